@@ -1,0 +1,78 @@
+// Format adapters: bytes <-> meshes to denoise. The algorithms never include this folder.
+//
+// A MeshDocument is a decoded asset. It exposes the triangle surfaces to denoise (for glTF:
+// one welded surface per mesh, whatever its instancing; for OFF/OBJ/PLY/DRC: one surface)
+// and re-encodes the asset after their positions were replaced, keeping everything else.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/errors.h"
+#include "core/mesh.h"
+
+namespace mdn::io {
+
+enum class Format { Off, Obj, Ply, Drc, Glb, Gltf };
+std::string_view to_string(Format format);                     // "off", "obj", "ply", "drc", "glb", "gltf"
+std::optional<Format> format_from_string(std::string_view name);  // inverse of to_string
+std::optional<Format> format_from_extension(std::string_view path);  // by file name ending
+std::optional<Format> sniff_format(std::string_view bytes);       // by content (magic numbers / keywords)
+std::string_view media_type(Format format);  // model/gltf-binary, model/gltf+json, application/octet-stream ...
+
+// The bytes are not a valid file of the format (truncated, inconsistent counts, bad JSON, ...).
+// Maps to HTTP 400.
+class FormatError : public InvalidMeshError {
+ public:
+  using InvalidMeshError::InvalidMeshError;
+};
+// Valid, but uses something we do not support (an extension, a primitive mode, an external
+// URI). what() names it. Maps to HTTP 422.
+class UnsupportedError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+// Declared or decoded sizes exceed Limits. Maps to HTTP 413.
+class LimitError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct Limits {
+  std::int64_t max_faces = 5'000'000;
+  std::int64_t max_vertices = 5'000'000;
+  std::int64_t max_decoded_bytes = std::int64_t{1} << 30;  // total bytes any decoder may allocate
+};
+
+struct EncodeOptions {
+  std::optional<Format> format;  // default: the input's container
+  bool draco = true;             // glTF: KHR_draco_mesh_compression; DRC is always Draco
+  int position_bits = 16;        // Draco quantisation bits, [8, 30]
+  int normal_bits = 10;
+  int texcoord_bits = 12;
+  int color_bits = 10;
+  int generic_bits = 12;
+  int compression_level = 7;     // Draco encoder speed/size trade-off, [0, 10] (10 = smallest)
+};
+
+class MeshDocument {
+ public:
+  virtual ~MeshDocument() = default;
+  virtual Format format() const = 0;
+  // Surfaces to denoise, in a stable order. Callers may replace their V (same #V).
+  virtual std::vector<TriMesh>& surfaces() = 0;
+  // Re-encodes the asset with the current surface positions.
+  virtual std::string encode(const EncodeOptions& options) const = 0;
+  // Notes for the caller about what was changed besides positions (e.g. "TANGENT dropped").
+  virtual std::vector<std::string> notes() const { return {}; }
+};
+
+// Decodes bytes of the given format. Throws FormatError, UnsupportedError or LimitError.
+std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, const Limits& limits = {});
+
+}  // namespace mdn::io

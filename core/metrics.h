@@ -1,0 +1,36 @@
+// Error metrics of Sec. 7 (MSAE, E_v) and the exact point-to-surface distance they need.
+#pragma once
+
+#include <memory>
+
+#include "core/mesh.h"
+
+namespace mdn {
+
+class Executor;
+
+// Mean over faces of the squared angle (radians) between the face normals of `result` and
+// `truth`, which must have the same faces (same #F, same indices). Faces degenerate in either
+// mesh are skipped. Throws InvalidMeshError if the connectivity differs.
+double msae(const TriMesh& result, const TriMesh& truth);
+
+// Exact closest-point queries against a triangle soup, accelerated by an AABB tree
+// (built once, queried many times; queries are const and thread-safe).
+class SurfaceDistance {
+ public:
+  explicit SurfaceDistance(const TriMesh& surface);
+  ~SurfaceDistance();
+  SurfaceDistance(SurfaceDistance&&) noexcept;
+  double distance(const Vec3& p) const;  // Euclidean distance from p to the closest point of the surface
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// E_v (Sun et al. 2007): sqrt( sum_i (sum_{j in F(i)} A_j) d_i^2 / (3 sum_f A_f) ), d_i the
+// exact distance from result vertex i to the truth surface, A the result's face areas.
+// Both meshes are first mapped by the truth's unit box (UnitBox::of(truth.V)), so E_v is
+// in the ground truth's unit-box frame.
+double vertex_error(const TriMesh& result, const TriMesh& truth, Executor* executor = nullptr);
+
+}  // namespace mdn

@@ -1,0 +1,28 @@
+// L1-median normal filter, Sec. 5 (Eq. 6-7) of Lu, Chen, Schaefer.
+#pragma once
+
+#include "core/mesh.h"
+#include "core/topology.h"
+
+namespace mdn {
+
+class Executor;
+class ProgressObserver;
+
+struct NormalFilterSettings {
+  double sigma_gamma_deg = 30;     // angle scale, Eq. 6
+  int iterations = 20;             // Jacobi iterations of Eq. 7
+  double sigma_c_factor = 1.5;     // sigma_c = factor x mean centroid distance of edge-adjacent faces
+  double bilateral_switch = 1e-3;  // below this ||n_i - n_j|| the weight drops its 1/||n_i - n_j||
+  bool l1_median = true;           // false: always bilateral weights (for comparison only)
+};
+
+// Filters the face normals of the mesh (V, F). Areas and centroids are those of (V, F)
+// and stay fixed; each iteration updates all faces from the previous iterate (Jacobi) and
+// renormalises. Returns #F by 3 unit normals (zero rows stay zero for degenerate faces
+// without usable neighbours).
+Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const Topology& topo,
+                                 const NormalFilterSettings& settings, Executor* executor = nullptr,
+                                 ProgressObserver* progress = nullptr);
+
+}  // namespace mdn

@@ -1,0 +1,78 @@
+// Parameters of the method (Table 1 order), their defaults, meanings and ranges.
+// Defaults are defined here once; the CLI and the server fill missing fields from them.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+
+namespace mdn {
+
+// Whether the region-based pre-filter of Sec. 4.2 (K-means + Eq. 2) runs.
+enum class RegionMode {
+  Auto,  // run it when the input is detected as irregularly sampled and noisy (see core/README.md)
+  On,    // always run it on the small-triangle cluster
+  Off,   // never run it
+};
+std::string_view to_string(RegionMode mode);
+std::optional<RegionMode> region_mode_from_string(std::string_view text);
+
+// Sparse solver for the SPD systems of Eq. 1-3 (see core/README.md for the measurements).
+enum class LinearSolver {
+  Ldlt,               // Eigen SimplicialLDLT, symbolic analysis shared by Eq. 1 and all Eq. 3 steps
+  ConjugateGradient,  // Jacobi-preconditioned CG warm-started from the previous iterate
+};
+std::string_view to_string(LinearSolver solver);
+std::optional<LinearSolver> linear_solver_from_string(std::string_view text);
+
+struct DenoiseParams {
+  // --- The six parameters of Table 1 (defaults: the Fandisk row) ---
+  double alpha = 0.1;        // weight of the shaping term, Eq. 1 and Eq. 3; paper [0.05, 0.2]
+  double sigma_theta = 30;   // degrees; angle scale of the edge weight w_e, Eq. 4; paper [20, 50]
+  int n_aniso = 2;           // iterations of the anisotropic pre-filter, Eq. 3; paper [0, 12]
+  double sigma_gamma = 30;   // degrees; angle scale of the normal filter, Eq. 6-7; paper [20, 50]
+  int n_normal = 20;         // iterations of the L1-median normal filter, Eq. 7; paper [5, 100]
+  int n_vertex = 10;         // iterations of the vertex update, Eq. 8; paper [5, 100]
+
+  // --- Region-based pre-filter (Sec. 4.2) ---
+  RegionMode region_mode = RegionMode::Auto;
+  double beta = 6;                  // smoothness of the cluster Laplacian, Eq. 2
+  int kmeans_k = 2;                 // K of the K-means clustering
+  double fold_angle = 130;          // degrees; an edge is folded if its face normals differ by more
+  double fold_ratio = 0.10;         // fraction of folded edges that marks the input as very noisy
+  double irregular_area_ratio = 4;  // mean-area ratio between clusters that marks irregular sampling
+  std::uint64_t kmeans_seed = 1;    // seed of the k-means++ initialisation
+
+  // --- Constants ---
+  double b = 1.7320508075688772;  // base of the exponential edge weight, Eq. 4 (sqrt 3)
+  double bilateral_switch = 1e-3; // ||n_i - n_j|| below which Eq. 7 uses bilateral weights
+  double sigma_c_factor = 1.5;    // sigma_c = factor x mean centroid distance of adjacent faces
+
+  // --- Numerics (do not change the result beyond solver tolerance) ---
+  LinearSolver solver = LinearSolver::Ldlt;
+  double cg_tolerance = 1e-10;    // relative residual for LinearSolver::ConjugateGradient
+
+  // Throws InvalidParamsError naming the first field outside its accepted range.
+  void validate() const;
+};
+
+// Description of one numeric parameter, for validation, help texts and the JSON Schema.
+struct ParamSpec {
+  std::string_view name;         // field name, identical in C++ and JSON
+  bool integer;                  // true for iteration counts and K
+  double min, max;               // accepted range, inclusive
+  double paper_min, paper_max;   // range the paper used (Sec. 7); equal to min/max if none
+  std::string_view unit;         // "degrees", "iterations", "" ...
+  std::string_view equation;     // "Eq. 4", "Sec. 4.2" ...
+  std::string_view description;  // one line
+  double DenoiseParams::*real_field = nullptr;  // exactly one of the two is set
+  int DenoiseParams::*int_field = nullptr;
+  double default_value() const;
+};
+// All numeric parameters, Table 1's six first. (region_mode, kmeans_seed and solver are
+// enumerations / seeds and are described separately by the adapters.)
+std::span<const ParamSpec> param_specs();
+
+}  // namespace mdn

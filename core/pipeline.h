@@ -1,0 +1,45 @@
+// The whole method: pre-filter (Sec. 4), L1-median normal filter (Sec. 5), vertex update
+// (Sec. 6). Re-entrant: concurrent calls on different meshes are safe.
+#pragma once
+
+#include "core/mesh.h"
+#include "core/params.h"
+#include "core/progress.h"
+
+namespace mdn {
+
+struct RunOptions {
+  int threads = 1;                        // worker threads for this call; output does not depend on it
+  ProgressObserver* progress = nullptr;   // optional; progress and cancellation
+};
+
+// Wall-clock milliseconds per step.
+struct StageTimings {
+  double setup_ms = 0;        // validation, normalisation, topology
+  double initial_ms = 0;      // Eq. 1
+  double region_ms = 0;       // Sec. 4.2 detection, K-means and Eq. 2
+  double anisotropic_ms = 0;  // Eq. 3-4, all iterations
+  double normal_ms = 0;       // Eq. 6-7, all iterations
+  double vertex_ms = 0;       // Eq. 8, all iterations
+  double total_ms = 0;
+  double prefilter_ms() const { return initial_ms + region_ms + anisotropic_ms; }
+};
+
+// What the pipeline measured and decided (Sec. 4.2).
+struct DenoiseReport {
+  double fold_ratio = 0;          // fraction of interior edges whose face normals differ by > fold_angle (noisy input)
+  double cluster_area_ratio = 1;  // mean face area of the largest-area cluster / smallest (after Eq. 1); 1 if not measured
+  bool region_prefilter_applied = false;
+  std::int64_t region_vertices = 0;  // vertices smoothed by Eq. 2
+  StageTimings timings;
+};
+
+struct DenoiseResult {
+  TriMesh mesh;  // same connectivity as the input, new positions (input frame)
+  DenoiseReport report;
+};
+
+// Throws InvalidMeshError, InvalidParamsError, SolverError or CancelledError.
+DenoiseResult denoise(const TriMesh& input, const DenoiseParams& params, const RunOptions& options = {});
+
+}  // namespace mdn

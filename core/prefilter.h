@@ -1,0 +1,70 @@
+// Vertex pre-filtering, Sec. 4 of Lu, Chen, Schaefer. All positions are #V by 3 in the
+// unit-box frame; the topology is that of the mesh being filtered.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "core/mesh.h"
+#include "core/params.h"
+#include "core/topology.h"
+
+namespace mdn {
+
+class Executor;
+
+// Solves the systems (I + alpha D^T W D) P~ = P of Eq. 1 (W = I) and Eq. 3 (W = diag(w_e)),
+// with D the #E by #V shaping operator, one row per interior manifold edge. All systems
+// share one sparsity pattern, so the symbolic analysis is done once (LDLT) or the previous
+// solution warm-starts the next solve (CG). Not thread-safe; one per pipeline run.
+class ShapingSolver {
+ public:
+  ShapingSolver(const Topology& topo, LinearSolver kind, double cg_tolerance);
+  ~ShapingSolver();
+  // Returns the solution P~ (#V by 3). weights: #E edge weights, or empty for W = I.
+  Vertices solve(const Vertices& P, double alpha, const Eigen::VectorXd& weights);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Eq. 1: initial isotropic pre-filter.
+Vertices initial_prefilter(const Vertices& P, const Topology& topo, double alpha,
+                           LinearSolver kind = LinearSolver::Ldlt);
+
+// Eq. 4: w_e = b^-((1 - cos theta) / (1 - cos sigma_theta)), theta the angle between the
+// normals of the edge's two faces. Returns #E weights.
+Eigen::VectorXd anisotropic_edge_weights(const Vertices& P, const Triangles& F, const Topology& topo,
+                                         double sigma_theta_deg, double b);
+
+// Eq. 3, iterated `iterations` times, each anchored to the previous output with w_e
+// recomputed. `solver` is reused across calls if given.
+Vertices anisotropic_prefilter(const Vertices& P, const Triangles& F, const Topology& topo,
+                               const DenoiseParams& params, ShapingSolver* solver = nullptr);
+
+// Sec. 4.2: fraction of interior manifold edges whose two face normals make an angle
+// greater than fold_angle_deg.
+double fold_ratio(const Vertices& P, const Triangles& F, const Topology& topo, double fold_angle_deg);
+
+struct FaceClusters {
+  std::vector<std::int32_t> label;   // #F cluster index in [0, K)
+  std::vector<double> mean_area;     // K mean face area per cluster
+  std::int32_t smallest = 0;         // cluster with the smallest mean area
+  double area_ratio = 1;             // max mean area / min mean area over non-empty clusters
+};
+// Sec. 4.2: K-means over faces in (centroid, area) space. Features are standardised
+// (centroids by their common RMS spread, area by its own) and seeded with k-means++.
+FaceClusters cluster_faces(const Vertices& P, const Triangles& F, int k, std::uint64_t seed,
+                           int max_iterations = 100);
+
+// Eq. 2 on one set of faces: their vertices are unknowns, every other vertex is fixed.
+// Minimises ||P~ - P||^2 + beta ||L P~||^2 over the unknowns, L the uniform Laplacian of
+// the whole mesh restricted to the unknown rows. Returns the new positions of all vertices.
+Vertices region_prefilter(const Vertices& P, const Triangles& F, const Topology& topo,
+                          const std::vector<std::int32_t>& faces, double beta,
+                          std::int64_t* num_unknowns = nullptr);
+
+}  // namespace mdn

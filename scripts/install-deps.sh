@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Installs the Debian packages listed in scripts/deps/<list>.txt (and, for tests, the npm
+# tools of tests/tools). Idempotent; needs root on a Debian bookworm machine.
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+root="$(cd "$here/.." && pwd)"
+
+packages=()
+for list in "$@"; do
+  while read -r line; do
+    line="${line%%#*}"; line="$(echo "$line" | xargs)"
+    [ -n "$line" ] && packages+=("$line")
+  done < "$here/deps/$list.txt"
+done
+
+missing=()
+for p in "${packages[@]}"; do
+  # node and npm may come from elsewhere on a developer machine; only install if absent.
+  if [ "$p" = nodejs ] && command -v node >/dev/null 2>&1; then continue; fi
+  if [ "$p" = npm ] && command -v npm >/dev/null 2>&1; then continue; fi
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ "${#missing[@]}" -gt 0 ]; then
+  echo "installing: ${missing[*]}" >&2
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+if [[ " $* " == *" test "* ]] && [ -f "$root/tests/tools/package.json" ]; then
+  if [ ! -d "$root/tests/tools/node_modules" ] || [ "$root/tests/tools/package.json" -nt "$root/tests/tools/node_modules" ]; then
+    (cd "$root/tests/tools" && npm install --no-audit --no-fund --loglevel=error && touch node_modules)
+  fi
+fi

@@ -1,0 +1,38 @@
+// One denoising job from bytes to bytes: decode, denoise every surface, encode. Shared by
+// the command-line tool and the HTTP server's workers so both give identical bytes.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/io/document.h"
+#include "core/pipeline.h"
+#include "server/params_json.h"
+
+namespace mdn::service {
+
+struct JobInput {
+  std::string bytes;
+  io::Format format;
+  JobParams params;
+  int threads = 1;  // threads for the core pipeline
+};
+
+struct JobOutput {
+  std::string bytes;
+  io::Format format;
+  std::string media_type;
+  JobParams effective;                  // parameters actually used
+  std::vector<DenoiseReport> reports;   // one per surface
+  std::vector<std::string> notes;       // from the adapter (e.g. TANGENT dropped)
+  std::int64_t vertices = 0, faces = 0; // summed over surfaces
+  double decode_ms = 0, denoise_ms = 0, encode_ms = 0;
+  StageTimings stages;                  // summed over surfaces
+};
+
+// Throws what io::decode and mdn::denoise throw (FormatError, UnsupportedError, LimitError,
+// InvalidMeshError, InvalidParamsError, SolverError, CancelledError).
+JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObserver* progress = nullptr);
+
+}  // namespace mdn::service

@@ -1,0 +1,31 @@
+// The JSON shape of the parameters, shared by the command-line tool and the HTTP API.
+// proto/params.schema.json documents the same shape; tests check that they agree.
+//
+//   { "alpha": 0.1, "sigma_theta": 30, "n_aniso": 2, "sigma_gamma": 30, "n_normal": 20,
+//     "n_vertex": 10, "region_mode": "auto", "beta": 6, ... ,
+//     "output": { "format": "glb", "draco": true, "position_bits": 16, ... } }
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include "core/io/document.h"
+#include "core/params.h"
+
+namespace mdn::service {
+
+struct JobParams {
+  DenoiseParams denoise;      // method parameters (defaults from core)
+  io::EncodeOptions output;   // output container and Draco settings
+};
+
+// Parses a JSON object; missing fields keep their defaults. Throws InvalidParamsError naming
+// the field for: a non-object, an unknown field, a wrong type, a non-integer where an integer
+// is required, an out-of-range value, an unknown enumeration value.
+JobParams job_params_from_json(const nlohmann::json& j);
+// Parses text (the body of --params, ?params= or X-Denoise-Params). Bad JSON gives
+// InvalidParamsError with field "params".
+JobParams job_params_from_text(std::string_view text);
+// Every field with its effective value (what the CLI prints and the server echoes).
+nlohmann::json to_json(const JobParams& p);
+
+}  // namespace mdn::service
