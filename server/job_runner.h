@@ -35,4 +35,14 @@ struct JobOutput {
 // InvalidMeshError, InvalidParamsError, SolverError, CancelledError).
 JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObserver* progress = nullptr);
 
+// Added by the cli engineer (additive): the JSON summary of a finished job, the same shape the
+// CLI prints with --report and the HTTP server may echo:
+//   { "format": "off", "media_type": ..., "bytes": N, "vertices": N, "faces": N,
+//     "params": to_json(effective), "timings_ms": { "decode", "denoise", "encode", "setup",
+//     "initial", "region", "anisotropic", "normal", "vertex", "prefilter", "total" },
+//     "surfaces": [ report_to_json(r) ... ], "notes": [ ... ] }
+// Timings are wall-clock and vary between runs; everything else is deterministic.
+nlohmann::json report_to_json(const DenoiseReport& report);  // fold_ratio, cluster_area_ratio, region_*
+nlohmann::json job_summary_json(const JobOutput& output);
+
 }  // namespace mdn::service

@@ -28,4 +28,12 @@ JobParams job_params_from_text(std::string_view text);
 // Every field with its effective value (what the CLI prints and the server echoes).
 nlohmann::json to_json(const JobParams& p);
 
+// Added by the cli engineer (additive; the HTTP server may call these for JobParams it builds
+// itself rather than parses): range checks of the "output" object (Draco bits [8|1, 30],
+// compression_level [0, 10]) and of everything (DenoiseParams::validate() plus the output
+// checks). Throw InvalidParamsError with the JSON path, e.g. "output.position_bits".
+// job_params_from_json() already calls validate(); run_job() calls it before decoding.
+void validate_output_options(const io::EncodeOptions& options);
+void validate(const JobParams& params);
+
 }  // namespace mdn::service

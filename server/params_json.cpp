@@ -1,0 +1,266 @@
+// JSON <-> JobParams. Names, ranges and defaults of the numeric method parameters come from
+// mdn::param_specs() (core/params.h), so they are defined once; this file only adds the JSON
+// typing rules, the enumerations and the "output" object, whose ranges live in kOutputInts.
+#include "server/params_json.h"
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/errors.h"
+
+namespace mdn::service {
+namespace {
+
+using nlohmann::json;
+
+// Integral doubles print without a fraction ("500", not "500.0"); others print shortest
+// round-trip ("0.1"), which is what nlohmann's dump() does for doubles.
+std::string number_text(double value) {
+  if (std::isfinite(value) && value == std::floor(value) && std::abs(value) < 1e15) {
+    return std::to_string(static_cast<std::int64_t>(value));
+  }
+  return json(value).dump();
+}
+
+// What the caller sent, for messages: numbers and short strings verbatim, other types by kind.
+std::string describe(const json& value) {
+  switch (value.type()) {
+    case json::value_t::string: {
+      const auto& s = value.get_ref<const std::string&>();
+      if (s.size() <= 40) return "the string " + json(s).dump();
+      return "a string";
+    }
+    case json::value_t::boolean: return value.get<bool>() ? "true" : "false";
+    case json::value_t::null: return "null";
+    case json::value_t::object: return "an object";
+    case json::value_t::array: return "an array";
+    case json::value_t::number_float: return number_text(value.get<double>());
+    default: return value.dump();  // integers
+  }
+}
+
+std::string range_text(double min, double max) {
+  return "[" + number_text(min) + ", " + number_text(max) + "]";
+}
+
+[[noreturn]] void fail(const std::string& path, const std::string& requirement, const json& got) {
+  throw InvalidParamsError(path, path + " must be " + requirement + ", got " + describe(got));
+}
+
+// JSON numbers only (booleans are not numbers here, unlike in some JSON libraries' casts).
+// An integral float such as 2.0 counts as an integer, as JSON Schema's "integer" type does.
+double real_in_range(const json& value, const std::string& path, double min, double max) {
+  const std::string requirement = "a number in " + range_text(min, max);
+  if (!value.is_number()) fail(path, requirement, value);
+  const double x = value.get<double>();
+  if (!std::isfinite(x) || x < min || x > max) fail(path, requirement, value);
+  return x;
+}
+
+std::int64_t integer_in_range(const json& value, const std::string& path, double min, double max) {
+  const std::string requirement = "an integer in " + range_text(min, max);
+  if (!value.is_number()) fail(path, requirement, value);
+  if (value.is_number_integer()) {
+    // number_unsigned above int64 cannot be in any range we accept.
+    if (value.is_number_unsigned() &&
+        value.get<std::uint64_t>() > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max())) {
+      fail(path, requirement, value);
+    }
+    const auto n = value.get<std::int64_t>();
+    if (static_cast<double>(n) < min || static_cast<double>(n) > max) fail(path, requirement, value);
+    return n;
+  }
+  const double x = value.get<double>();
+  if (!std::isfinite(x) || x != std::floor(x) || x < min || x > max) fail(path, requirement, value);
+  return static_cast<std::int64_t>(x);
+}
+
+// A seed: any non-negative integer that fits 64 bits. Integral floats are accepted only up to
+// 2^53, where every integer is still exactly representable.
+std::uint64_t seed_value(const json& value, const std::string& path) {
+  const std::string requirement = "a non-negative integer below 2^64";
+  if (value.is_number_unsigned()) return value.get<std::uint64_t>();
+  if (value.is_number_integer()) fail(path, requirement, value);  // negative
+  if (value.is_number_float()) {
+    const double x = value.get<double>();
+    if (std::isfinite(x) && x >= 0 && x == std::floor(x) && x <= 9007199254740992.0) {
+      return static_cast<std::uint64_t>(x);
+    }
+  }
+  fail(path, requirement, value);
+}
+
+bool boolean_value(const json& value, const std::string& path) {
+  if (!value.is_boolean()) fail(path, "true or false", value);
+  return value.get<bool>();
+}
+
+const std::string& string_value(const json& value, const std::string& path, const std::string& choices) {
+  if (!value.is_string()) fail(path, "one of " + choices, value);
+  return value.get_ref<const std::string&>();
+}
+
+// Draco settings of the "output" object. Draco itself accepts 1..30 quantisation bits for
+// every attribute; positions below 8 bits wreck any mesh worth denoising (EncodeOptions says
+// [8, 30]). Compression level is Draco's speed/size knob, 0..10.
+struct OutputIntSpec {
+  const char* name;
+  int io::EncodeOptions::*field;
+  int min, max;
+};
+constexpr OutputIntSpec kOutputInts[] = {
+    {"position_bits", &io::EncodeOptions::position_bits, 8, 30},
+    {"normal_bits", &io::EncodeOptions::normal_bits, 1, 30},
+    {"texcoord_bits", &io::EncodeOptions::texcoord_bits, 1, 30},
+    {"color_bits", &io::EncodeOptions::color_bits, 1, 30},
+    {"generic_bits", &io::EncodeOptions::generic_bits, 1, 30},
+    {"compression_level", &io::EncodeOptions::compression_level, 0, 10},
+};
+
+constexpr const char* kFormatChoices = "\"off\", \"obj\", \"ply\", \"drc\", \"glb\", \"gltf\" or null (same as the input)";
+
+std::vector<std::string> top_level_names() {
+  std::vector<std::string> names;
+  for (const auto& spec : param_specs()) names.emplace_back(spec.name);
+  names.insert(names.end(), {"region_mode", "kmeans_seed", "solver", "output"});
+  return names;
+}
+
+std::vector<std::string> output_names() {
+  std::vector<std::string> names{"format", "draco"};
+  for (const auto& spec : kOutputInts) names.emplace_back(spec.name);
+  return names;
+}
+
+[[noreturn]] void unknown_field(const std::string& path, const std::vector<std::string>& accepted) {
+  std::ostringstream out;
+  out << "unknown field \"" << path << "\"; accepted fields:";
+  for (std::size_t i = 0; i < accepted.size(); ++i) out << (i ? ", " : " ") << accepted[i];
+  throw InvalidParamsError(path, out.str());
+}
+
+void parse_output(const json& j, io::EncodeOptions& out) {
+  if (!j.is_object()) fail("output", "an object", j);
+  for (const auto& [key, value] : j.items()) {
+    const std::string path = "output." + key;
+    if (key == "format") {
+      if (value.is_null()) {
+        out.format.reset();
+        continue;
+      }
+      const auto& text = string_value(value, path, kFormatChoices);
+      const auto format = io::format_from_string(text);
+      if (!format) fail(path, std::string("one of ") + kFormatChoices, value);
+      out.format = *format;
+    } else if (key == "draco") {
+      out.draco = boolean_value(value, path);
+    } else {
+      bool found = false;
+      for (const auto& spec : kOutputInts) {
+        if (key == spec.name) {
+          out.*spec.field = static_cast<int>(integer_in_range(value, path, spec.min, spec.max));
+          found = true;
+          break;
+        }
+      }
+      if (!found) unknown_field(path, output_names());
+    }
+  }
+}
+
+}  // namespace
+
+void validate_output_options(const io::EncodeOptions& options) {
+  for (const auto& spec : kOutputInts) {
+    const int value = options.*spec.field;
+    if (value < spec.min || value > spec.max) {
+      const std::string path = std::string("output.") + spec.name;
+      fail(path, "an integer in " + range_text(spec.min, spec.max), json(value));
+    }
+  }
+}
+
+void validate(const JobParams& params) {
+  params.denoise.validate();
+  validate_output_options(params.output);
+}
+
+JobParams job_params_from_json(const nlohmann::json& j) {
+  if (!j.is_object()) {
+    throw InvalidParamsError("params", "params must be a JSON object, got " + describe(j));
+  }
+  JobParams p;
+  for (const auto& [key, value] : j.items()) {
+    if (key == "region_mode") {
+      const auto& text = string_value(value, key, "\"auto\", \"on\" or \"off\"");
+      const auto mode = region_mode_from_string(text);
+      if (!mode) fail(key, "one of \"auto\", \"on\" or \"off\"", value);
+      p.denoise.region_mode = *mode;
+    } else if (key == "solver") {
+      const auto& text = string_value(value, key, "\"ldlt\" or \"cg\"");
+      const auto solver = linear_solver_from_string(text);
+      if (!solver) fail(key, "one of \"ldlt\" or \"cg\"", value);
+      p.denoise.solver = *solver;
+    } else if (key == "kmeans_seed") {
+      p.denoise.kmeans_seed = seed_value(value, key);
+    } else if (key == "output") {
+      parse_output(value, p.output);
+    } else {
+      const ParamSpec* spec = nullptr;
+      for (const auto& s : param_specs()) {
+        if (s.name == key) {
+          spec = &s;
+          break;
+        }
+      }
+      if (!spec) unknown_field(key, top_level_names());
+      if (spec->int_field) {
+        p.denoise.*spec->int_field = static_cast<int>(integer_in_range(value, key, spec->min, spec->max));
+      } else {
+        p.denoise.*spec->real_field = real_in_range(value, key, spec->min, spec->max);
+      }
+    }
+  }
+  // Cross-field rules (if core has any) and a second check of every range, in core's words.
+  validate(p);
+  return p;
+}
+
+JobParams job_params_from_text(std::string_view text) {
+  json j;
+  try {
+    j = json::parse(text.begin(), text.end());
+  } catch (const json::exception& e) {
+    // nlohmann's message carries the byte position of the error.
+    std::string what = e.what();
+    if (const auto pos = what.find("] "); pos != std::string::npos) what = what.substr(pos + 2);
+    throw InvalidParamsError("params", "params is not valid JSON: " + what);
+  }
+  return job_params_from_json(j);
+}
+
+nlohmann::json to_json(const JobParams& p) {
+  json j = json::object();
+  for (const auto& spec : param_specs()) {
+    if (spec.int_field) {
+      j[std::string(spec.name)] = p.denoise.*spec.int_field;
+    } else {
+      j[std::string(spec.name)] = p.denoise.*spec.real_field;
+    }
+  }
+  j["region_mode"] = std::string(to_string(p.denoise.region_mode));
+  j["kmeans_seed"] = p.denoise.kmeans_seed;
+  j["solver"] = std::string(to_string(p.denoise.solver));
+  json out = json::object();
+  out["format"] = p.output.format ? json(std::string(io::to_string(*p.output.format))) : json(nullptr);
+  out["draco"] = p.output.draco;
+  for (const auto& spec : kOutputInts) out[spec.name] = p.output.*spec.field;
+  j["output"] = std::move(out);
+  return j;
+}
+
+}  // namespace mdn::service
