@@ -172,6 +172,18 @@ void parse_output(const json& j, io::EncodeOptions& out) {
   }
 }
 
+// Parses JSON text; a syntax error becomes InvalidParamsError(field) with nlohmann's message,
+// which carries the byte position of the error.
+json parse_text(std::string_view text, const std::string& field) {
+  try {
+    return json::parse(text.begin(), text.end());
+  } catch (const json::exception& e) {
+    std::string what = e.what();
+    if (const auto pos = what.find("] "); pos != std::string::npos) what = what.substr(pos + 2);
+    throw InvalidParamsError(field, field + " is not valid JSON: " + what);
+  }
+}
+
 }  // namespace
 
 void validate_output_options(const io::EncodeOptions& options) {
@@ -231,16 +243,7 @@ JobParams job_params_from_json(const nlohmann::json& j) {
 }
 
 JobParams job_params_from_text(std::string_view text) {
-  json j;
-  try {
-    j = json::parse(text.begin(), text.end());
-  } catch (const json::exception& e) {
-    // nlohmann's message carries the byte position of the error.
-    std::string what = e.what();
-    if (const auto pos = what.find("] "); pos != std::string::npos) what = what.substr(pos + 2);
-    throw InvalidParamsError("params", "params is not valid JSON: " + what);
-  }
-  return job_params_from_json(j);
+  return job_params_from_json(parse_text(text, "params"));
 }
 
 nlohmann::json to_json(const JobParams& p) {
@@ -261,6 +264,45 @@ nlohmann::json to_json(const JobParams& p) {
   for (const auto& spec : kOutputInts) out[spec.name] = p.output.*spec.field;
   j["output"] = std::move(out);
   return j;
+}
+
+}  // namespace mdn::service
+
+namespace mdn::service {
+
+// Sigma is in mean edge lengths; 10 already moves vertices far past their neighbours, so
+// larger values are more likely a unit mistake than an experiment.
+constexpr double kMaxNoiseSigma = 10;
+
+NoiseSpec noise_spec_from_json(const nlohmann::json& j) {
+  if (!j.is_object()) throw InvalidParamsError("noise", "the noise spec must be a JSON object, got " + describe(j));
+  NoiseSpec spec;
+  constexpr const char* kKinds = "\"along_normal\", \"per_coordinate\" or \"random_direction\"";
+  for (const auto& [key, value] : j.items()) {
+    if (key == "kind") {
+      const auto kind = noise_kind_from_string(string_value(value, key, kKinds));
+      if (!kind) fail(key, std::string("one of ") + kKinds, value);
+      spec.kind = *kind;
+    } else if (key == "sigma") {
+      spec.sigma = real_in_range(value, key, 0, kMaxNoiseSigma);
+    } else if (key == "seed") {
+      spec.seed = seed_value(value, key);
+    } else if (key == "impulse_fraction") {
+      spec.impulse_fraction = real_in_range(value, key, 0, 1);
+    } else {
+      unknown_field(key, {"kind", "sigma", "seed", "impulse_fraction"});
+    }
+  }
+  return spec;
+}
+
+NoiseSpec noise_spec_from_text(std::string_view text) { return noise_spec_from_json(parse_text(text, "noise")); }
+
+nlohmann::json to_json(const NoiseSpec& spec) {
+  return {{"kind", std::string(to_string(spec.kind))},
+          {"sigma", spec.sigma},
+          {"seed", spec.seed},
+          {"impulse_fraction", spec.impulse_fraction}};
 }
 
 }  // namespace mdn::service

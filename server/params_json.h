@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/io/document.h"
+#include "core/noise.h"
 #include "core/params.h"
 
 namespace mdn::service {
@@ -35,5 +36,15 @@ nlohmann::json to_json(const JobParams& p);
 // job_params_from_json() already calls validate(); run_job() calls it before decoding.
 void validate_output_options(const io::EncodeOptions& options);
 void validate(const JobParams& params);
+
+// Added by the cli engineer (additive): synthetic noise for experiments (meshdenoise --add-noise),
+//   { "kind": "along_normal" | "per_coordinate" | "random_direction", "sigma": 0.2,
+//     "seed": 1, "impulse_fraction": 0 }
+// Missing fields keep NoiseSpec's defaults; sigma in [0, 10] mean edge lengths, impulse_fraction
+// in [0, 1], seed a non-negative integer. Same error rules as job_params_from_json (field() is
+// "sigma", "kind", ...). Text that is not JSON gives field "noise".
+NoiseSpec noise_spec_from_json(const nlohmann::json& j);
+NoiseSpec noise_spec_from_text(std::string_view text);
+nlohmann::json to_json(const NoiseSpec& spec);
 
 }  // namespace mdn::service
