@@ -14,6 +14,7 @@
 namespace mdn {
 
 class Executor;
+class ProgressObserver;
 
 // Solves the systems (I + alpha D^T W D) P~ = P of Eq. 1 (W = I) and Eq. 3 (W = diag(w_e)),
 // with D the #E by #V shaping operator, one row per interior manifold edge. All systems
@@ -41,9 +42,11 @@ Eigen::VectorXd anisotropic_edge_weights(const Vertices& P, const Triangles& F, 
                                          double sigma_theta_deg, double b);
 
 // Eq. 3, iterated `iterations` times, each anchored to the previous output with w_e
-// recomputed. `solver` is reused across calls if given.
+// recomputed. `solver` is reused across calls if given. Checks `progress` for
+// cancellation before every iteration (throws CancelledError).
 Vertices anisotropic_prefilter(const Vertices& P, const Triangles& F, const Topology& topo,
-                               const DenoiseParams& params, ShapingSolver* solver = nullptr);
+                               const DenoiseParams& params, ShapingSolver* solver = nullptr,
+                               ProgressObserver* progress = nullptr);
 
 // Sec. 4.2: fraction of interior manifold edges whose two face normals make an angle
 // greater than fold_angle_deg.

@@ -1,0 +1,16 @@
+#include "core/progress.h"
+
+namespace mdn {
+
+std::string_view to_string(Stage stage) {
+  switch (stage) {
+    case Stage::InitialPrefilter: return "initial_prefilter";
+    case Stage::RegionPrefilter: return "region_prefilter";
+    case Stage::AnisotropicPrefilter: return "anisotropic_prefilter";
+    case Stage::NormalFilter: return "normal_filter";
+    case Stage::VertexUpdate: return "vertex_update";
+  }
+  return "unknown";
+}
+
+}  // namespace mdn

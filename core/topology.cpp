@@ -1,0 +1,147 @@
+#include "core/topology.h"
+
+#include <algorithm>
+#include <array>
+#include <numeric>
+
+namespace mdn {
+namespace {
+
+struct HalfEdge {
+  std::int32_t lo, hi;      // undirected key
+  std::int32_t from, to;    // as traversed by the face
+  std::int32_t opposite;    // third vertex of the face
+  std::int32_t face;
+};
+
+// Turns per-element counts into CSR offsets.
+std::vector<std::int32_t> offsets_from_counts(const std::vector<std::int32_t>& counts) {
+  std::vector<std::int32_t> offsets(counts.size() + 1, 0);
+  std::partial_sum(counts.begin(), counts.end(), offsets.begin() + 1);
+  return offsets;
+}
+
+}  // namespace
+
+Topology Topology::build(const Triangles& F, std::int32_t num_vertices) {
+  Topology t;
+  t.num_vertices = num_vertices;
+  t.num_faces = static_cast<std::int32_t>(F.rows());
+
+  // --- Edges: sort half-edges by undirected key, classify by multiplicity. ---
+  std::vector<HalfEdge> half;
+  half.reserve(static_cast<std::size_t>(F.rows()) * 3);
+  for (std::int32_t f = 0; f < t.num_faces; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const std::int32_t a = F(f, k), b = F(f, (k + 1) % 3), c = F(f, (k + 2) % 3);
+      if (a == b) continue;  // a face with a repeated index has no edge here
+      half.push_back({std::min(a, b), std::max(a, b), a, b, c, f});
+    }
+  std::sort(half.begin(), half.end(), [](const HalfEdge& x, const HalfEdge& y) {
+    return x.lo != y.lo ? x.lo < y.lo : x.hi != y.hi ? x.hi < y.hi : x.face < y.face;
+  });
+
+  std::vector<std::array<std::int32_t, 4>> interior;
+  std::vector<std::array<std::int32_t, 2>> interior_faces, boundary, nonmanifold, unique_edges;
+  for (std::size_t i = 0; i < half.size();) {
+    std::size_t j = i;
+    while (j < half.size() && half[j].lo == half[i].lo && half[j].hi == half[i].hi) ++j;
+    const std::size_t count = j - i;
+    unique_edges.push_back({half[i].lo, half[i].hi});
+    const HalfEdge& h0 = half[i];
+    if (count == 2 && h0.opposite != half[i + 1].opposite) {
+      // S(e) = p_e1 - p_e2 + p_e3 - p_e4, (e1, e3) the edge, e2/e4 the opposite vertices.
+      interior.push_back({h0.from, h0.opposite, h0.to, half[i + 1].opposite});
+      interior_faces.push_back({h0.face, half[i + 1].face});
+    } else if (count == 1) {
+      boundary.push_back({h0.lo, h0.hi});
+    } else {
+      // Three or more faces, or two copies of one triangle: no shaping term (NOTES reading 2).
+      nonmanifold.push_back({h0.lo, h0.hi});
+    }
+    i = j;
+  }
+  auto to_matrix4 = [](const auto& rows) {
+    Eigen::Matrix<std::int32_t, Eigen::Dynamic, 4, Eigen::RowMajor> m(static_cast<Eigen::Index>(rows.size()), 4);
+    for (std::size_t r = 0; r < rows.size(); ++r)
+      for (int k = 0; k < 4; ++k) m(static_cast<Eigen::Index>(r), k) = rows[r][static_cast<std::size_t>(k)];
+    return m;
+  };
+  auto to_matrix2 = [](const auto& rows) {
+    Eigen::Matrix<std::int32_t, Eigen::Dynamic, 2, Eigen::RowMajor> m(static_cast<Eigen::Index>(rows.size()), 2);
+    for (std::size_t r = 0; r < rows.size(); ++r)
+      for (int k = 0; k < 2; ++k) m(static_cast<Eigen::Index>(r), k) = rows[r][static_cast<std::size_t>(k)];
+    return m;
+  };
+  t.interior_edges = to_matrix4(interior);
+  t.edge_faces = to_matrix2(interior_faces);
+  t.boundary_edges = to_matrix2(boundary);
+  t.nonmanifold_edges = to_matrix2(nonmanifold);
+
+  // --- Vertex -> faces (each face listed once per distinct vertex). ---
+  std::vector<std::int32_t> counts(static_cast<std::size_t>(num_vertices), 0);
+  auto distinct = [&](std::int32_t f, int k) {
+    for (int m = 0; m < k; ++m)
+      if (F(f, m) == F(f, k)) return false;
+    return true;
+  };
+  for (std::int32_t f = 0; f < t.num_faces; ++f)
+    for (int k = 0; k < 3; ++k)
+      if (distinct(f, k)) ++counts[static_cast<std::size_t>(F(f, k))];
+  t.vf_offsets = offsets_from_counts(counts);
+  t.vf_faces.assign(static_cast<std::size_t>(t.vf_offsets.back()), 0);
+  {
+    std::vector<std::int32_t> cursor(t.vf_offsets.begin(), t.vf_offsets.end() - 1);
+    for (std::int32_t f = 0; f < t.num_faces; ++f)
+      for (int k = 0; k < 3; ++k)
+        if (distinct(f, k)) t.vf_faces[static_cast<std::size_t>(cursor[static_cast<std::size_t>(F(f, k))]++)] = f;
+  }
+
+  // --- Vertex -> vertices from the unique edges (sorted, so deterministic). ---
+  std::fill(counts.begin(), counts.end(), 0);
+  for (const auto& [a, b] : unique_edges) {
+    ++counts[static_cast<std::size_t>(a)];
+    ++counts[static_cast<std::size_t>(b)];
+  }
+  t.vv_offsets = offsets_from_counts(counts);
+  t.vv_vertices.assign(static_cast<std::size_t>(t.vv_offsets.back()), 0);
+  {
+    std::vector<std::int32_t> cursor(t.vv_offsets.begin(), t.vv_offsets.end() - 1);
+    for (const auto& [a, b] : unique_edges) {
+      t.vv_vertices[static_cast<std::size_t>(cursor[static_cast<std::size_t>(a)]++)] = b;
+      t.vv_vertices[static_cast<std::size_t>(cursor[static_cast<std::size_t>(b)]++)] = a;
+    }
+  }
+
+  // --- Face -> vertex-adjacent faces N(i), itself excluded (NOTES reading 9). ---
+  t.ff_offsets.assign(static_cast<std::size_t>(t.num_faces) + 1, 0);
+  t.ff_faces.reserve(static_cast<std::size_t>(t.num_faces) * 13);
+  std::vector<std::int32_t> scratch;
+  for (std::int32_t f = 0; f < t.num_faces; ++f) {
+    scratch.clear();
+    for (int k = 0; k < 3; ++k) {
+      const auto v = static_cast<std::size_t>(F(f, k));
+      for (std::int32_t s = t.vf_offsets[v]; s < t.vf_offsets[v + 1]; ++s) {
+        const std::int32_t g = t.vf_faces[static_cast<std::size_t>(s)];
+        if (g != f) scratch.push_back(g);
+      }
+    }
+    std::sort(scratch.begin(), scratch.end());
+    scratch.erase(std::unique(scratch.begin(), scratch.end()), scratch.end());
+    t.ff_faces.insert(t.ff_faces.end(), scratch.begin(), scratch.end());
+    t.ff_offsets[static_cast<std::size_t>(f) + 1] = static_cast<std::int32_t>(t.ff_faces.size());
+  }
+  t.ff_faces.shrink_to_fit();
+  return t;
+}
+
+std::vector<bool> Topology::boundary_vertex_mask() const {
+  std::vector<bool> mask(static_cast<std::size_t>(num_vertices), false);
+  for (Eigen::Index e = 0; e < boundary_edges.rows(); ++e)
+    for (int k = 0; k < 2; ++k) mask[static_cast<std::size_t>(boundary_edges(e, k))] = true;
+  for (Eigen::Index e = 0; e < nonmanifold_edges.rows(); ++e)
+    for (int k = 0; k < 2; ++k) mask[static_cast<std::size_t>(nonmanifold_edges(e, k))] = true;
+  return mask;
+}
+
+}  // namespace mdn

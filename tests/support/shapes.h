@@ -1,0 +1,130 @@
+// Small procedural test meshes with known geometry (header-only, namespace mdn::test).
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <numbers>
+#include <utility>
+#include <vector>
+
+#include "core/mesh.h"
+
+namespace mdn::test {
+
+// n x n quads over [0, size]^2 at z = 0, each split into two triangles; normal +z.
+inline TriMesh plane(int n, double size = 1.0) {
+  TriMesh m;
+  m.V.resize((n + 1) * (n + 1), 3);
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) m.V.row(j * (n + 1) + i) << size * i / n, size * j / n, 0.0;
+  m.F.resize(2 * n * n, 3);
+  int f = 0;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+      // Alternate the diagonal so the triangulation has no preferred direction.
+      if ((i + j) % 2 == 0) {
+        m.F.row(f++) << a, b, d;
+        m.F.row(f++) << a, d, c;
+      } else {
+        m.F.row(f++) << a, b, c;
+        m.F.row(f++) << b, d, c;
+      }
+    }
+  return m;
+}
+
+// Axis-aligned cube [-0.5, 0.5]^3, each face an n x n grid, shared edge vertices welded;
+// outward normals.
+inline TriMesh cube(int n) {
+  TriMesh m;
+  std::map<std::array<long long, 3>, int> index;  // welding on the integer lattice
+  std::vector<std::array<double, 3>> verts;
+  std::vector<std::array<int, 3>> tris;
+  auto vertex = [&](const std::array<int, 3>& g) {
+    const std::array<long long, 3> key{g[0], g[1], g[2]};
+    auto [it, inserted] = index.emplace(key, static_cast<int>(verts.size()));
+    if (inserted) verts.push_back({double(g[0]) / n - 0.5, double(g[1]) / n - 0.5, double(g[2]) / n - 0.5});
+    return it->second;
+  };
+  // For each of the 6 faces: axis, side (0 or n), and two tangent axes ordered for outward normals.
+  const int faces[6][4] = {{0, n, 1, 2}, {0, 0, 2, 1}, {1, n, 2, 0}, {1, 0, 0, 2}, {2, n, 0, 1}, {2, 0, 1, 0}};
+  for (const auto& fc : faces) {
+    const int axis = fc[0], side = fc[1], u = fc[2], v = fc[3];
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        auto at = [&](int a, int b) {
+          std::array<int, 3> g{};
+          g[axis] = side;
+          g[u] = a;
+          g[v] = b;
+          return vertex(g);
+        };
+        const int p00 = at(i, j), p10 = at(i + 1, j), p01 = at(i, j + 1), p11 = at(i + 1, j + 1);
+        if ((i + j) % 2 == 0) {
+          tris.push_back({p00, p10, p11});
+          tris.push_back({p00, p11, p01});
+        } else {
+          tris.push_back({p00, p10, p01});
+          tris.push_back({p10, p11, p01});
+        }
+      }
+  }
+  m.V.resize(static_cast<Eigen::Index>(verts.size()), 3);
+  for (std::size_t i = 0; i < verts.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) << verts[i][0], verts[i][1], verts[i][2];
+  m.F.resize(static_cast<Eigen::Index>(tris.size()), 3);
+  for (std::size_t i = 0; i < tris.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << tris[i][0], tris[i][1], tris[i][2];
+  return m;
+}
+
+// Unit sphere: icosahedron subdivided `levels` times (1-to-4), projected to the sphere.
+inline TriMesh sphere(int levels) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<Vec3> v = {{-1, t, 0}, {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                                       {11, 10, 2}, {10, 7, 6}, {7, 1, 8},   {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                                       {3, 8, 9},  {4, 9, 5},  {2, 4, 11},  {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  for (auto& p : v) p.normalize();
+  for (int l = 0; l < levels; ++l) {
+    std::map<std::pair<int, int>, int> mid;
+    auto midpoint = [&](int a, int b) {
+      const auto key = std::minmax(a, b);
+      auto [it, inserted] = mid.emplace(key, static_cast<int>(v.size()));
+      if (inserted) v.push_back((v[static_cast<std::size_t>(a)] + v[static_cast<std::size_t>(b)]).normalized());
+      return it->second;
+    };
+    std::vector<std::array<int, 3>> next;
+    for (const auto& tri : f) {
+      const int a = midpoint(tri[0], tri[1]), b = midpoint(tri[1], tri[2]), c = midpoint(tri[2], tri[0]);
+      next.push_back({tri[0], a, c});
+      next.push_back({tri[1], b, a});
+      next.push_back({tri[2], c, b});
+      next.push_back({a, b, c});
+    }
+    f.swap(next);
+  }
+  TriMesh m;
+  m.V.resize(static_cast<Eigen::Index>(v.size()), 3);
+  for (std::size_t i = 0; i < v.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = v[i].transpose();
+  m.F.resize(static_cast<Eigen::Index>(f.size()), 3);
+  for (std::size_t i = 0; i < f.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << f[i][0], f[i][1], f[i][2];
+  return m;
+}
+
+// A folded sheet: two planar n x n wings meeting at the crease x = 0 with the given dihedral
+// opening (180 = flat). Open boundary; normals of each wing are known exactly.
+inline TriMesh fold(int n, double opening_deg) {
+  TriMesh m = plane(n, 2.0);
+  const double half = (180.0 - opening_deg) / 2.0 * std::numbers::pi / 180.0;
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i) {
+    const double x = m.V(i, 0) - 1.0;  // crease at x = 0
+    m.V(i, 0) = x * std::cos(half) * (x < 0 ? 1 : 1);
+    m.V(i, 2) = std::abs(x) * std::sin(half);
+  }
+  return m;
+}
+
+}  // namespace mdn::test
