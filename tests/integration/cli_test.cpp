@@ -1,0 +1,359 @@
+// Black-box tests of the `meshdenoise` executable: the real binary, real files, exit codes
+// and stdout JSON, as a user would see them.
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/metrics.h"
+#include "core/noise.h"
+#include "support/shapes.h"
+
+namespace mdn {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+std::string binary() {
+  const char* dir = std::getenv("MDN_BUILD_DIR");
+  return dir ? std::string(dir) + "/server/meshdenoise" : std::string();
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+}
+
+std::string off_text(const TriMesh& mesh) {
+  std::string out = "OFF\n" + std::to_string(mesh.num_vertices()) + " " + std::to_string(mesh.num_faces()) + " 0\n";
+  char buffer[96];
+  for (Eigen::Index i = 0; i < mesh.V.rows(); ++i) {
+    std::snprintf(buffer, sizeof buffer, "%.17g %.17g %.17g\n", mesh.V(i, 0), mesh.V(i, 1), mesh.V(i, 2));
+    out += buffer;
+  }
+  for (Eigen::Index f = 0; f < mesh.F.rows(); ++f) {
+    out += "3 " + std::to_string(mesh.F(f, 0)) + " " + std::to_string(mesh.F(f, 1)) + " " +
+           std::to_string(mesh.F(f, 2)) + "\n";
+  }
+  return out;
+}
+
+std::string quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_FALSE(binary().empty()) << "MDN_BUILD_DIR is not set (ctest sets it)";
+    ASSERT_TRUE(fs::exists(binary())) << binary() << " was not built";
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           ("mdn_cli_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ignored;
+    fs::remove_all(dir_, ignored);
+  }
+
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+  // Runs meshdenoise with the given (already quoted) arguments; stderr is not a terminal,
+  // so no progress bar is drawn.
+  Result run(const std::string& args) const {
+    const std::string out = path("stdout.txt"), err = path("stderr.txt");
+    const std::string command = quote(binary()) + " " + args + " >" + quote(out) + " 2>" + quote(err) + " </dev/null";
+    const int status = std::system(command.c_str());
+    Result r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    r.out = read_text(out);
+    r.err = read_text(err);
+    return r;
+  }
+
+  // Writes a clean sphere and a noisy copy (noise added in-process by core, not by the CLI).
+  void write_sphere_pair(int levels = 3) {
+    clean_ = test::sphere(levels);
+    noisy_ = clean_;
+    noisy_.V = add_noise(clean_, {NoiseKind::AlongNormal, 0.3, 11, 0});
+    write_text(path("clean.off"), off_text(clean_));
+    write_text(path("noisy.off"), off_text(noisy_));
+  }
+
+  fs::path dir_;
+  TriMesh clean_, noisy_;
+};
+
+json parse_stdout(const Result& r) {
+  try {
+    return json::parse(r.out);
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "stdout is not JSON (" << e.what() << "): " << r.out << "\nstderr: " << r.err;
+    return json::object();
+  }
+}
+
+TEST_F(Cli, HelpAndVersion) {
+  const Result help = run("--help");
+  EXPECT_EQ(help.code, 0);
+  EXPECT_NE(help.out.find("Usage:"), std::string::npos);
+  EXPECT_NE(help.out.find("n_normal"), std::string::npos);  // parameters listed from core's specs
+  EXPECT_NE(help.out.find("Exit codes"), std::string::npos);
+  const Result version = run("--version");
+  EXPECT_EQ(version.code, 0);
+  EXPECT_EQ(version.out.rfind("meshdenoise ", 0), 0u) << version.out;
+}
+
+TEST_F(Cli, DenoisingImprovesAgainstGroundTruth) {
+  write_sphere_pair();
+  // Measure only: IN against GT, no OUT.
+  const Result noisy = run("--metrics " + quote(path("clean.off")) + " " + quote(path("noisy.off")));
+  ASSERT_EQ(noisy.code, 0) << noisy.err;
+  const json before = parse_stdout(noisy);
+  // The CLI's figure is core's figure on the same meshes.
+  EXPECT_NEAR(before["msae"].get<double>(), msae(noisy_, clean_), 1e-12);
+  EXPECT_NEAR(before["msae_deg2"].get<double>(), before["msae"].get<double>() * std::pow(180 / std::numbers::pi, 2), 1e-9);
+  EXPECT_GT(before["ev"].get<double>(), 0);
+
+  // Denoise and measure the written file.
+  const Result denoised = run("--metrics " + quote(path("clean.off")) + " " + quote(path("noisy.off")) + " " +
+                              quote(path("out.off")));
+  ASSERT_EQ(denoised.code, 0) << denoised.err;
+  const json after = parse_stdout(denoised);
+  ASSERT_TRUE(fs::exists(path("out.off")));
+  EXPECT_LT(after["msae"].get<double>(), before["msae"].get<double>() / 4) << after << " vs " << before;
+  EXPECT_LT(after["ev"].get<double>(), before["ev"].get<double>()) << after << " vs " << before;
+
+  // And the written file measured on its own gives the same figures.
+  const Result remeasured = run("--metrics " + quote(path("clean.off")) + " " + quote(path("out.off")));
+  ASSERT_EQ(remeasured.code, 0) << remeasured.err;
+  EXPECT_EQ(parse_stdout(remeasured), after);
+}
+
+TEST_F(Cli, AddNoiseThenDenoiseThenMeasure) {
+  write_text(path("clean.off"), off_text(test::sphere(3)));
+  const std::string spec = quote(R"({"kind":"along_normal","sigma":0.3,"seed":5,"impulse_fraction":0})");
+  const Result noise = run("--add-noise " + spec + " " + quote(path("clean.off")) + " " + quote(path("noisy.off")));
+  ASSERT_EQ(noise.code, 0) << noise.err;
+  EXPECT_NE(read_text(path("noisy.off")), read_text(path("clean.off")));
+
+  // Seeded: the same spec gives the same file, another seed another one.
+  ASSERT_EQ(run("--add-noise " + spec + " " + quote(path("clean.off")) + " " + quote(path("noisy2.off"))).code, 0);
+  EXPECT_EQ(read_text(path("noisy.off")), read_text(path("noisy2.off")));
+  ASSERT_EQ(run("--add-noise '{\"seed\":6,\"sigma\":0.3}' " + quote(path("clean.off")) + " " +
+                quote(path("noisy3.off"))).code, 0);
+  EXPECT_NE(read_text(path("noisy.off")), read_text(path("noisy3.off")));
+
+  // The spec can also come from a file.
+  write_text(path("spec.json"), R"({"kind":"along_normal","sigma":0.3,"seed":5})");
+  ASSERT_EQ(run("--add-noise " + quote(path("spec.json")) + " " + quote(path("clean.off")) + " " +
+                quote(path("noisy4.off"))).code, 0);
+  EXPECT_EQ(read_text(path("noisy.off")), read_text(path("noisy4.off")));
+
+  const json before = parse_stdout(run("--metrics " + quote(path("clean.off")) + " " + quote(path("noisy.off"))));
+  const Result denoise = run("--metrics " + quote(path("clean.off")) + " " + quote(path("noisy.off")) + " " +
+                             quote(path("denoised.off")));
+  ASSERT_EQ(denoise.code, 0) << denoise.err;
+  const json after = parse_stdout(denoise);
+  ASSERT_GT(before["msae"].get<double>(), 0);
+  EXPECT_LT(after["msae"].get<double>(), before["msae"].get<double>() / 4) << after << " vs " << before;
+}
+
+TEST_F(Cli, SameBytesForOneAndTwoThreads) {
+  write_sphere_pair();
+  ASSERT_EQ(run("--threads 1 " + quote(path("noisy.off")) + " " + quote(path("t1.off"))).code, 0);
+  ASSERT_EQ(run("--threads=2 " + quote(path("noisy.off")) + " " + quote(path("t2.off"))).code, 0);
+  const std::string one = read_text(path("t1.off"));
+  EXPECT_FALSE(one.empty());
+  EXPECT_EQ(one, read_text(path("t2.off")));
+}
+
+TEST_F(Cli, ParamsInlineAndFromFileAndReport) {
+  write_sphere_pair();
+  const std::string params = R"({"n_normal": 5, "n_vertex": 4, "region_mode": "off"})";
+  const Result inline_run =
+      run("--report --params " + quote(params) + " " + quote(path("noisy.off")) + " " + quote(path("a.off")));
+  ASSERT_EQ(inline_run.code, 0) << inline_run.err;
+  const json report = parse_stdout(inline_run);
+  EXPECT_EQ(report["params"]["n_normal"], 5);
+  EXPECT_EQ(report["params"]["n_vertex"], 4);
+  EXPECT_EQ(report["params"]["region_mode"], "off");
+  EXPECT_EQ(report["params"]["alpha"], 0.1);  // defaults filled in and echoed
+  EXPECT_EQ(report["params"]["output"]["format"], "off");
+  EXPECT_EQ(report["vertices"], clean_.num_vertices());
+  EXPECT_EQ(report["faces"], clean_.num_faces());
+  EXPECT_TRUE(report["timings_ms"]["normal"].is_number());
+  EXPECT_TRUE(report["timings_ms"]["total"].is_number());
+  ASSERT_EQ(report["surfaces"].size(), 1u);
+  EXPECT_EQ(report["surfaces"][0]["region_prefilter_applied"], false);  // region_mode off
+  EXPECT_TRUE(report["surfaces"][0]["fold_ratio"].is_number());
+
+  write_text(path("params.json"), params);
+  const Result file_run = run("--params " + quote(path("params.json")) + " " + quote(path("noisy.off")) + " " +
+                              quote(path("b.off")));
+  ASSERT_EQ(file_run.code, 0) << file_run.err;
+  EXPECT_EQ(read_text(path("a.off")), read_text(path("b.off")));
+  EXPECT_TRUE(file_run.out.empty());  // nothing on stdout without --report / --metrics
+  // Different parameters really give a different result.
+  ASSERT_EQ(run(quote(path("noisy.off")) + " " + quote(path("c.off"))).code, 0);
+  EXPECT_NE(read_text(path("a.off")), read_text(path("c.off")));
+}
+
+TEST_F(Cli, OutputFormatFollowsTheExtension) {
+  write_sphere_pair(2);
+  const Result r = run(quote(path("noisy.off")) + " " + quote(path("out.ply")));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(read_text(path("out.ply")).rfind("ply", 0), 0u);
+  const Result obj = run(quote(path("noisy.off")) + " " + quote(path("out.obj")));
+  ASSERT_EQ(obj.code, 0) << obj.err;
+  // An OFF input without extension is recognised by its content.
+  fs::copy_file(path("noisy.off"), path("noisy_no_extension"));
+  const Result sniffed = run(quote(path("noisy_no_extension")) + " " + quote(path("sniffed.off")));
+  ASSERT_EQ(sniffed.code, 0) << sniffed.err;
+  ASSERT_EQ(run(quote(path("noisy.off")) + " " + quote(path("direct.off"))).code, 0);
+  EXPECT_EQ(read_text(path("sniffed.off")), read_text(path("direct.off")));
+  // A conflicting explicit format is a usage error.
+  const Result conflict = run("--params '{\"output\":{\"format\":\"obj\"}}' " + quote(path("noisy.off")) + " " +
+                              quote(path("x.ply")));
+  EXPECT_EQ(conflict.code, 2) << conflict.err;
+}
+
+TEST_F(Cli, BadArgumentsExitTwoWithAMessage) {
+  write_sphere_pair(1);
+  const std::string in = quote(path("noisy.off")), out = quote(path("out.off"));
+  struct Case {
+    std::string args, message;
+  };
+  const std::vector<Case> cases = {
+      {"", "expected IN and OUT"},
+      {in, "missing OUT"},
+      {in + " " + out + " " + out, "expected IN and OUT"},
+      {"--frobnicate " + in + " " + out, "unknown option --frobnicate"},
+      {"--threads 0 " + in + " " + out, "--threads must be an integer in [1, 1024]"},
+      {"--threads two " + in + " " + out, "--threads"},
+      {in + " " + out + " --params", "--params needs a value"},
+      {"--params '{\"n_normal\": 2.5}' " + in + " " + out, "n_normal must be an integer in ["},
+      {"--params '{\"alpha\": \"0.1\"}' " + in + " " + out, "alpha must be a number in ["},
+      {"--params '{\"n_normals\": 3}' " + in + " " + out, "unknown field \"n_normals\""},
+      {"--params '{\"output\": {\"position_bits\": 99}}' " + in + " " + out, "output.position_bits"},
+      {"--params '{\"alpha\": 0.1' " + in + " " + out, "params is not valid JSON"},
+      {"--params " + quote(path("missing.json")) + " " + in + " " + out, "--params"},
+      {"--add-noise '{\"sigma\": -1}' " + in + " " + out, "sigma must be a number in [0, 10]"},
+      {"--add-noise '{}' --params '{}' " + in + " " + out, "cannot be combined"},
+      {"--report=yes " + in + " " + out, "takes no value"},
+  };
+  for (const auto& c : cases) {
+    const Result r = run(c.args);
+    EXPECT_EQ(r.code, 2) << c.args << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << c.args << "\nstderr: " << r.err;
+    EXPECT_TRUE(r.out.empty()) << c.args;
+  }
+  EXPECT_FALSE(fs::exists(path("out.off")));  // nothing written on a usage error
+}
+
+TEST_F(Cli, BadInputFilesExitThree) {
+  write_sphere_pair(1);
+  write_text(path("truncated.off"), "OFF\n4 2 0\n0 0 0\n1 0 0\n");
+  write_text(path("nonsense.off"), "this is not a mesh at all\n");
+  write_text(path("nonsense.dat"), "this is not a mesh at all\n");
+  write_text(path("quad.off"), "OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n");
+  write_text(path("nan.off"), "OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n");
+  write_text(path("badindex.off"), "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
+  write_text(path("other.off"), off_text(test::plane(3)));
+  const std::string out = quote(path("out.off"));
+  const std::vector<std::string> cases = {
+      quote(path("missing.off")) + " " + out,
+      quote(path("truncated.off")) + " " + out,
+      quote(path("nonsense.off")) + " " + out,
+      quote(path("nonsense.dat")) + " " + out,
+      quote(path("quad.off")) + " " + out,
+      quote(path("nan.off")) + " " + out,
+      quote(path("badindex.off")) + " " + out,
+      // Ground truth with other faces than the result.
+      "--metrics " + quote(path("other.off")) + " " + quote(path("noisy.off")),
+      "--metrics " + quote(path("missing.off")) + " " + quote(path("noisy.off")),
+      // Output that cannot be written.
+      quote(path("noisy.off")) + " " + quote(path("no/such/dir/out.off")),
+  };
+  for (const auto& args : cases) {
+    const Result r = run(args);
+    EXPECT_EQ(r.code, 3) << args << "\nstderr: " << r.err;
+    EXPECT_EQ(r.err.rfind("meshdenoise: error: ", 0), 0u) << args << "\nstderr: " << r.err;
+  }
+  const Result missing = run(quote(path("missing.off")) + " " + out);
+  EXPECT_NE(missing.err.find("missing.off"), std::string::npos) << missing.err;  // names the file
+}
+
+// SIGINT cancels cooperatively: exit 130, no output file. The signal is sent only once the
+// process has installed its handler (read from /proc), so the test does not depend on timing.
+TEST_F(Cli, SigintCancelsWithExit130) {
+  write_text(path("big.off"), off_text(test::sphere(5)));
+  const std::string params = R"({"n_aniso": 100, "n_normal": 1000, "n_vertex": 1000})";
+  const std::string out = path("never.off"), err = path("stderr.txt");
+  const std::string bin = binary(), p = path("big.off");
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    // Only async-signal-safe calls between fork and exec.
+    const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(fd, 2);
+    ::execl(bin.c_str(), bin.c_str(), "--threads", "1", "--params", params.c_str(), p.c_str(), out.c_str(),
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  // Wait (up to a generous bound) until SIGINT (signal 2 -> bit 1 of SigCgt) is caught.
+  bool caught = false;
+  for (int i = 0; i < 6000 && !caught; ++i) {
+    std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+    std::string line;
+    while (std::getline(status, line)) {
+      if (line.rfind("SigCgt:", 0) == 0) {
+        caught = (std::stoull(line.substr(7), nullptr, 16) & 0x2u) != 0;
+      }
+    }
+    if (!caught) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_TRUE(caught) << "meshdenoise never installed its SIGINT handler";
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 130) << read_text(err);
+  EXPECT_NE(read_text(err).find("cancelled"), std::string::npos) << read_text(err);
+  EXPECT_FALSE(fs::exists(out));
+}
+
+}  // namespace
+}  // namespace mdn
