@@ -1,0 +1,33 @@
+// Internal to mdn_io: Draco payloads <-> draco::Mesh with the library's core Decoder and
+// Encoder (never draco::GltfDecoder, see core/io/README.md), and the geometry update shared
+// by raw .drc files and KHR_draco_mesh_compression primitives.
+#pragma once
+
+#include <draco/mesh/mesh.h>
+
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "core/io/document.h"
+#include "core/io/weld.h"
+
+namespace mdn::io::detail {
+
+// Decodes a Draco mesh payload. `what` names it in errors ("DRC", "mesh 2 primitive 0").
+// Throws FormatError (corrupt payload), UnsupportedError (a point cloud) or LimitError.
+std::unique_ptr<draco::Mesh> draco_decode(std::string_view bytes, const std::string& what, const Limits& limits);
+
+// Encodes with the quantisation bits and speed of `options`. Deterministic.
+std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options);
+
+// Reads every point's position (#points by 3) and the faces as point indices.
+Vertices draco_positions(const draco::Mesh& mesh);
+Triangles draco_faces(const draco::Mesh& mesh);
+
+// Writes new positions into `mesh`: point p gets welded[point_to_weld[p]]. If the mesh has
+// a NORMAL attribute, its values are recomputed from the new surface, each normal value from
+// the faces whose corners use it (so split normals, i.e. hard edges, stay split).
+void draco_update_geometry(draco::Mesh& mesh, const Vertices& welded, const std::vector<std::int32_t>& point_to_weld);
+
+}  // namespace mdn::io::detail

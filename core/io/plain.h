@@ -1,0 +1,27 @@
+// Internal to mdn_io: writers for bare triangle surfaces, used when the caller asks for an
+// output container other than the input's (e.g. OFF in, PLY out). They write positions and
+// triangles only; what the input carried besides geometry stays with same-format outputs.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/io/document.h"
+
+namespace mdn::io::detail {
+
+// Surfaces are concatenated into one mesh for the single-mesh formats (OFF, OBJ, PLY, DRC)
+// and become one glTF mesh each (one node per mesh) for GLB / glTF.
+std::string encode_plain(const std::vector<TriMesh>& surfaces, Format format, const EncodeOptions& options);
+
+std::string write_off(const TriMesh& mesh);
+std::string write_obj(const TriMesh& mesh);
+std::string write_ply(const TriMesh& mesh);  // binary little endian, float positions, int indices
+std::string write_drc(const TriMesh& mesh, const EncodeOptions& options);
+std::string write_plain_gltf(const std::vector<TriMesh>& surfaces, Format format, const EncodeOptions& options);
+
+// Throws InvalidMeshError if a caller changed the number of vertices of a surface (the
+// document maps every welded vertex back to the file's copies and needs the same count).
+void check_surface_sizes(const std::vector<TriMesh>& surfaces, const std::vector<std::int64_t>& counts);
+
+}  // namespace mdn::io::detail

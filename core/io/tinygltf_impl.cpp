@@ -1,0 +1,1 @@
+// tinygltf implementation unit: filled in with the glTF adapter.
