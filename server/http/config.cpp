@@ -1,0 +1,196 @@
+#include "server/http/config.h"
+
+#include <charconv>
+#include <cmath>
+#include <sstream>
+#include <thread>
+
+namespace mdn::http {
+namespace {
+
+std::int64_t parse_int(const std::string& name, const std::string& text, std::int64_t lo, std::int64_t hi) {
+  std::int64_t value = 0;
+  const char* end = text.data() + text.size();
+  auto [ptr, ec] = std::from_chars(text.data(), end, value);
+  std::int64_t multiplier = 1;
+  if (ec == std::errc() && ptr != end && ptr + 1 == end) {  // size suffixes for byte counts
+    switch (*ptr) {
+      case 'k': case 'K': multiplier = std::int64_t{1} << 10; ++ptr; break;
+      case 'm': case 'M': multiplier = std::int64_t{1} << 20; ++ptr; break;
+      case 'g': case 'G': multiplier = std::int64_t{1} << 30; ++ptr; break;
+      default: break;
+    }
+  }
+  if (ec != std::errc() || ptr != end || text.empty())
+    throw ConfigError(name + ": expected an integer, got '" + text + "'");
+  if (value > hi / multiplier || value < lo / multiplier || value * multiplier < lo || value * multiplier > hi)
+    throw ConfigError(name + ": " + text + " is outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  return value * multiplier;
+}
+
+double parse_seconds(const std::string& name, const std::string& text, double lo, double hi, bool lo_open) {
+  double value = 0;
+  const char* end = text.data() + text.size();
+  auto [ptr, ec] = std::from_chars(text.data(), end, value);
+  if (ec != std::errc() || ptr != end || text.empty() || !std::isfinite(value))
+    throw ConfigError(name + ": expected a number of seconds, got '" + text + "'");
+  if (value < lo || (lo_open && value == lo) || value > hi) {
+    std::ostringstream range;
+    range << (lo_open ? "(" : "[") << lo << ", " << hi << "]";
+    throw ConfigError(name + ": " + text + " is outside " + range.str());
+  }
+  return value;
+}
+
+struct Setting {
+  const char* flag;  // without "--"
+  const char* env;
+  const char* help;
+  std::function<void(ServerConfig&, const std::string& name, const std::string& value)> set;
+  std::function<std::string(const ServerConfig&)> show;
+};
+
+std::string show_double(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+const std::vector<Setting>& settings() {
+  static const std::vector<Setting> table = {
+      {"host", "MDN_HOST", "address to listen on (0.0.0.0: every interface)",
+       [](ServerConfig& c, const std::string&, const std::string& v) { c.host = v; },
+       [](const ServerConfig& c) { return c.host; }},
+      {"port", "MDN_PORT", "TCP port; 0 picks a free one (see --port-file)",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.port = int(parse_int(n, v, 0, 65535)); },
+       [](const ServerConfig& c) { return std::to_string(c.port); }},
+      {"port-file", "MDN_PORT_FILE", "write the bound port to this file once listening (for scripts and tests)",
+       [](ServerConfig& c, const std::string&, const std::string& v) { c.port_file = v; },
+       [](const ServerConfig& c) { return c.port_file.empty() ? std::string("(none)") : c.port_file; }},
+      {"workers", "MDN_WORKERS", "worker threads running the pipeline; 0 = number of cores",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.workers = int(parse_int(n, v, 0, 256)); },
+       [](const ServerConfig& c) { return std::to_string(c.workers) + " (" + std::to_string(c.effective_workers()) + " here)"; }},
+      {"threads-per-job", "MDN_THREADS_PER_JOB", "threads inside one pipeline run, [1, 64]",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.threads_per_job = int(parse_int(n, v, 1, 64)); },
+       [](const ServerConfig& c) { return std::to_string(c.threads_per_job); }},
+      {"queue-capacity", "MDN_QUEUE_CAPACITY", "jobs waiting for a worker; beyond it new jobs get 503",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.queue_capacity = int(parse_int(n, v, 1, 100000)); },
+       [](const ServerConfig& c) { return std::to_string(c.queue_capacity); }},
+      {"job-time-limit", "MDN_JOB_TIME_LIMIT", "seconds of running time after which a job fails",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.job_time_limit_s = parse_seconds(n, v, 0, 1e6, true); },
+       [](const ServerConfig& c) { return show_double(c.job_time_limit_s); }},
+      {"result-ttl", "MDN_RESULT_TTL", "seconds a finished job and its result stay available",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.result_ttl_s = parse_seconds(n, v, 0, 1e7, true); },
+       [](const ServerConfig& c) { return show_double(c.result_ttl_s); }},
+      {"max-stored-jobs", "MDN_MAX_STORED_JOBS", "finished jobs kept at most (the oldest are evicted first)",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_stored_jobs = int(parse_int(n, v, 1, 1000000)); },
+       [](const ServerConfig& c) { return std::to_string(c.max_stored_jobs); }},
+      {"max-body", "MDN_MAX_BODY", "largest request body in bytes (suffix K, M or G allowed)",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_body_bytes = parse_int(n, v, 1, std::int64_t{1} << 40); },
+       [](const ServerConfig& c) { return std::to_string(c.max_body_bytes); }},
+      {"max-faces", "MDN_MAX_FACES", "largest number of faces of one surface",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_faces = parse_int(n, v, 1, std::int64_t{1} << 31); },
+       [](const ServerConfig& c) { return std::to_string(c.max_faces); }},
+      {"max-vertices", "MDN_MAX_VERTICES", "largest number of vertices of one surface",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_vertices = parse_int(n, v, 1, std::int64_t{1} << 31); },
+       [](const ServerConfig& c) { return std::to_string(c.max_vertices); }},
+      {"io-threads", "MDN_IO_THREADS", "HTTP threads; each open connection holds one",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.io_threads = int(parse_int(n, v, 4, 4096)); },
+       [](const ServerConfig& c) { return std::to_string(c.io_threads); }},
+      {"keep-alive-timeout", "MDN_KEEP_ALIVE_TIMEOUT", "seconds an idle keep-alive connection is kept",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.keep_alive_timeout_s = parse_seconds(n, v, 0, 3600, true); },
+       [](const ServerConfig& c) { return show_double(c.keep_alive_timeout_s); }},
+      {"keep-alive-max", "MDN_KEEP_ALIVE_MAX", "requests served on one connection",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.keep_alive_max = int(parse_int(n, v, 1, 1000000)); },
+       [](const ServerConfig& c) { return std::to_string(c.keep_alive_max); }},
+      {"read-timeout", "MDN_READ_TIMEOUT", "seconds to wait for request bytes",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.read_timeout_s = parse_seconds(n, v, 0, 3600, true); },
+       [](const ServerConfig& c) { return show_double(c.read_timeout_s); }},
+      {"write-timeout", "MDN_WRITE_TIMEOUT", "seconds to wait while sending response bytes",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.write_timeout_s = parse_seconds(n, v, 0, 3600, true); },
+       [](const ServerConfig& c) { return show_double(c.write_timeout_s); }},
+      {"drain-grace", "MDN_DRAIN_GRACE", "on SIGTERM/SIGINT, seconds allowed for queued and running jobs",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.drain_grace_s = parse_seconds(n, v, 0, 1e6, false); },
+       [](const ServerConfig& c) { return show_double(c.drain_grace_s); }},
+      {"auth-token", "MDN_AUTH_TOKEN", "require 'Authorization: Bearer <token>' on /v1 (prefer the variable: flags show in ps)",
+       [](ServerConfig& c, const std::string&, const std::string& v) { c.auth_token = v; },
+       [](const ServerConfig& c) { return c.auth_token.empty() ? std::string("(none)") : std::string("(set)"); }},
+      {"cors-origin", "MDN_CORS_ORIGIN", "Access-Control-Allow-Origin for browser clients; empty disables CORS",
+       [](ServerConfig& c, const std::string&, const std::string& v) { c.cors_origin = v; },
+       [](const ServerConfig& c) { return c.cors_origin.empty() ? std::string("(disabled)") : c.cors_origin; }},
+      {"log-format", "MDN_LOG_FORMAT", "text or json (one JSON object per line)",
+       [](ServerConfig& c, const std::string& n, const std::string& v) {
+         if (v == "text") c.log_format = LogFormat::Text;
+         else if (v == "json") c.log_format = LogFormat::Json;
+         else throw ConfigError(n + ": expected text or json, got '" + v + "'");
+       },
+       [](const ServerConfig& c) { return std::string(c.log_format == LogFormat::Json ? "json" : "text"); }},
+      {"log-level", "MDN_LOG_LEVEL", "trace, debug, info, warn, error or off",
+       [](ServerConfig& c, const std::string& n, const std::string& v) {
+         static const char* levels[] = {"trace", "debug", "info", "warn", "error", "off"};
+         for (const char* l : levels)
+           if (v == l) { c.log_level = v; return; }
+         throw ConfigError(n + ": expected trace, debug, info, warn, error or off, got '" + v + "'");
+       },
+       [](const ServerConfig& c) { return c.log_level; }},
+  };
+  return table;
+}
+
+}  // namespace
+
+int ServerConfig::effective_workers() const {
+  if (workers > 0) return workers;
+  const unsigned cores = std::thread::hardware_concurrency();
+  return cores > 0 ? int(cores) : 1;
+}
+
+ParsedCommandLine parse_command_line(const std::vector<std::string>& args,
+                                     const std::function<const char*(const char*)>& getenv_fn) {
+  ParsedCommandLine out;
+  for (const Setting& s : settings()) {
+    if (const char* v = getenv_fn ? getenv_fn(s.env) : nullptr; v != nullptr)
+      s.set(out.config, s.env, v);
+  }
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    if (arg == "--help" || arg == "-h") { out.help = true; continue; }
+    if (arg == "--version") { out.version = true; continue; }
+    if (arg.rfind("--", 0) != 0) throw ConfigError("unexpected argument '" + arg + "' (see --help)");
+    std::string name = arg.substr(2), value;
+    bool has_value = false;
+    if (auto eq = name.find('='); eq != std::string::npos) {
+      value = name.substr(eq + 1);
+      name.resize(eq);
+      has_value = true;
+    }
+    const Setting* found = nullptr;
+    for (const Setting& s : settings())
+      if (name == s.flag) found = &s;
+    if (found == nullptr) throw ConfigError("unknown flag --" + name + " (see --help)");
+    if (!has_value) {
+      if (i + 1 >= args.size()) throw ConfigError("--" + name + " needs a value");
+      value = args[++i];
+    }
+    found->set(out.config, "--" + name, value);
+  }
+  return out;
+}
+
+std::string help_text() {
+  const ServerConfig defaults;
+  std::ostringstream out;
+  out << "meshdenoise-server: HTTP service for robust mesh denoising (Lu, Chen, Schaefer).\n\n"
+      << "Usage: meshdenoise-server [--flag value | --flag=value]...\n\n"
+      << "Every setting can also come from its environment variable; flags win.\n\n";
+  for (const Setting& s : settings()) {
+    out << "  --" << s.flag << " (" << s.env << ")\n      " << s.help << "; default: " << s.show(defaults) << "\n";
+  }
+  out << "  --help     this text\n  --version  print the version\n\n"
+      << "API: GET /openapi.yaml describes every route; GET /v1/params lists the parameters.\n"
+      << "SIGTERM/SIGINT: /readyz turns 503, new jobs get 503, accepted jobs finish within\n"
+      << "--drain-grace seconds, then the process exits 0.\n";
+  return out.str();
+}
+
+}  // namespace mdn::http

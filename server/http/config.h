@@ -1,0 +1,71 @@
+// Configuration of meshdenoise-server: every setting, its default, flag and environment
+// variable. Parsed once in main() and passed down; nothing reads the environment later.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace mdn::http {
+
+enum class LogFormat { Text, Json };
+
+struct ServerConfig {
+  // --- Listening ---
+  std::string host = "127.0.0.1";  // --host / MDN_HOST; 0.0.0.0 to listen on every interface
+  int port = 8080;                 // --port / MDN_PORT; 0 picks a free port (see port_file)
+  std::string port_file;           // --port-file / MDN_PORT_FILE; written once bound (tests)
+
+  // --- Execution ---
+  int workers = 0;            // --workers; pipeline threads; 0 = number of cores; [0, 256]
+  int threads_per_job = 1;    // --threads-per-job; threads inside one pipeline run; [1, 64]
+  int queue_capacity = 64;    // --queue-capacity; queued (not yet running) jobs; [1, 100000]
+  double job_time_limit_s = 300;   // --job-time-limit; seconds of running time per job; (0, 1e6]
+  double result_ttl_s = 600;       // --result-ttl; seconds a finished job and its result are kept
+  int max_stored_jobs = 1024;      // --max-stored-jobs; finished jobs kept at most (oldest evicted)
+
+  // --- Input limits ---
+  std::int64_t max_body_bytes = std::int64_t{256} << 20;  // --max-body; request body bytes
+  std::int64_t max_faces = 5'000'000;                     // --max-faces; per surface
+  std::int64_t max_vertices = 5'000'000;                  // --max-vertices; per surface
+
+  // --- Connections (cpp-httplib holds one I/O thread per open connection) ---
+  int io_threads = 64;              // --io-threads; HTTP threads, >= 4
+  double keep_alive_timeout_s = 2;  // --keep-alive-timeout; short, idle clients hold a thread
+  int keep_alive_max = 100;         // --keep-alive-max; requests per connection
+  double read_timeout_s = 30;       // --read-timeout
+  double write_timeout_s = 30;      // --write-timeout
+
+  // --- Operations ---
+  double drain_grace_s = 30;     // --drain-grace; on SIGTERM, time for queued+running jobs
+  std::string auth_token;        // --auth-token / MDN_AUTH_TOKEN; empty = no auth (prefer the env)
+  std::string cors_origin = "*"; // --cors-origin; Access-Control-Allow-Origin; empty = no CORS
+  LogFormat log_format = LogFormat::Text;  // --log-format text|json
+  std::string log_level = "info";          // --log-level trace|debug|info|warn|error|off
+
+  int effective_workers() const;
+};
+
+// A bad flag, environment variable or value; what() names it.
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct ParsedCommandLine {
+  ServerConfig config;
+  bool help = false;
+  bool version = false;
+};
+
+// Defaults, then MDN_* environment variables (getenv-style lookup passed in so tests can
+// supply their own), then flags (--name value or --name=value). Throws ConfigError.
+ParsedCommandLine parse_command_line(const std::vector<std::string>& args,
+                                     const std::function<const char*(const char*)>& getenv_fn);
+// --help text: every setting with its flag, environment variable and default.
+std::string help_text();
+
+}  // namespace mdn::http

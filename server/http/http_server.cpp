@@ -1,0 +1,829 @@
+#include "server/http/http_server.h"
+
+#include <httplib.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <charconv>
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <functional>
+#include <map>
+#include <random>
+#include <regex>
+#include <thread>
+
+#include "core/params.h"
+#include "server/http/connection_probe.h"
+#include "server/http/embedded.h"
+#include "server/http/metrics.h"
+#include "server/http/problem.h"
+#include "server/params_json.h"
+
+namespace mdn::http {
+namespace {
+
+using nlohmann::json;
+
+// Response headers a browser script may read (CORS).
+constexpr const char* kExposedHeaders =
+    "Location, Retry-After, X-Request-Id, Server-Timing, Content-Disposition, Idempotent-Replayed, "
+    "X-Denoise-Params, X-Denoise-Input-Bytes, X-Denoise-Output-Bytes, X-Denoise-Vertices, X-Denoise-Faces, "
+    "X-Denoise-Notes";
+constexpr const char* kAllowedRequestHeaders =
+    "Authorization, Content-Type, X-Request-Id, X-Denoise-Params, Idempotency-Key";
+
+std::string lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::string trim(std::string_view s) {
+  const auto b = s.find_first_not_of(" \t");
+  if (b == std::string_view::npos) return {};
+  const auto e = s.find_last_not_of(" \t");
+  return std::string(s.substr(b, e - b + 1));
+}
+
+// "model/gltf-binary; charset=x" -> "model/gltf-binary"
+std::string base_media_type(std::string_view content_type) {
+  return lower(trim(content_type.substr(0, content_type.find(';'))));
+}
+
+void replace_header(httplib::Response& res, const std::string& key, const std::string& value) {
+  res.headers.erase(key);
+  res.set_header(key, value);
+}
+
+// A header value must not carry CR/LF (response splitting) nor other control characters.
+std::string header_safe(std::string_view text) {
+  std::string out;
+  for (char c : text) out += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? ' ' : c;
+  return out;
+}
+
+std::string format_ms(double ms) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f", ms);
+  return buf;
+}
+
+std::string iso8601(std::chrono::system_clock::time_point t) {
+  const std::time_t tt = std::chrono::system_clock::to_time_t(t);
+  std::tm tm{};
+  gmtime_r(&tt, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+bool has_request_body(const httplib::Request& req) {
+  if (lower(req.get_header_value("Transfer-Encoding")).find("chunked") != std::string::npos) return true;
+  return req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0";
+}
+
+// Media types accepted for mesh bodies; nullopt means "recognise the bytes" (sniffing).
+struct InputMediaType {
+  std::string_view media_type;
+  std::optional<io::Format> format;
+};
+constexpr InputMediaType kInputMediaTypes[] = {
+    {"model/gltf-binary", io::Format::Glb},
+    {"model/gltf+json", io::Format::Gltf},
+    {"model/x-off", io::Format::Off},
+    {"model/obj", io::Format::Obj},
+    {"model/x-ply", io::Format::Ply},
+    {"model/x-draco", io::Format::Drc},
+    {"application/octet-stream", std::nullopt},  // .drc, or any format recognised by content
+    {"text/plain", std::nullopt},                // OFF/OBJ/PLY ASCII recognised by content
+};
+
+std::string accepted_media_types() {
+  std::string out;
+  for (const auto& t : kInputMediaTypes) out += (out.empty() ? "" : ", ") + std::string(t.media_type);
+  return out;
+}
+
+Problem unsupported_media_type(const std::string& detail) {
+  Problem p = make_problem(415, "unsupported-media-type", "Unsupported media type", detail);
+  p.extensions["accepted"] = accepted_media_types();
+  return p;
+}
+
+// The container of a mesh body: from its declared media type, else from its bytes.
+io::Format resolve_format(const std::string& content_type, std::string_view bytes,
+                          const std::string& filename = {}) {
+  const std::string type = base_media_type(content_type);
+  bool sniff = type.empty();
+  for (const auto& t : kInputMediaTypes) {
+    if (type == t.media_type) {
+      if (t.format) return *t.format;
+      sniff = true;
+    }
+  }
+  if (!sniff) {
+    // Whatever media type the io adapters emit is accepted too (a result can be sent back).
+    for (io::Format f : {io::Format::Off, io::Format::Obj, io::Format::Ply, io::Format::Drc, io::Format::Glb,
+                         io::Format::Gltf}) {
+      if (type == io::media_type(f)) {
+        if (type == "application/octet-stream" || type == "text/plain") break;
+        return f;
+      }
+    }
+    throw HttpError(unsupported_media_type("media type '" + type + "' is not a mesh format this service reads"));
+  }
+  if (!filename.empty())
+    if (auto f = io::format_from_extension(filename)) return *f;
+  if (auto f = io::sniff_format(bytes)) return *f;
+  throw HttpError(unsupported_media_type(
+      "the body is not recognisable as glTF, GLB, Draco, OFF, OBJ or PLY; declare its media type"));
+}
+
+json output_summary(const service::JobOutput& out) {
+  json reports = json::array();
+  for (const DenoiseReport& r : out.reports) {
+    reports.push_back({{"fold_ratio", r.fold_ratio},
+                       {"cluster_area_ratio", r.cluster_area_ratio},
+                       {"region_prefilter_applied", r.region_prefilter_applied},
+                       {"region_vertices", r.region_vertices}});
+  }
+  return {{"media_type", out.media_type},
+          {"format", std::string(io::to_string(out.format))},
+          {"bytes", out.bytes.size()},
+          {"vertices", out.vertices},
+          {"faces", out.faces},
+          {"params", service::to_json(out.effective)},
+          {"notes", out.notes},
+          {"reports", reports},
+          {"timings_ms",
+           {{"decode", out.decode_ms},
+            {"setup", out.stages.setup_ms},
+            {"initial_prefilter", out.stages.initial_ms},
+            {"region_prefilter", out.stages.region_ms},
+            {"anisotropic_prefilter", out.stages.anisotropic_ms},
+            {"normal_filter", out.stages.normal_ms},
+            {"vertex_update", out.stages.vertex_ms},
+            {"denoise", out.denoise_ms},
+            {"encode", out.encode_ms}}}};
+}
+
+struct Context {
+  const httplib::Request& req;
+  httplib::Response& res;
+  const httplib::ContentReader* reader;  // POST routes only
+  std::string request_id;
+};
+
+}  // namespace
+
+struct HttpService::Impl {
+  using HandlerFn = void (Impl::*)(Context&);
+  struct Route {
+    std::string method;
+    std::string pattern;  // regex over the path
+    std::string name;     // metrics label and OpenAPI path
+    HandlerFn handler;
+    bool reads_body;
+    std::regex regex;
+  };
+
+  Impl(const ServerConfig& c, std::shared_ptr<const EventLog> l)
+      : config(c),
+        log(std::move(l)),
+        queue(make_queue_options(c),
+              [this](const JobSnapshot& s) {
+                metrics.job_finished(std::string(to_string(s.state)), s.queue_wait_s, s.run_s);
+                if (log) {
+                  json fields = {{"job_id", s.id}, {"state", to_string(s.state)}, {"queue_wait_s", s.queue_wait_s},
+                                 {"run_s", s.run_s}, {"async", s.asynchronous}};
+                  if (s.error) fields["error"] = s.error->type, fields["detail"] = s.error->detail;
+                  log->info("job_finished", fields);
+                }
+              }) {
+    std::random_device rd;
+    char buf[16];
+    std::snprintf(buf, sizeof buf, "%08x", unsigned(rd()));
+    id_prefix = buf;
+    // All routes, in one table. Patterns match the whole path (std::regex_match).
+    routes = {
+        {"GET", "/healthz", "/healthz", &Impl::healthz, false, {}},
+        {"GET", "/readyz", "/readyz", &Impl::readyz, false, {}},
+        {"GET", "/metrics", "/metrics", &Impl::metrics_route, false, {}},
+        {"GET", "/openapi.yaml", "/openapi.yaml", &Impl::openapi, false, {}},
+        {"GET", "/v1/params", "/v1/params", &Impl::params, false, {}},
+        {"GET", "/v1/params/schema", "/v1/params/schema", &Impl::params_schema, false, {}},
+        {"POST", "/v1/denoise", "/v1/denoise", &Impl::denoise, true, {}},
+        {"POST", "/v1/jobs", "/v1/jobs", &Impl::create_job, true, {}},
+        {"GET", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", &Impl::get_job, false, {}},
+        {"DELETE", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", &Impl::delete_job, false, {}},
+        {"GET", "/v1/jobs/([^/]+)/result", "/v1/jobs/{id}/result", &Impl::get_result, false, {}},
+    };
+    for (Route& r : routes) r.regex = std::regex(r.pattern);
+    install();
+  }
+
+  static JobQueueOptions make_queue_options(const ServerConfig& c) {
+    JobQueueOptions o;
+    o.workers = c.effective_workers();
+    o.threads_per_job = c.threads_per_job;
+    o.capacity = c.queue_capacity;
+    o.time_limit = std::chrono::milliseconds(std::int64_t(c.job_time_limit_s * 1000));
+    o.result_ttl = std::chrono::milliseconds(std::int64_t(c.result_ttl_s * 1000));
+    o.max_stored = c.max_stored_jobs;
+    o.limits.max_faces = c.max_faces;
+    o.limits.max_vertices = c.max_vertices;
+    return o;
+  }
+
+  // ---------------------------------------------------------------- wiring
+  void install() {
+    const int io_threads = config.io_threads;
+    svr.new_task_queue = [io_threads] { return new httplib::ThreadPool(std::size_t(io_threads)); };
+    auto secs = [](double s) { return std::pair<time_t, time_t>(time_t(s), time_t((s - double(time_t(s))) * 1e6)); };
+    svr.set_keep_alive_timeout(std::max<time_t>(1, time_t(config.keep_alive_timeout_s + 0.5)));
+    svr.set_keep_alive_max_count(std::size_t(config.keep_alive_max));
+    svr.set_read_timeout(secs(config.read_timeout_s).first, secs(config.read_timeout_s).second);
+    svr.set_write_timeout(secs(config.write_timeout_s).first, secs(config.write_timeout_s).second);
+    // Only bodies read by httplib itself (routes without a ContentReader) obey this; our
+    // POST routes count bytes themselves because chunked uploads bypass it (0.11.4).
+    svr.set_payload_max_length(std::size_t(config.max_body_bytes));
+    svr.set_tcp_nodelay(true);
+
+    for (Route& r : routes) {
+      Route* route = &r;
+      if (r.reads_body) {
+        svr.Post(r.pattern, [this, route](const httplib::Request& req, httplib::Response& res,
+                                          const httplib::ContentReader& reader) { dispatch(*route, req, res, &reader); });
+      } else if (r.method == "GET") {
+        svr.Get(r.pattern, [this, route](const httplib::Request& req, httplib::Response& res) {
+          dispatch(*route, req, res, nullptr);
+        });
+      } else if (r.method == "DELETE") {
+        svr.Delete(r.pattern, [this, route](const httplib::Request& req, httplib::Response& res) {
+          dispatch(*route, req, res, nullptr);
+        });
+      }
+    }
+    svr.Options(".*", [this](const httplib::Request& req, httplib::Response& res) { preflight(req, res); });
+    svr.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) { return pre_routing(req, res); });
+    svr.set_error_handler(httplib::Server::HandlerWithResponse(
+        [this](const httplib::Request& req, httplib::Response& res) { return on_error(req, res); }));
+    svr.set_logger([this](const httplib::Request& req, const httplib::Response& res) { access_log(req, res); });
+  }
+
+  std::string new_request_id() {
+    return id_prefix + "-" + std::to_string(request_counter.fetch_add(1) + 1);
+  }
+
+  static bool valid_request_id(const std::string& id) {
+    if (id.empty() || id.size() > 128) return false;
+    return std::all_of(id.begin(), id.end(), [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.' || c == ':';
+    });
+  }
+
+  std::string request_id_of(const httplib::Request& req, httplib::Response& res) {
+    if (res.has_header("X-Request-Id")) return res.get_header_value("X-Request-Id");
+    std::string id = req.get_header_value("X-Request-Id");
+    if (!valid_request_id(id)) id = new_request_id();
+    res.set_header("X-Request-Id", id);
+    return id;
+  }
+
+  void write_problem(const httplib::Request& req, httplib::Response& res, const Problem& p,
+                     const std::string& request_id) {
+    // Byte ranges apply to result downloads only, never to an error body (httplib would
+    // otherwise slice it into multipart/byteranges).
+    const_cast<httplib::Request&>(req).ranges.clear();
+    res.status = p.status;
+    if (p.retry_after_s) replace_header(res, "Retry-After", std::to_string(*p.retry_after_s));
+    if (p.status == 401) replace_header(res, "WWW-Authenticate", "Bearer realm=\"meshdenoise\"");
+    res.set_content(p.to_json(req.path, request_id).dump(-1, ' ', false, json::error_handler_t::replace),
+                    kProblemMediaType);
+  }
+
+  // Every route handler runs through here once: whatever it throws becomes one problem+json.
+  void dispatch(const Route& route, const httplib::Request& req, httplib::Response& res,
+                const httplib::ContentReader* reader) {
+    Context ctx{req, res, reader, request_id_of(req, res)};
+    try {
+      (this->*route.handler)(ctx);
+    } catch (...) {
+      const Problem p = problem_from_exception(std::current_exception());
+      if (p.status >= 500 && log)
+        log->error("handler_failed", {{"request_id", ctx.request_id}, {"route", route.name}, {"detail", p.detail}});
+      try {
+        write_problem(req, res, p, ctx.request_id);
+      } catch (...) {  // last resort: never let an exception reach httplib
+        res.status = 500;
+        res.body.clear();
+      }
+    }
+  }
+
+  httplib::Server::HandlerResponse pre_routing(const httplib::Request& req, httplib::Response& res) {
+    {
+      std::lock_guard lock(start_mutex);
+      request_start[std::this_thread::get_id()] = Clock::now();
+    }
+    const std::string id = request_id_of(req, res);
+    if (!config.cors_origin.empty()) {
+      res.set_header("Access-Control-Allow-Origin", config.cors_origin);
+      res.set_header("Access-Control-Expose-Headers", kExposedHeaders);
+      if (config.cors_origin != "*") res.set_header("Vary", "Origin");
+    }
+    auto reject = [&](const Problem& p) {
+      // The body (if any) stays unread: close the connection so it is not parsed as a request.
+      if (has_request_body(req)) replace_header(res, "Connection", "close");
+      write_problem(req, res, p, id);
+      return httplib::Server::HandlerResponse::Handled;
+    };
+    // Several ranges could multiply a result's size (one 1 MB result became 209 MB with 200
+    // ranges in 0.11.4): refuse them; single ranges are honoured on result downloads only.
+    if (req.ranges.size() > 1)
+      return reject(make_problem(416, "multiple-ranges", "Multiple ranges not supported",
+                                 "send at most one byte range"));
+    static const std::regex result_path("/v1/jobs/[^/]+/result");
+    if (!req.ranges.empty() && !(req.method == "GET" && std::regex_match(req.path, result_path)))
+      const_cast<httplib::Request&>(req).ranges.clear();
+    if (!config.auth_token.empty() && req.method != "OPTIONS" && req.path.rfind("/v1/", 0) == 0) {
+      if (!authorized(req.get_header_value("Authorization")))
+        return reject(make_problem(401, "unauthorized", "Unauthorized",
+                                   "this server requires 'Authorization: Bearer <token>' on /v1 routes"));
+    }
+    return httplib::Server::HandlerResponse::Unhandled;
+  }
+
+  bool authorized(const std::string& header) const {
+    const std::string prefix = "Bearer ";
+    if (header.size() < prefix.size() || lower(header.substr(0, prefix.size())) != lower(prefix)) return false;
+    const std::string token = trim(header.substr(prefix.size()));
+    // Constant-time comparison: timing does not reveal how many leading bytes matched.
+    unsigned char diff = token.size() == config.auth_token.size() ? 0 : 1;
+    for (std::size_t i = 0; i < config.auth_token.size(); ++i)
+      diff |= static_cast<unsigned char>(config.auth_token[i] ^ (i < token.size() ? token[i] : 0));
+    return diff == 0;
+  }
+
+  httplib::Server::HandlerResponse on_error(const httplib::Request& req, httplib::Response& res) {
+    if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;  // already a problem
+    const std::string id = request_id_of(req, res);
+    Problem p;
+    switch (res.status) {
+      case 404: {
+        std::string allow;
+        for (const Route& r : routes)
+          if (std::regex_match(req.path, r.regex) && allow.find(r.method) == std::string::npos)
+            allow += (allow.empty() ? "" : ", ") + r.method;
+        if (!allow.empty()) {
+          p = make_problem(405, "method-not-allowed", "Method not allowed",
+                           req.method + " is not allowed on " + req.path + "; allowed: " + allow);
+          replace_header(res, "Allow", allow + ", OPTIONS");
+        } else {
+          p = make_problem(404, "not-found", "Not found", "no route " + req.method + " " + req.path);
+        }
+        break;
+      }
+      case 413:
+        p = make_problem(413, "too-large", "Content too large",
+                         "the body exceeds the limit of " + std::to_string(config.max_body_bytes) + " bytes");
+        replace_header(res, "Connection", "close");
+        break;
+      case 414: p = make_problem(414, "uri-too-long", "URI too long", "the request target is too long"); break;
+      case 416:
+        p = make_problem(416, "range-not-satisfiable", "Range not satisfiable", "the Range header is invalid");
+        break;
+      case 400: p = make_problem(400, "bad-request", "Bad request", "the HTTP request could not be parsed"); break;
+      default:
+        p = make_problem(res.status, "http-error", "HTTP error", "the request failed with status " +
+                                                                     std::to_string(res.status));
+    }
+    write_problem(req, res, p, id);
+    return httplib::Server::HandlerResponse::Handled;
+  }
+
+  void preflight(const httplib::Request& req, httplib::Response& res) {
+    request_id_of(req, res);
+    res.status = 204;
+    res.set_header("Allow", "GET, POST, DELETE, OPTIONS");
+    if (!config.cors_origin.empty()) {
+      res.set_header("Access-Control-Allow-Methods", "GET, POST, DELETE, OPTIONS");
+      res.set_header("Access-Control-Allow-Headers", kAllowedRequestHeaders);
+      res.set_header("Access-Control-Max-Age", "600");
+    }
+  }
+
+  std::string route_name(const httplib::Request& req) const {
+    for (const Route& r : routes)
+      if ((r.method == req.method || (req.method == "HEAD" && r.method == "GET")) && std::regex_match(req.path, r.regex))
+        return r.name;
+    return req.method == "OPTIONS" ? "*" : "unmatched";
+  }
+
+  void access_log(const httplib::Request& req, const httplib::Response& res) {
+    const std::string route = route_name(req);
+    metrics.count_request(route, req.method, res.status);
+    metrics.add_bytes_out(std::int64_t(res.body.size()));
+    if (!req.body.empty()) metrics.add_bytes_in(std::int64_t(req.body.size()));
+    double ms = -1;
+    {
+      std::lock_guard lock(start_mutex);
+      if (auto it = request_start.find(std::this_thread::get_id()); it != request_start.end()) {
+        ms = std::chrono::duration<double, std::milli>(Clock::now() - it->second).count();
+        request_start.erase(it);
+      }
+    }
+    if (!log) return;
+    // Probes are frequent: log them at debug level.
+    const bool probe = route == "/healthz" || route == "/readyz" || route == "/metrics";
+    // req.remote_addr is the socket's peer; never the REMOTE_ADDR header a client may send.
+    log->log(probe ? spdlog::level::debug : spdlog::level::info, "request",
+             {{"request_id", res.get_header_value("X-Request-Id")},
+              {"method", req.method},
+              {"path", req.path},
+              {"route", route},
+              {"status", res.status},
+              {"duration_ms", ms},
+              {"bytes_out", res.body.size()},
+              {"remote", req.remote_addr}});
+  }
+
+  // ---------------------------------------------------------------- request bodies
+  // Reads the body through the ContentReader, counting bytes ourselves: cpp-httplib 0.11.4
+  // applies set_payload_max_length to Content-Length bodies only, not to chunked uploads.
+  std::string read_body(Context& ctx, const httplib::ContentReader& reader) {
+    std::string body;
+    check_declared_length(ctx);
+    bool over = false;
+    const bool ok = reader([&](const char* data, std::size_t n) {
+      if (std::int64_t(body.size() + n) > config.max_body_bytes) {
+        over = true;
+        return false;
+      }
+      body.append(data, n);
+      return true;
+    });
+    metrics.add_bytes_in(std::int64_t(body.size()));
+    if (over) throw_too_large(ctx);
+    if (!ok) throw HttpError(make_problem(400, "bad-body", "Unreadable body", "the request body could not be read"));
+    return body;
+  }
+
+  [[noreturn]] void throw_too_large(Context& ctx) {
+    replace_header(ctx.res, "Connection", "close");  // the rest of the body stays unread
+    throw HttpError(make_problem(413, "too-large", "Content too large",
+                                 "the body exceeds the limit of " + std::to_string(config.max_body_bytes) + " bytes"));
+  }
+
+  void check_declared_length(Context& ctx) {
+    const bool chunked = lower(ctx.req.get_header_value("Transfer-Encoding")).find("chunked") != std::string::npos;
+    if (chunked) return;
+    if (!ctx.req.has_header("Content-Length")) {
+      replace_header(ctx.res, "Connection", "close");
+      throw HttpError(make_problem(411, "length-required", "Length required",
+                                   "send Content-Length or Transfer-Encoding: chunked"));
+    }
+    const std::string text = ctx.req.get_header_value("Content-Length");
+    std::uint64_t n = 0;
+    auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), n);
+    if (ec == std::errc::result_out_of_range) throw_too_large(ctx);
+    if (ec != std::errc() || ptr != text.data() + text.size() || text.empty()) {
+      replace_header(ctx.res, "Connection", "close");
+      throw HttpError(make_problem(400, "bad-request", "Bad request", "Content-Length is not a number"));
+    }
+    if (n > std::uint64_t(config.max_body_bytes)) throw_too_large(ctx);
+  }
+
+  // Body, container and parameters of a job, from a raw body or a multipart form.
+  service::JobInput read_job_input(Context& ctx) {
+    const httplib::Request& req = ctx.req;
+    std::optional<std::string> params_text;
+    auto set_params = [&](std::string text, const char* where) {
+      if (params_text)
+        throw HttpError(make_problem(400, "invalid-params", "Invalid parameters",
+                                     std::string("parameters given twice (") + where +
+                                         "); use one of ?params=, X-Denoise-Params or the params form field"));
+      params_text = std::move(text);
+    };
+    if (req.has_param("params")) set_params(req.get_param_value("params"), "query");
+    if (req.has_header("X-Denoise-Params")) set_params(req.get_header_value("X-Denoise-Params"), "header");
+
+    service::JobInput input;
+    if (req.is_multipart_form_data()) {
+      check_declared_length(ctx);
+      std::string current, mesh, params_part, mesh_type, mesh_name;
+      bool has_mesh = false, has_params = false, over = false, unexpected = false;
+      std::string unexpected_name;
+      std::int64_t total = 0;
+      const bool ok = (*ctx.reader)(
+          [&](const httplib::MultipartFormData& part) {
+            current = part.name;
+            if (current == "mesh") {
+              if (has_mesh) return unexpected = true, unexpected_name = "mesh (twice)", false;
+              has_mesh = true;
+              mesh_type = part.content_type;
+              mesh_name = part.filename;
+            } else if (current == "params") {
+              if (has_params) return unexpected = true, unexpected_name = "params (twice)", false;
+              has_params = true;
+            } else {
+              unexpected = true;
+              unexpected_name = current;
+              return false;
+            }
+            return true;
+          },
+          [&](const char* data, std::size_t n) {
+            total += std::int64_t(n);
+            if (total > config.max_body_bytes) return over = true, false;
+            (current == "mesh" ? mesh : params_part).append(data, n);
+            return true;
+          });
+      metrics.add_bytes_in(total);
+      if (over) throw_too_large(ctx);
+      if (unexpected)
+        throw HttpError(make_problem(400, "bad-form", "Bad form",
+                                     "unexpected form field '" + unexpected_name + "'; expected 'mesh' and 'params'"));
+      if (!ok) throw HttpError(make_problem(400, "bad-form", "Bad form", "the multipart body could not be parsed"));
+      if (!has_mesh) throw HttpError(make_problem(400, "bad-form", "Bad form", "the form has no 'mesh' field"));
+      if (has_params) set_params(std::move(params_part), "form field");
+      input.format = resolve_format(mesh_type, mesh, mesh_name);
+      input.bytes = std::move(mesh);
+    } else {
+      std::string content_type = req.get_header_value("Content-Type");
+      if (base_media_type(content_type) == "application/x-www-form-urlencoded")
+        throw HttpError(unsupported_media_type(
+            "application/x-www-form-urlencoded is not a mesh (curl -d sets it: use --data-binary with "
+            "-H 'Content-Type: ...')"));
+      input.bytes = read_body(ctx, *ctx.reader);
+      if (input.bytes.empty()) throw HttpError(make_problem(400, "empty-body", "Empty body", "the request body is empty"));
+      input.format = resolve_format(content_type, input.bytes);
+    }
+    input.params = params_text ? service::job_params_from_text(*params_text) : service::JobParams{};
+    return input;
+  }
+
+  // ---------------------------------------------------------------- responses
+  void write_result(Context& ctx, const JobSnapshot& s) {
+    const service::JobOutput& out = *s.output;
+    httplib::Response& res = ctx.res;
+    // A single byte range of a result is honoured (resumable downloads); httplib slices it.
+    if (ctx.req.ranges.size() == 1) {
+      const auto [first, last] = ctx.req.ranges.front();
+      const auto size = std::int64_t(out.bytes.size());
+      const bool ok = (first >= 0 && first < size && (last < 0 || last >= first)) || (first < 0 && last > 0);
+      if (!ok) {
+        replace_header(res, "Content-Range", "bytes */" + std::to_string(size));
+        throw HttpError(make_problem(416, "range-not-satisfiable", "Range not satisfiable",
+                                     "the result has " + std::to_string(size) + " bytes"));
+      }
+      res.status = 206;
+    } else {
+      res.status = 200;
+    }
+    res.set_content(out.bytes, out.media_type);
+    res.set_header("Content-Disposition", "attachment; filename=\"denoised." + std::string(io::to_string(out.format)) + "\"");
+    res.set_header("X-Denoise-Params", service::to_json(out.effective).dump());
+    res.set_header("X-Denoise-Input-Bytes", std::to_string(s.input_bytes));
+    res.set_header("X-Denoise-Output-Bytes", std::to_string(out.bytes.size()));
+    res.set_header("X-Denoise-Vertices", std::to_string(out.vertices));
+    res.set_header("X-Denoise-Faces", std::to_string(out.faces));
+    if (!out.notes.empty()) {
+      std::string notes;
+      for (const auto& n : out.notes) notes += (notes.empty() ? "" : "; ") + n;
+      res.set_header("X-Denoise-Notes", header_safe(notes));
+    }
+    // Server-Timing (W3C): per-stage milliseconds, shown by browsers' developer tools.
+    res.set_header("Server-Timing",
+                   "queue;dur=" + format_ms(s.queue_wait_s * 1000) + ", decode;dur=" + format_ms(out.decode_ms) +
+                       ", prefilter;dur=" + format_ms(out.stages.setup_ms + out.stages.prefilter_ms()) +
+                       ", normal;dur=" + format_ms(out.stages.normal_ms) + ", vertex;dur=" +
+                       format_ms(out.stages.vertex_ms) + ", encode;dur=" + format_ms(out.encode_ms) +
+                       ", total;dur=" + format_ms((s.queue_wait_s + s.run_s) * 1000));
+  }
+
+  json job_json(const JobSnapshot& s, const std::string& request_id) const {
+    const std::string self = "/v1/jobs/" + s.id;
+    json j = {{"id", s.id},
+              {"state", to_string(s.state)},
+              {"progress", {{"stage", s.stage}, {"fraction", s.fraction}}},
+              {"cancel_requested", s.cancel_requested},
+              {"created_at", iso8601(s.created_wall)},
+              {"timings_s", {{"queue_wait", s.queue_wait_s}, {"run", s.run_s}}},
+              {"input_bytes", s.input_bytes},
+              {"links", {{"self", self}, {"result", self + "/result"}}}};
+    if (s.output) j["result"] = output_summary(*s.output);
+    if (s.error) j["error"] = s.error->to_json(self, request_id);
+    return j;
+  }
+
+  static void set_json(httplib::Response& res, const json& j, int status = 200) {
+    res.status = status;
+    res.set_content(j.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
+  }
+
+  std::shared_ptr<Job> find_job(Context& ctx) {
+    const std::string id = ctx.req.matches[1];
+    auto job = queue.find(id);
+    if (!job)
+      throw HttpError(make_problem(404, "job-not-found", "Job not found",
+                                   "no job '" + header_safe(id) + "' (unknown, deleted or expired)"));
+    return job;
+  }
+
+  // ---------------------------------------------------------------- handlers
+  void healthz(Context& ctx) { set_json(ctx.res, {{"status", "ok"}}); }
+
+  void readyz(Context& ctx) {
+    if (queue.draining()) {
+      Problem p = make_problem(503, "draining", "Server draining", "the server is shutting down");
+      p.retry_after_s = 5;
+      throw HttpError(p);
+    }
+    if (queue.saturated()) {
+      Problem p = make_problem(503, "queue-full", "Job queue full", "the job queue is full");
+      p.retry_after_s = queue.retry_after_s();
+      throw HttpError(p);
+    }
+    set_json(ctx.res, {{"status", "ready"},
+                       {"queued", queue.queued()},
+                       {"running", queue.running()},
+                       {"capacity", queue.capacity()},
+                       {"workers", queue.workers()}});
+  }
+
+  void metrics_route(Context& ctx) {
+    ctx.res.status = 200;
+    ctx.res.set_content(metrics.render({queue.queued(), queue.capacity(), queue.running(), queue.workers(),
+                                        queue.draining()}),
+                        "text/plain; version=0.0.4; charset=utf-8");
+  }
+
+  void openapi(Context& ctx) {
+    ctx.res.status = 200;
+    const auto doc = embedded::openapi_yaml();
+    ctx.res.set_content(doc.data(), doc.size(), "application/yaml");
+  }
+
+  void params(Context& ctx) {
+    json specs = json::array();
+    for (const ParamSpec& s : param_specs()) {
+      specs.push_back({{"name", s.name},
+                       {"type", s.integer ? "integer" : "number"},
+                       {"default", s.default_value()},
+                       {"minimum", s.min},
+                       {"maximum", s.max},
+                       {"paper_minimum", s.paper_min},
+                       {"paper_maximum", s.paper_max},
+                       {"unit", s.unit},
+                       {"equation", s.equation},
+                       {"description", s.description}});
+    }
+    set_json(ctx.res, {{"defaults", service::to_json(service::JobParams{})},
+                       {"parameters", specs},
+                       {"schema", json::parse(embedded::params_schema_json())}});
+  }
+
+  void params_schema(Context& ctx) {
+    ctx.res.status = 200;
+    const auto doc = embedded::params_schema_json();
+    ctx.res.set_content(doc.data(), doc.size(), "application/schema+json");
+  }
+
+  void denoise(Context& ctx) {
+    service::JobInput input = read_job_input(ctx);
+    std::shared_ptr<Job> job = queue.submit(std::move(input), false).job;
+    auto probe = ConnectionProbe::find(ctx.req.local_port, ctx.req.remote_addr, ctx.req.remote_port);
+    while (!job->wait_for(std::chrono::milliseconds(50))) {
+      if (probe && probe->peer_gone()) {
+        queue.cancel(job);
+        if (log) log->info("client_gone", {{"request_id", ctx.request_id}, {"job_id", job->id()}});
+        ctx.res.status = 499;  // nginx's "client closed request": for the access log only
+        return;
+      }
+    }
+    const JobSnapshot s = job->snapshot();
+    if (s.state == JobState::Succeeded) return write_result(ctx, s);
+    throw HttpError(s.error.value_or(make_problem(500, "internal", "Internal server error", "the job failed")));
+  }
+
+  void create_job(Context& ctx) {
+    std::optional<std::string> key;
+    if (ctx.req.has_header("Idempotency-Key")) {
+      key = ctx.req.get_header_value("Idempotency-Key");
+      if (key->empty() || key->size() > 255 || !std::all_of(key->begin(), key->end(), [](char c) {
+            return c > 0x20 && c < 0x7f;
+          }))
+        throw HttpError(make_problem(400, "bad-idempotency-key", "Bad Idempotency-Key",
+                                     "Idempotency-Key must be 1 to 255 visible ASCII characters"));
+    }
+    service::JobInput input = read_job_input(ctx);
+    std::string fingerprint;
+    if (key) {
+      // Same key and same (body, format, effective parameters) -> same job.
+      fingerprint = std::string(io::to_string(input.format)) + "|" + service::to_json(input.params).dump() + "|" +
+                    std::to_string(input.bytes.size()) + "|" +
+                    std::to_string(std::hash<std::string_view>{}(input.bytes));
+    }
+    auto submitted = queue.submit(std::move(input), true, key, fingerprint);
+    const JobSnapshot s = submitted.job->snapshot();
+    if (submitted.replayed) ctx.res.set_header("Idempotent-Replayed", "true");
+    ctx.res.set_header("Location", "/v1/jobs/" + s.id);
+    ctx.res.set_header("Retry-After", "1");
+    set_json(ctx.res, job_json(s, ctx.request_id), 202);
+  }
+
+  void get_job(Context& ctx) {
+    const JobSnapshot s = find_job(ctx)->snapshot();
+    if (!is_terminal(s.state)) ctx.res.set_header("Retry-After", "1");
+    set_json(ctx.res, job_json(s, ctx.request_id));
+  }
+
+  void get_result(Context& ctx) {
+    std::shared_ptr<Job> job = find_job(ctx);
+    const JobSnapshot s = job->snapshot();
+    if (s.state == JobState::Succeeded) {
+      write_result(ctx, s);
+      job->mark_result_fetched();
+      return;
+    }
+    Problem p;
+    if (!is_terminal(s.state)) {
+      p = make_problem(409, "job-not-finished", "Job not finished", "the job is " + std::string(to_string(s.state)));
+      p.retry_after_s = 1;
+    } else {
+      p = make_problem(409, "job-" + std::string(to_string(s.state)), "Job has no result",
+                       "the job " + std::string(to_string(s.state)) + (s.error ? ": " + s.error->detail : ""));
+      if (s.error) p.extensions["job_error"] = s.error->to_json("/v1/jobs/" + s.id, ctx.request_id);
+    }
+    p.extensions["job_state"] = to_string(s.state);
+    throw HttpError(p);
+  }
+
+  void delete_job(Context& ctx) {
+    const std::string id = ctx.req.matches[1];
+    auto job = queue.find(id);
+    switch (queue.cancel(id)) {
+      case JobQueue::CancelOutcome::NotFound:
+        throw HttpError(make_problem(404, "job-not-found", "Job not found",
+                                     "no job '" + header_safe(id) + "' (unknown, deleted or expired)"));
+      case JobQueue::CancelOutcome::CancelledQueued:
+        return set_json(ctx.res, job_json(job->snapshot(), ctx.request_id), 200);
+      case JobQueue::CancelOutcome::CancelRequested:
+        return set_json(ctx.res, job_json(job->snapshot(), ctx.request_id), 202);
+      case JobQueue::CancelOutcome::Removed:
+        ctx.res.status = 204;
+        return;
+    }
+  }
+
+  // ---------------------------------------------------------------- state
+  const ServerConfig config;
+  const std::shared_ptr<const EventLog> log;
+  Metrics metrics;  // before queue: the queue's hook uses it until the queue is destroyed
+  JobQueue queue;
+  httplib::Server svr;
+  std::vector<Route> routes;
+  std::string id_prefix;
+  std::atomic<std::uint64_t> request_counter{0};
+  std::mutex start_mutex;
+  std::map<std::thread::id, Clock::time_point> request_start;  // for access-log durations
+};
+
+HttpService::HttpService(const ServerConfig& config, std::shared_ptr<const EventLog> log)
+    : impl_(std::make_unique<Impl>(config, std::move(log))) {}
+
+HttpService::~HttpService() {
+  stop();
+}
+
+int HttpService::bind() {
+  auto& svr = impl_->svr;
+  const auto& c = impl_->config;
+  int port = c.port;
+  if (port == 0) {
+    port = svr.bind_to_any_port(c.host);
+    if (port < 0) throw std::runtime_error("cannot bind " + c.host + " on any port");
+  } else if (!svr.bind_to_port(c.host, port)) {
+    throw std::runtime_error("cannot bind " + c.host + ":" + std::to_string(port));
+  }
+  return port;
+}
+
+bool HttpService::serve() { return impl_->svr.listen_after_bind(); }
+
+void HttpService::begin_drain() { impl_->queue.begin_drain(); }
+
+bool HttpService::wait_drained(Clock::time_point deadline) { return impl_->queue.wait_drained(deadline); }
+
+void HttpService::stop() {
+  impl_->queue.begin_drain();
+  impl_->queue.cancel_all();
+  impl_->svr.stop();
+}
+
+JobQueue& HttpService::queue() { return impl_->queue; }
+
+}  // namespace mdn::http

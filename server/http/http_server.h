@@ -1,0 +1,45 @@
+// The HTTP service: route table, handlers, CORS, auth, request ids, access logs and metrics,
+// over cpp-httplib and the JobQueue. Built from a ServerConfig; main() only parses the
+// configuration, handles signals and calls these methods.
+//
+// Lifecycle: bind() -> serve() (blocks, on its own thread) ... begin_drain() -> wait_drained()
+// -> stop(). Every method except serve() may be called from any thread.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "server/http/config.h"
+#include "server/http/job_queue.h"
+#include "server/http/log.h"
+
+namespace mdn::http {
+
+class HttpService {
+ public:
+  // Starts the worker pool. `log` receives access and job logs.
+  HttpService(const ServerConfig& config, std::shared_ptr<const EventLog> log);
+  ~HttpService();
+  HttpService(const HttpService&) = delete;
+  HttpService& operator=(const HttpService&) = delete;
+
+  // Binds the listening socket (config.port, or any free port if 0) and returns the port.
+  // Throws std::runtime_error if the address cannot be bound.
+  int bind();
+  // Accepts connections until stop(). Returns false if listening failed.
+  bool serve();
+  // SIGTERM: /readyz answers 503 and new jobs get 503; accepted jobs keep running.
+  void begin_drain();
+  // Waits until accepted jobs finished (and async results were fetched) or the deadline.
+  bool wait_drained(Clock::time_point deadline);
+  // Stops accepting connections, lets in-flight requests finish, and cancels what is left.
+  void stop();
+
+  JobQueue& queue();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace mdn::http

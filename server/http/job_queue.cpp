@@ -1,0 +1,387 @@
+#include "server/http/job_queue.h"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "core/errors.h"
+#include "core/progress.h"
+
+namespace mdn::http {
+
+std::string_view to_string(JobState state) {
+  switch (state) {
+    case JobState::Queued: return "queued";
+    case JobState::Running: return "running";
+    case JobState::Succeeded: return "succeeded";
+    case JobState::Failed: return "failed";
+    case JobState::Cancelled: return "cancelled";
+  }
+  return "unknown";
+}
+
+namespace {
+double seconds_between(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+}  // namespace
+
+// Progress and cancellation for one running job: reports the stage into the Job and asks the
+// pipeline to stop when the job was cancelled or its time limit passed (polled by the core
+// between iterations, so a stop takes at most one iteration).
+class Job::Observer final : public ProgressObserver {
+ public:
+  Observer(Job& job, Clock::time_point deadline) : job_(job), deadline_(deadline) {}
+  void on_progress(Stage stage, double fraction) override {
+    std::lock_guard lock(job_.mutex_);
+    job_.stage_ = std::string(to_string(stage));
+    job_.fraction_ = std::clamp(fraction, 0.0, 1.0);
+  }
+  bool cancel_requested() override {
+    if (job_.cancel_.load()) return true;
+    if (Clock::now() > deadline_) {
+      timed_out_ = true;
+      return true;
+    }
+    return false;
+  }
+  bool timed_out() const { return timed_out_; }
+
+ private:
+  Job& job_;
+  Clock::time_point deadline_;
+  bool timed_out_ = false;
+};
+
+Job::Job(std::string id, service::JobInput input, bool asynchronous)
+    : id_(std::move(id)), asynchronous_(asynchronous), input_(std::move(input)) {
+  input_bytes_ = std::int64_t(input_.bytes.size());
+}
+
+JobSnapshot Job::snapshot() const {
+  JobSnapshot s;
+  s.id = id_;
+  s.asynchronous = asynchronous_;
+  s.created_wall = created_wall_;
+  s.cancel_requested = cancel_.load();
+  const auto now = Clock::now();
+  std::lock_guard lock(mutex_);
+  s.state = state_;
+  s.stage = stage_;
+  s.fraction = fraction_;
+  s.input_bytes = input_bytes_;
+  s.queue_wait_s = seconds_between(created_, started_.value_or(finished_.value_or(now)));
+  s.run_s = started_ ? seconds_between(*started_, finished_.value_or(now)) : 0.0;
+  s.error = error_;
+  s.output = output_;
+  return s;
+}
+
+JobState Job::state() const {
+  std::lock_guard lock(mutex_);
+  return state_;
+}
+
+bool Job::wait_for(std::chrono::milliseconds timeout) const {
+  std::unique_lock lock(mutex_);
+  return done_cv_.wait_for(lock, timeout, [&] { return is_terminal(state_); });
+}
+
+void Job::mark_result_fetched() {
+  std::lock_guard lock(mutex_);
+  result_fetched_ = true;
+}
+
+bool Job::result_fetched() const {
+  std::lock_guard lock(mutex_);
+  return result_fetched_;
+}
+
+JobQueue::JobQueue(JobQueueOptions options, JobFinishedHook on_finished)
+    : options_(std::move(options)), on_finished_(std::move(on_finished)), rng_(std::random_device{}()) {
+  const int n = std::max(1, options_.workers);
+  workers_.reserve(std::size_t(n));
+  for (int i = 0; i < n; ++i) workers_.emplace_back([this] { worker_loop(); });
+}
+
+JobQueue::~JobQueue() {
+  {
+    std::lock_guard lock(mutex_);
+    stop_ = true;
+    draining_ = true;
+    for (auto& [id, job] : jobs_) job->cancel_ = true;
+  }
+  work_cv_.notify_all();
+  for (auto& t : workers_) t.join();
+  // Jobs still queued never ran: mark them cancelled so waiters wake up.
+  std::lock_guard lock(mutex_);
+  for (auto& job : queue_) {
+    std::lock_guard job_lock(job->mutex_);
+    finish_locked(*job, JobState::Cancelled,
+                  make_problem(503, "shutting-down", "Server shutting down", "the server stopped before this job ran"),
+                  nullptr);
+  }
+  queue_.clear();
+}
+
+std::string JobQueue::new_id_locked() {
+  // 128 random bits: ids are unguessable, so a job's result is only reachable by its owner.
+  char buf[33];
+  std::snprintf(buf, sizeof buf, "%016llx%016llx", static_cast<unsigned long long>(rng_()),
+                static_cast<unsigned long long>(rng_()));
+  return buf;
+}
+
+JobQueue::Submitted JobQueue::submit(service::JobInput input, bool asynchronous,
+                                     const std::optional<std::string>& idempotency_key,
+                                     const std::string& fingerprint) {
+  std::unique_lock lock(mutex_);
+  sweep_locked();
+  if (idempotency_key) {
+    if (auto it = idempotency_.find(*idempotency_key); it != idempotency_.end()) {
+      if (it->second.fingerprint != fingerprint) {
+        Problem p = make_problem(422, "idempotency-key-reused", "Idempotency-Key reused",
+                                 "this Idempotency-Key was already used with a different body or parameters");
+        throw HttpError(std::move(p));
+      }
+      if (auto job = jobs_.find(it->second.job_id); job != jobs_.end()) return {job->second, true};
+      idempotency_.erase(it);  // its job expired: the key is free again
+    }
+  }
+  if (draining_ || stop_) {
+    Problem p = make_problem(503, "draining", "Server draining", "the server is shutting down and accepts no new jobs");
+    p.retry_after_s = retry_after_s();
+    throw HttpError(std::move(p));
+  }
+  if (int(queue_.size()) >= options_.capacity) {
+    Problem p = make_problem(503, "queue-full", "Job queue full",
+                             "all " + std::to_string(options_.capacity) + " queue slots are taken; retry later");
+    p.retry_after_s = retry_after_s();
+    throw HttpError(std::move(p));
+  }
+  std::string id;
+  do id = new_id_locked();
+  while (jobs_.count(id) != 0);
+  input.threads = options_.threads_per_job;
+  auto job = std::make_shared<Job>(id, std::move(input), asynchronous);
+  jobs_.emplace(id, job);
+  queue_.push_back(job);
+  if (idempotency_key) idempotency_[*idempotency_key] = {fingerprint, id};
+  lock.unlock();
+  work_cv_.notify_one();
+  return {job, false};
+}
+
+std::shared_ptr<Job> JobQueue::find(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  sweep_locked();
+  auto it = jobs_.find(id);
+  return it == jobs_.end() ? nullptr : it->second;
+}
+
+JobQueue::CancelOutcome JobQueue::cancel(const std::string& id) {
+  std::unique_lock lock(mutex_);
+  sweep_locked();
+  auto it = jobs_.find(id);
+  if (it == jobs_.end()) return CancelOutcome::NotFound;
+  std::shared_ptr<Job> job = it->second;
+  std::unique_lock job_lock(job->mutex_);
+  switch (job->state_) {
+    case JobState::Queued: {
+      queue_.erase(std::remove(queue_.begin(), queue_.end(), job), queue_.end());
+      job->cancel_ = true;
+      finish_locked(*job, JobState::Cancelled,
+                    make_problem(409, "cancelled", "Job cancelled", "cancelled by DELETE before it started"), nullptr);
+      job_lock.unlock();
+      finished_order_.push_back(id);
+      idle_cv_.notify_all();
+      return CancelOutcome::CancelledQueued;
+    }
+    case JobState::Running:
+      job->cancel_ = true;
+      return CancelOutcome::CancelRequested;
+    default:
+      job_lock.unlock();
+      jobs_.erase(it);
+      finished_order_.erase(std::remove(finished_order_.begin(), finished_order_.end(), id), finished_order_.end());
+      for (auto k = idempotency_.begin(); k != idempotency_.end();)
+        k = k->second.job_id == id ? idempotency_.erase(k) : std::next(k);
+      idle_cv_.notify_all();
+      return CancelOutcome::Removed;
+  }
+}
+
+void JobQueue::cancel(const std::shared_ptr<Job>& job) {
+  std::unique_lock lock(mutex_);
+  std::unique_lock job_lock(job->mutex_);
+  job->cancel_ = true;
+  if (job->state_ == JobState::Queued) {
+    queue_.erase(std::remove(queue_.begin(), queue_.end(), job), queue_.end());
+    finish_locked(*job, JobState::Cancelled,
+                  make_problem(409, "cancelled", "Job cancelled", "the client went away before the job started"), nullptr);
+    job_lock.unlock();
+    finished_order_.push_back(job->id_);
+    idle_cv_.notify_all();
+  }
+}
+
+void JobQueue::cancel_all() {
+  std::vector<std::shared_ptr<Job>> all;
+  {
+    std::lock_guard lock(mutex_);
+    for (auto& [id, job] : jobs_) all.push_back(job);
+  }
+  for (auto& job : all) cancel(job);
+  {
+    std::lock_guard lock(mutex_);
+    abandoned_ = true;
+  }
+  idle_cv_.notify_all();
+}
+
+void JobQueue::begin_drain() {
+  std::lock_guard lock(mutex_);
+  draining_ = true;
+}
+
+bool JobQueue::draining() const {
+  std::lock_guard lock(mutex_);
+  return draining_;
+}
+
+bool JobQueue::wait_drained(Clock::time_point deadline) {
+  std::unique_lock lock(mutex_);
+  auto drained = [&] {
+    if (!queue_.empty() || running_ > 0) return false;
+    for (auto& [id, job] : jobs_) {
+      if (!job->asynchronous_) continue;
+      std::lock_guard job_lock(job->mutex_);
+      if (job->state_ == JobState::Succeeded && !job->result_fetched_) return false;
+    }
+    return true;
+  };
+  // Fetching a result does not notify; poll at a short interval besides the notifications.
+  while (!drained()) {
+    if (Clock::now() >= deadline || abandoned_) return false;
+    idle_cv_.wait_until(lock, std::min(deadline, Clock::now() + std::chrono::milliseconds(100)));
+  }
+  return true;
+}
+
+int JobQueue::queued() const {
+  std::lock_guard lock(mutex_);
+  return int(queue_.size());
+}
+
+int JobQueue::running() const {
+  std::lock_guard lock(mutex_);
+  return running_;
+}
+
+bool JobQueue::saturated() const {
+  std::lock_guard lock(mutex_);
+  return int(queue_.size()) >= options_.capacity;
+}
+
+int JobQueue::retry_after_s() const {
+  // A coarse hint: one second per job ahead per worker, at least 1, at most 60.
+  const std::size_t ahead = queue_.size();
+  return int(std::clamp<std::size_t>(ahead / std::size_t(std::max(1, options_.workers)), 1, 60));
+}
+
+void JobQueue::worker_loop() {
+  for (;;) {
+    std::shared_ptr<Job> job;
+    {
+      std::unique_lock lock(mutex_);
+      work_cv_.wait(lock, [&] { return stop_ || !queue_.empty(); });
+      if (stop_) return;
+      job = std::move(queue_.front());
+      queue_.pop_front();
+      ++running_;
+      std::lock_guard job_lock(job->mutex_);
+      job->state_ = JobState::Running;
+      job->started_ = Clock::now();
+      job->stage_ = "decode";
+    }
+    run(job);
+    {
+      std::lock_guard lock(mutex_);
+      --running_;
+      finished_order_.push_back(job->id_);
+      sweep_locked();
+    }
+    idle_cv_.notify_all();
+    if (on_finished_) on_finished_(job->snapshot());
+  }
+}
+
+void JobQueue::run(const std::shared_ptr<Job>& job) {
+  service::JobInput input;
+  {
+    std::lock_guard lock(job->mutex_);
+    input = std::move(job->input_);
+    job->input_ = {};
+  }
+  Job::Observer observer(*job, *job->started_ + options_.time_limit);
+  std::shared_ptr<const service::JobOutput> output;
+  std::optional<Problem> error;
+  JobState state = JobState::Succeeded;
+  try {
+    if (job->cancel_) throw CancelledError();
+    output = std::make_shared<const service::JobOutput>(service::run_job(input, options_.limits, &observer));
+  } catch (const CancelledError&) {
+    if (observer.timed_out()) {
+      state = JobState::Failed;
+      const double limit_s = std::chrono::duration<double>(options_.time_limit).count();
+      error = make_problem(504, "time-limit-exceeded", "Job time limit exceeded",
+                           "the job ran longer than the server's limit of " + std::to_string(limit_s) + " s");
+      error->extensions["time_limit_s"] = limit_s;
+    } else {
+      state = JobState::Cancelled;
+      error = make_problem(409, "cancelled", "Job cancelled", "cancelled while running");
+    }
+  } catch (...) {
+    state = JobState::Failed;
+    error = problem_from_exception(std::current_exception());
+  }
+  input = {};  // free the request bytes before publishing
+  std::lock_guard lock(job->mutex_);
+  finish_locked(*job, state, std::move(error), std::move(output));
+}
+
+void JobQueue::finish_locked(Job& job, JobState state, std::optional<Problem> error,
+                             std::shared_ptr<const service::JobOutput> output) {
+  job.state_ = state;
+  job.finished_ = Clock::now();
+  job.error_ = std::move(error);
+  job.output_ = std::move(output);
+  job.input_ = {};
+  if (state == JobState::Succeeded) {
+    job.stage_ = "done";
+    job.fraction_ = 1;
+  }
+  job.done_cv_.notify_all();
+}
+
+void JobQueue::sweep_locked() {
+  const auto now = Clock::now();
+  auto drop = [&](const std::string& id) {
+    jobs_.erase(id);
+    for (auto k = idempotency_.begin(); k != idempotency_.end();)
+      k = k->second.job_id == id ? idempotency_.erase(k) : std::next(k);
+  };
+  // finished_order_ is in finishing order, so expired jobs are at the front.
+  while (!finished_order_.empty()) {
+    auto it = jobs_.find(finished_order_.front());
+    bool expire = it == jobs_.end() || int(finished_order_.size()) > options_.max_stored;
+    if (!expire) {
+      std::lock_guard job_lock(it->second->mutex_);
+      expire = it->second->finished_ && *it->second->finished_ + options_.result_ttl <= now;
+    }
+    if (!expire) break;
+    drop(finished_order_.front());
+    finished_order_.pop_front();
+  }
+}
+
+}  // namespace mdn::http

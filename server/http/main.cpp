@@ -1,0 +1,136 @@
+// meshdenoise-server: parses the configuration (flags, then MDN_* variables), runs the HTTP
+// service, and drains on SIGTERM/SIGINT: /readyz turns 503, new jobs get 503, accepted jobs
+// finish within --drain-grace seconds, then the process exits 0. A second signal stops at once.
+#include <atomic>
+#include <cerrno>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <thread>
+
+#include <pthread.h>
+
+#include "server/http/config.h"
+#include "server/http/http_server.h"
+#include "server/http/log.h"
+
+namespace {
+
+// Writes the port atomically (write then rename) so a reader never sees a partial file.
+void write_port_file(const std::string& path, int port) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    out << port << "\n";
+    if (!out) throw std::runtime_error("cannot write " + tmp);
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+// Waits for SIGTERM or SIGINT for at most `timeout_s` (negative: forever). True if one came.
+bool wait_for_signal(const sigset_t& set, double timeout_s) {
+  for (;;) {
+    int rc;
+    if (timeout_s < 0) {
+      int sig = 0;
+      rc = sigwait(&set, &sig) == 0 ? sig : -1;
+    } else {
+      timespec ts{time_t(timeout_s), long((timeout_s - double(time_t(timeout_s))) * 1e9)};
+      rc = sigtimedwait(&set, nullptr, &ts);
+    }
+    if (rc > 0) return true;
+    if (rc < 0 && errno == EINTR) continue;
+    return false;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace mdn::http;
+  ParsedCommandLine parsed;
+  try {
+    parsed = parse_command_line(std::vector<std::string>(argv + 1, argv + argc), [](const char* name) {
+      return std::getenv(name);
+    });
+  } catch (const ConfigError& e) {
+    std::cerr << "meshdenoise-server: " << e.what() << "\n";
+    return 2;
+  }
+  if (parsed.help) {
+    std::cout << help_text();
+    return 0;
+  }
+  if (parsed.version) {
+    std::cout << "meshdenoise-server " << MDN_VERSION << "\n";
+    return 0;
+  }
+  const ServerConfig& config = parsed.config;
+
+  // Signals are taken synchronously by this thread (sigwait), so no handler and no global
+  // flag: block them before any thread starts so every thread inherits the mask.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);  // a vanished client must not kill the process
+
+  auto log = std::make_shared<const EventLog>(config);
+  try {
+    HttpService service(config, log);
+    const int port = service.bind();
+    if (!config.port_file.empty()) write_port_file(config.port_file, port);
+    log->info("listening", {{"host", config.host},
+                            {"port", port},
+                            {"workers", config.effective_workers()},
+                            {"threads_per_job", config.threads_per_job},
+                            {"queue_capacity", config.queue_capacity},
+                            {"io_threads", config.io_threads},
+                            {"max_body", config.max_body_bytes},
+                            {"auth", !config.auth_token.empty()}});
+    bool serve_ok = true;
+    const pthread_t main_thread = pthread_self();
+    std::atomic<bool> stopping{false};
+    std::thread server([&] {
+      serve_ok = service.serve();
+      // Listening failed on its own: wake the main thread as a signal would.
+      if (!stopping) pthread_kill(main_thread, SIGTERM);
+    });
+
+    wait_for_signal(signals, -1);
+    stopping = true;
+    log->info("draining", {{"grace_s", config.drain_grace_s},
+                           {"queued", service.queue().queued()},
+                           {"running", service.queue().running()}});
+    service.begin_drain();
+    // Drain on a helper thread so a second signal can still cut the grace period short.
+    std::atomic<bool> drained_done{false};
+    bool drained = false;
+    std::thread drainer([&] {
+      drained = service.wait_drained(Clock::now() + std::chrono::milliseconds(std::int64_t(config.drain_grace_s * 1000)));
+      drained_done = true;
+    });
+    while (!drained_done) {
+      if (wait_for_signal(signals, 0.1)) {
+        log->warn("forced_stop", {{"queued", service.queue().queued()}, {"running", service.queue().running()}});
+        service.stop();
+      }
+    }
+    drainer.join();
+    if (!drained)
+      log->warn("drain_incomplete", {{"queued", service.queue().queued()}, {"running", service.queue().running()}});
+    service.stop();
+    server.join();
+    log->info("stopped", {{"drained", drained}});
+    if (!serve_ok) return 1;
+  } catch (const std::exception& e) {
+    log->error("fatal", {{"detail", e.what()}});
+    return 1;
+  }
+  return 0;
+}
