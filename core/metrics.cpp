@@ -199,6 +199,8 @@ struct SurfaceDistance::Impl {
 
 SurfaceDistance::SurfaceDistance(const TriMesh& surface) : impl_(std::make_unique<Impl>()) {
   validate_mesh(surface);
+  if (surface.num_faces() > std::numeric_limits<std::int32_t>::max() / 3)
+    throw InvalidMeshError("SurfaceDistance: too many faces for 32-bit node indices");
   const auto nf = static_cast<std::int32_t>(surface.num_faces());
   std::vector<Vec3> corners(3 * static_cast<std::size_t>(nf));
   Vertices centroids(nf, 3);

@@ -1,5 +1,6 @@
 #include "core/normal_filter.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -35,8 +36,9 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
   const double sigma_c = mean_dist > 0 ? s.sigma_c_factor * mean_dist : 1.0;
 
   // The spatial part of omega_ij, a_j phi(||c_i - c_j|| / sigma_c), is fixed: precompute
-  // it once per neighbour pair, in the CSR order of N(i).
-  std::vector<double> spatial(topo.ff_faces.size());
+  // it once per neighbour entry, in the CSR order of N(i).
+  const std::size_t entries = topo.ff_faces.size();
+  std::vector<double> spatial(entries);
   const double inv_sigma_c2 = 1.0 / (sigma_c * sigma_c);
   ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t i = begin; i < end; ++i)
@@ -47,6 +49,28 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
       }
   });
 
+  // The range part, phi((1 - cos gamma_ij) / (1 - cos sigma_gamma)) / ||n_i - n_j||, is
+  // symmetric in i and j: evaluate it once per unordered pair (half the exp and sqrt calls).
+  // pair_of[k] maps CSR entry k (face i -> neighbour j) to its pair; N(j) contains i because
+  // vertex adjacency is symmetric, and the lists are sorted.
+  std::vector<std::int32_t> pair_first, pair_second, pair_of(entries);
+  pair_first.reserve(entries / 2);
+  pair_second.reserve(entries / 2);
+  for (std::int64_t i = 0; i < nf; ++i)
+    for (std::int32_t k = topo.ff_offsets[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k) {
+      const std::int32_t j = topo.ff_faces[static_cast<std::size_t>(k)];
+      if (j < i) continue;
+      const auto id = static_cast<std::int32_t>(pair_first.size());
+      pair_first.push_back(static_cast<std::int32_t>(i));
+      pair_second.push_back(j);
+      pair_of[static_cast<std::size_t>(k)] = id;
+      const auto jb = topo.ff_faces.begin() + topo.ff_offsets[static_cast<std::size_t>(j)];
+      const auto je = topo.ff_faces.begin() + topo.ff_offsets[static_cast<std::size_t>(j) + 1];
+      pair_of[static_cast<std::size_t>(std::lower_bound(jb, je, static_cast<std::int32_t>(i)) - topo.ff_faces.begin())] = id;
+    }
+  const auto num_pairs = static_cast<std::int64_t>(pair_first.size());
+  std::vector<double> range(static_cast<std::size_t>(num_pairs));
+
   // Eq. 7 typo: both denominators mean 1 - cos(sigma_gamma) (NOTES reading 8).
   const double inv_range = 1.0 / (1.0 - std::cos(s.sigma_gamma_deg * std::numbers::pi / 180.0));
   Vertices next(nf, 3);
@@ -55,30 +79,37 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
       if (progress->cancel_requested()) throw CancelledError();
       progress->on_progress(Stage::NormalFilter, static_cast<double>(it) / s.iterations);
     }
+    ex.parallel_for(num_pairs, [&](std::int64_t begin, std::int64_t end) {
+      for (std::int64_t q = begin; q < end; ++q) {
+        const auto ni = current.row(pair_first[static_cast<std::size_t>(q)]);
+        const auto nj = current.row(pair_second[static_cast<std::size_t>(q)]);
+        const double x = (1.0 - ni.dot(nj)) * inv_range;  // (1 - cos gamma_ij) / (1 - cos sigma_gamma)
+        double g = std::exp(-x * x);
+        if (s.l1_median) {
+          const double dist = (ni - nj).norm();
+          // omega_ij = .../||n_i - n_j||; bilateral weights where that is tiny (Eq. 7).
+          if (dist >= s.bilateral_switch) g /= dist;
+        }
+        range[static_cast<std::size_t>(q)] = g;
+      }
+    });
     // Eq. 7: one Jacobi step of the weighted L1-median, all faces from the previous iterate.
     ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
       for (std::int64_t i = begin; i < end; ++i) {
-        const Eigen::RowVector3d ni = current.row(i);
-        if (ni.squaredNorm() == 0) {  // degenerate face: nothing to filter
-          next.row(i) = ni;
+        if (current.row(i).squaredNorm() == 0) {  // degenerate face: nothing to filter
+          next.row(i).setZero();
           continue;
         }
         Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
         for (std::int32_t k = topo.ff_offsets[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k) {
-          const double sp = spatial[static_cast<std::size_t>(k)];
-          if (sp == 0) continue;  // zero-area neighbour (its normal is zero too)
-          const Eigen::RowVector3d nj = current.row(topo.ff_faces[static_cast<std::size_t>(k)]);
-          const double x = (1.0 - ni.dot(nj)) * inv_range;  // (1 - cos gamma_ij) / (1 - cos sigma_gamma)
-          double w = sp * std::exp(-x * x);
-          if (s.l1_median) {
-            const double dist = (ni - nj).norm();
-            // omega_ij = .../||n_i - n_j||; bilateral weights where that is tiny (Eq. 7).
-            if (dist >= s.bilateral_switch) w /= dist;
-          }
-          sum += w * nj;
+          const double w = spatial[static_cast<std::size_t>(k)] * range[static_cast<std::size_t>(pair_of[static_cast<std::size_t>(k)])];
+          sum += w * current.row(topo.ff_faces[static_cast<std::size_t>(k)]);
         }
         const double len = sum.norm();
-        next.row(i) = len > 0 ? Eigen::RowVector3d(sum / len) : ni;
+        if (len > 0)
+          next.row(i) = sum / len;
+        else
+          next.row(i) = current.row(i);  // no usable neighbour (isolated or all degenerate)
       }
     });
     current.swap(next);

@@ -48,7 +48,7 @@ const std::array<ParamSpec, 15> kSpecs{{
     {"beta", false, 0, 1000, 6, 6, "", "Eq. 2", "smoothness of the region-based Laplacian pre-filter", &P::beta, nullptr},
     {"kmeans_k", true, 2, 16, 2, 2, "clusters", "Sec. 4.2", "number of K-means clusters over (centroid, area)", nullptr, &P::kmeans_k},
     {"fold_angle", false, 0, 180, 130, 130, "degrees", "Sec. 4.2", "angle between face normals above which an edge counts as folded", &P::fold_angle, nullptr},
-    {"fold_ratio", false, 0, 1, 0.1, 0.1, "fraction", "Sec. 4.2", "fraction of folded edges that marks the input as very noisy", &P::fold_ratio, nullptr},
+    {"fold_ratio", false, 0, 1, 0.1, 0.1, "fraction", "Sec. 4.2", "fraction of folded edges (angle > fold_angle) also required before auto runs the region pre-filter", &P::fold_ratio, nullptr},
     {"irregular_area_ratio", false, 1, 1e6, 4, 4, "ratio", "Sec. 4.2", "cluster mean-area ratio that marks irregular sampling", &P::irregular_area_ratio, nullptr},
     {"b", false, 1, 100, 1.7320508075688772, 1.7320508075688772, "", "Eq. 4", "base of the exponential edge weight", &P::b, nullptr},
     {"bilateral_switch", false, 0, 2, 1e-3, 1e-3, "", "Eq. 7", "||n_i - n_j|| below which bilateral weights are used", &P::bilateral_switch, nullptr},

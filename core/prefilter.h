@@ -58,8 +58,8 @@ struct FaceClusters {
   std::int32_t smallest = 0;         // cluster with the smallest mean area
   double area_ratio = 1;             // max mean area / min mean area over non-empty clusters
 };
-// Sec. 4.2: K-means over faces in (centroid, area) space. Features are standardised
-// (centroids by their common RMS spread, area by its own) and seeded with k-means++.
+// Sec. 4.2: K-means over faces in (centroid, area) space, seeded with k-means++. Features:
+// centroids scaled to unit total variance, log(area) standardised (see core/README.md).
 FaceClusters cluster_faces(const Vertices& P, const Triangles& F, int k, std::uint64_t seed,
                            int max_iterations = 100);
 

@@ -49,14 +49,18 @@ Topology Topology::build(const Triangles& F, std::int32_t num_vertices) {
     const std::size_t count = j - i;
     unique_edges.push_back({half[i].lo, half[i].hi});
     const HalfEdge& h0 = half[i];
-    if (count == 2 && h0.opposite != half[i + 1].opposite) {
+    const HalfEdge& h1 = half[std::min(i + 1, half.size() - 1)];
+    // Two faces with four distinct vertices (e1, e2, e3, e4): a proper manifold edge.
+    if (count == 2 && h0.opposite != h1.opposite && h0.opposite != h1.from && h0.opposite != h1.to &&
+        h1.opposite != h0.from && h1.opposite != h0.to) {
       // S(e) = p_e1 - p_e2 + p_e3 - p_e4, (e1, e3) the edge, e2/e4 the opposite vertices.
-      interior.push_back({h0.from, h0.opposite, h0.to, half[i + 1].opposite});
-      interior_faces.push_back({h0.face, half[i + 1].face});
+      interior.push_back({h0.from, h0.opposite, h0.to, h1.opposite});
+      interior_faces.push_back({h0.face, h1.face});
     } else if (count == 1) {
       boundary.push_back({h0.lo, h0.hi});
     } else {
-      // Three or more faces, or two copies of one triangle: no shaping term (NOTES reading 2).
+      // Three or more faces, two copies of one triangle, or a degenerate face on the edge:
+      // no shaping term (NOTES reading 2).
       nonmanifold.push_back({h0.lo, h0.hi});
     }
     i = j;

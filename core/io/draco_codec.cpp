@@ -36,7 +36,7 @@ std::unique_ptr<draco::Mesh> draco_decode(std::string_view bytes, const std::str
   return mesh;
 }
 
-std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options) {
+std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options, const std::optional<QuantizationBox>& box) {
   auto check_bits = [](int bits, const char* name) {
     if (bits < 1 || bits > 30) throw std::invalid_argument(std::string(name) + " must be in [1, 30]");
   };
@@ -48,7 +48,8 @@ std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options) 
   if (options.compression_level < 0 || options.compression_level > 10)
     throw std::invalid_argument("compression_level must be in [0, 10]");
   draco::Encoder encoder;
-  encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, options.position_bits);
+  if (box) encoder.SetAttributeExplicitQuantization(draco::GeometryAttribute::POSITION, options.position_bits, 3, box->origin, box->range);
+  else encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, options.position_bits);
   encoder.SetAttributeQuantization(draco::GeometryAttribute::NORMAL, options.normal_bits);
   encoder.SetAttributeQuantization(draco::GeometryAttribute::TEX_COORD, options.texcoord_bits);
   encoder.SetAttributeQuantization(draco::GeometryAttribute::COLOR, options.color_bits);

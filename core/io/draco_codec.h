@@ -6,6 +6,7 @@
 #include <draco/mesh/mesh.h>
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -18,8 +19,17 @@ namespace mdn::io::detail {
 // Throws FormatError (corrupt payload), UnsupportedError (a point cloud) or LimitError.
 std::unique_ptr<draco::Mesh> draco_decode(std::string_view bytes, const std::string& what, const Limits& limits);
 
-// Encodes with the quantisation bits and speed of `options`. Deterministic.
-std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options);
+// A position quantisation grid shared by several payloads: the same input position gives
+// the same decoded position in each (no cracks between primitives of one mesh).
+struct QuantizationBox {
+  float origin[3] = {0, 0, 0};
+  float range = 1;  // edge of the cube the grid spans
+};
+
+// Encodes with the quantisation bits and speed of `options` (and `box` for positions when
+// given). Deterministic.
+std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options,
+                         const std::optional<QuantizationBox>& box = std::nullopt);
 
 // Reads every point's position (#points by 3) and the faces as point indices.
 Vertices draco_positions(const draco::Mesh& mesh);

@@ -14,7 +14,9 @@
 namespace mdn::test {
 
 // n x n quads over [0, size]^2 at z = 0, each split into two triangles; normal +z.
-inline TriMesh plane(int n, double size = 1.0) {
+// alternate: alternate the diagonal per cell (no preferred direction); otherwise every
+// cell is split along the same diagonal (every edge's quad is then a parallelogram).
+inline TriMesh plane(int n, double size = 1.0, bool alternate = true) {
   TriMesh m;
   m.V.resize((n + 1) * (n + 1), 3);
   for (int j = 0; j <= n; ++j)
@@ -25,7 +27,7 @@ inline TriMesh plane(int n, double size = 1.0) {
     for (int i = 0; i < n; ++i) {
       const int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
       // Alternate the diagonal so the triangulation has no preferred direction.
-      if ((i + j) % 2 == 0) {
+      if (!alternate || (i + j) % 2 == 0) {
         m.F.row(f++) << a, b, d;
         m.F.row(f++) << a, d, c;
       } else {
@@ -121,9 +123,112 @@ inline TriMesh fold(int n, double opening_deg) {
   const double half = (180.0 - opening_deg) / 2.0 * std::numbers::pi / 180.0;
   for (Eigen::Index i = 0; i < m.V.rows(); ++i) {
     const double x = m.V(i, 0) - 1.0;  // crease at x = 0
-    m.V(i, 0) = x * std::cos(half) * (x < 0 ? 1 : 1);
+    m.V(i, 0) = x * std::cos(half);
     m.V(i, 2) = std::abs(x) * std::sin(half);
   }
+  return m;
+}
+
+}  // namespace mdn::test
+
+namespace mdn::test {
+
+// A plane over [0, 1]^2 whose left half is sampled `density` times more finely in x than its
+// right half: triangle areas differ by that factor (irregular sampling, Sec. 4.2).
+inline TriMesh irregular_plane(int n, int density) {
+  std::vector<double> xs;
+  for (int i = 0; i < n * density; ++i) xs.push_back(0.5 * i / (n * density));
+  for (int i = 0; i <= n; ++i) xs.push_back(0.5 + 0.5 * i / n);
+  const int cols = static_cast<int>(xs.size()), rows = 2 * n + 1;
+  TriMesh m;
+  m.V.resize(cols * rows, 3);
+  for (int j = 0; j < rows; ++j)
+    for (int i = 0; i < cols; ++i) m.V.row(j * cols + i) << xs[static_cast<std::size_t>(i)], double(j) / (rows - 1), 0.0;
+  m.F.resize(2 * (cols - 1) * (rows - 1), 3);
+  int f = 0;
+  for (int j = 0; j + 1 < rows; ++j)
+    for (int i = 0; i + 1 < cols; ++i) {
+      const int a = j * cols + i, b = a + 1, c = a + cols, d = c + 1;
+      m.F.row(f++) << a, b, d;
+      m.F.row(f++) << a, d, c;
+    }
+  return m;
+}
+
+}  // namespace mdn::test
+
+namespace mdn::test {
+
+// One conforming red-green refinement step: faces whose centroid satisfies `select` are split
+// 1-to-4; neighbours left with one split edge are bisected (green), neighbours with two or
+// three split edges are split 1-to-4 as well, until the mesh has no hanging vertex.
+template <class Select>
+TriMesh refine_where(const TriMesh& in, Select select) {
+  std::vector<Vec3> v;
+  for (Eigen::Index i = 0; i < in.V.rows(); ++i) v.push_back(in.V.row(i).transpose());
+  const auto nf = static_cast<std::size_t>(in.F.rows());
+  std::vector<bool> red(nf, false);
+  for (std::size_t f = 0; f < nf; ++f) {
+    const Eigen::Index r = static_cast<Eigen::Index>(f);
+    red[f] = select(((in.V.row(in.F(r, 0)) + in.V.row(in.F(r, 1)) + in.V.row(in.F(r, 2))) / 3.0).transpose().eval());
+  }
+  std::map<std::pair<int, int>, int> mid;
+  auto key = [](int a, int b) { return std::make_pair(std::min(a, b), std::max(a, b)); };
+  for (bool changed = true; changed;) {  // closure: no face may keep two split edges
+    changed = false;
+    mid.clear();
+    for (std::size_t f = 0; f < nf; ++f)
+      if (red[f])
+        for (int k = 0; k < 3; ++k) mid[key(in.F(static_cast<Eigen::Index>(f), k), in.F(static_cast<Eigen::Index>(f), (k + 1) % 3))] = -1;
+    for (std::size_t f = 0; f < nf; ++f) {
+      if (red[f]) continue;
+      int split = 0;
+      for (int k = 0; k < 3; ++k) split += mid.count(key(in.F(static_cast<Eigen::Index>(f), k), in.F(static_cast<Eigen::Index>(f), (k + 1) % 3))) ? 1 : 0;
+      if (split >= 2) red[f] = changed = true;
+    }
+  }
+  for (auto& [edge, index] : mid) {
+    index = static_cast<int>(v.size());
+    v.push_back(0.5 * (v[static_cast<std::size_t>(edge.first)] + v[static_cast<std::size_t>(edge.second)]));
+  }
+  std::vector<std::array<int, 3>> out;
+  for (std::size_t f = 0; f < nf; ++f) {
+    const Eigen::Index r = static_cast<Eigen::Index>(f);
+    const int a = in.F(r, 0), b = in.F(r, 1), c = in.F(r, 2);
+    if (red[f]) {
+      const int ab = mid[key(a, b)], bc = mid[key(b, c)], ca = mid[key(c, a)];
+      out.push_back({a, ab, ca});
+      out.push_back({b, bc, ab});
+      out.push_back({c, ca, bc});
+      out.push_back({ab, bc, ca});
+      continue;
+    }
+    const int corners[3] = {a, b, c};
+    bool done = false;
+    for (int k = 0; k < 3 && !done; ++k) {
+      const int p = corners[k], q = corners[(k + 1) % 3], o = corners[(k + 2) % 3];
+      auto it = mid.find(key(p, q));
+      if (it == mid.end()) continue;
+      out.push_back({p, it->second, o});  // green: bisect the split edge
+      out.push_back({it->second, q, o});
+      done = true;
+    }
+    if (!done) out.push_back({a, b, c});
+  }
+  TriMesh m;
+  m.V.resize(static_cast<Eigen::Index>(v.size()), 3);
+  for (std::size_t i = 0; i < v.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = v[i].transpose();
+  m.F.resize(static_cast<Eigen::Index>(out.size()), 3);
+  for (std::size_t i = 0; i < out.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << out[i][0], out[i][1], out[i][2];
+  return m;
+}
+
+// A unit sphere whose upper cap (z > 0.2) is sampled 16 times more densely (two conforming
+// refinement steps, vertices projected back to the sphere): irregular sampling, Sec. 4.2.
+inline TriMesh irregular_sphere(int levels) {
+  auto cap = [](const Vec3& c) { return c.z() > 0.2; };
+  TriMesh m = refine_where(refine_where(sphere(levels), cap), cap);
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i) m.V.row(i).normalize();
   return m;
 }
 

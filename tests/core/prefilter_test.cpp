@@ -1,0 +1,139 @@
+#include "core/prefilter.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/noise.h"
+#include "support/shapes.h"
+
+namespace mdn {
+namespace {
+
+Topology topology_of(const TriMesh& m) { return Topology::build(m.F, static_cast<std::int32_t>(m.V.rows())); }
+
+// Eq. 1 fixed point: on a grid split along one diagonal every edge's quad is a
+// parallelogram, so S(e) = 0 everywhere and the minimiser is the input itself.
+TEST(InitialPrefilter, ParallelogramGridIsAFixedPoint) {
+  const TriMesh m = test::plane(6, 1.0, /*alternate=*/false);
+  const Topology t = topology_of(m);
+  for (LinearSolver kind : {LinearSolver::Ldlt, LinearSolver::ConjugateGradient}) {
+    const Vertices out = initial_prefilter(m.V, t, 0.2, kind);
+    EXPECT_LT((out - m.V).cwiseAbs().maxCoeff(), 1e-9) << to_string(kind);
+  }
+}
+
+// Eq. 1 is linear and acts per coordinate: a planar input (z = 0) stays exactly planar.
+TEST(InitialPrefilter, PlaneStaysAPlaneAndNoiseInPlaneShrinks) {
+  TriMesh m = test::plane(10);
+  const Topology t = topology_of(m);
+  NoiseSpec spec;
+  spec.kind = NoiseKind::PerCoordinate;
+  spec.sigma = 0.3;
+  Vertices noisy = add_noise(m, spec);
+  noisy.col(2).setZero();
+  const Vertices out = initial_prefilter(noisy, t, 0.1);
+  EXPECT_EQ(out.col(2).cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(ShapingSolver, LdltAndConjugateGradientAgree) {
+  const TriMesh clean = test::sphere(3);
+  NoiseSpec spec;
+  spec.sigma = 0.4;
+  const Vertices noisy = add_noise(clean, spec);
+  const Topology t = topology_of(clean);
+  DenoiseParams p;
+  p.n_aniso = 3;
+  p.solver = LinearSolver::Ldlt;
+  const Vertices a = anisotropic_prefilter(initial_prefilter(noisy, t, p.alpha, p.solver), clean.F, t, p);
+  p.solver = LinearSolver::ConjugateGradient;
+  const Vertices b = anisotropic_prefilter(initial_prefilter(noisy, t, p.alpha, p.solver), clean.F, t, p);
+  EXPECT_LT((a - b).cwiseAbs().maxCoeff(), 1e-8);
+}
+
+// Eq. 4: w_e = 1 for coplanar faces, b^-1 at theta = sigma_theta, decreasing in theta.
+TEST(AnisotropicWeights, FollowEquation4) {
+  for (double opening : {180.0, 150.0, 90.0}) {
+    const TriMesh m = test::fold(4, opening);
+    const Topology t = topology_of(m);
+    const Eigen::VectorXd w = anisotropic_edge_weights(m.V, m.F, t, 30.0, std::sqrt(3.0));
+    const double theta = (180.0 - opening) * M_PI / 180.0;
+    const double expected = std::pow(std::sqrt(3.0), -(1 - std::cos(theta)) / (1 - std::cos(M_PI / 6)));
+    EXPECT_NEAR(w.maxCoeff(), 1.0, 1e-12);
+    EXPECT_NEAR(w.minCoeff(), expected, 1e-9) << "opening " << opening;
+  }
+}
+
+TEST(AnisotropicPrefilter, KeepsACreaseBetterThanTheIsotropicFilter) {
+  const TriMesh clean = test::fold(16, 90);
+  NoiseSpec spec;
+  spec.sigma = 0.1;
+  const Vertices noisy = add_noise(clean, spec);
+  const Topology t = topology_of(clean);
+  DenoiseParams p;
+  p.alpha = 0.2;
+  p.n_aniso = 6;
+  p.sigma_theta = 20;
+  const Vertices aniso = anisotropic_prefilter(noisy, clean.F, t, p);
+  ShapingSolver iso(t, p.solver, p.cg_tolerance);
+  Vertices isotropic = noisy;
+  for (int i = 0; i < p.n_aniso; ++i) isotropic = iso.solve(isotropic, p.alpha, {});
+  // Height of the crease line (x = 0): the true value is 0.
+  double aniso_err = 0, iso_err = 0;
+  for (Eigen::Index v = 0; v < clean.V.rows(); ++v)
+    if (std::abs(clean.V(v, 0)) < 1e-12) {
+      aniso_err += std::abs(aniso(v, 2) - clean.V(v, 2));
+      iso_err += std::abs(isotropic(v, 2) - clean.V(v, 2));
+    }
+  EXPECT_LT(aniso_err, 0.7 * iso_err);
+}
+
+TEST(FoldRatio, CountsEdgesFoldedBeyondTheThreshold) {
+  const TriMesh flat = test::plane(5);
+  const Topology t = topology_of(flat);
+  EXPECT_EQ(fold_ratio(flat.V, flat.F, t, 130), 0.0);
+  const TriMesh sharp = test::fold(6, 30);  // normals differ by 150 degrees along the crease
+  const Topology ts = topology_of(sharp);
+  EXPECT_NEAR(fold_ratio(sharp.V, sharp.F, ts, 130), 6.0 / ts.num_interior_edges(), 1e-12);
+  EXPECT_EQ(fold_ratio(sharp.V, sharp.F, ts, 160), 0.0);
+}
+
+TEST(ClusterFaces, SeparatesTheDenselySampledHalf) {
+  const TriMesh m = test::irregular_plane(6, 8);
+  const FaceClusters c = cluster_faces(m.V, m.F, 2, 1);
+  EXPECT_GT(c.area_ratio, 4.0);
+  const Vertices C = face_centroids(m.V, m.F);
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+    EXPECT_EQ(c.label[static_cast<std::size_t>(f)] == c.smallest, C(f, 0) < 0.5) << "face " << f;
+  // A regular mesh shows no such contrast.
+  const TriMesh regular = test::sphere(3);
+  EXPECT_LT(cluster_faces(regular.V, regular.F, 2, 1).area_ratio, 2.0);
+}
+
+TEST(RegionPrefilter, SmoothsOnlyTheClusterAndKeepsOthersFixed) {
+  const TriMesh clean = test::irregular_plane(6, 8);
+  NoiseSpec spec;
+  spec.sigma = 0.5;
+  const Vertices noisy = add_noise(clean, spec);
+  const Topology t = topology_of(clean);
+  std::vector<std::int32_t> left;
+  const Vertices C = face_centroids(clean.V, clean.F);
+  for (Eigen::Index f = 0; f < clean.F.rows(); ++f)
+    if (C(f, 0) < 0.25) left.push_back(static_cast<std::int32_t>(f));
+  std::int64_t unknowns = 0;
+  const Vertices out = region_prefilter(noisy, clean.F, t, left, 6.0, &unknowns);
+  EXPECT_GT(unknowns, 0);
+  double before = 0, after = 0;
+  for (Eigen::Index v = 0; v < clean.V.rows(); ++v) {
+    if (clean.V(v, 0) > 0.26) {
+      EXPECT_EQ(out.row(v), noisy.row(v)) << "vertex " << v << " outside the cluster moved";
+    } else if (clean.V(v, 0) < 0.2 && clean.V(v, 1) > 0.05 && clean.V(v, 1) < 0.95) {
+      before += std::abs(noisy(v, 2));
+      after += std::abs(out(v, 2));
+    }
+  }
+  EXPECT_LT(after, 0.5 * before);
+}
+
+}  // namespace
+}  // namespace mdn

@@ -1,0 +1,68 @@
+#include "core/topology.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "support/shapes.h"
+
+namespace mdn {
+namespace {
+
+TEST(Topology, ClosedCubeHasOnlyInteriorEdges) {
+  const TriMesh m = test::cube(3);
+  const Topology t = Topology::build(m.F, static_cast<std::int32_t>(m.V.rows()));
+  EXPECT_EQ(t.num_interior_edges(), m.F.rows() * 3 / 2);
+  EXPECT_EQ(t.boundary_edges.rows(), 0);
+  EXPECT_EQ(t.nonmanifold_edges.rows(), 0);
+  // Euler characteristic of a sphere: V - E + F = 2.
+  EXPECT_EQ(m.V.rows() - t.num_interior_edges() + m.F.rows(), 2);
+}
+
+TEST(Topology, InteriorEdgeRowsAreEdgeThenOppositeVertices) {
+  const TriMesh m = test::sphere(1);
+  const Topology t = Topology::build(m.F, static_cast<std::int32_t>(m.V.rows()));
+  for (Eigen::Index e = 0; e < t.num_interior_edges(); ++e) {
+    for (int side = 0; side < 2; ++side) {
+      const auto f = t.edge_faces(e, side);
+      const std::int32_t opposite = t.interior_edges(e, side == 0 ? 1 : 3);
+      std::array<std::int32_t, 3> face{m.F(f, 0), m.F(f, 1), m.F(f, 2)};
+      std::array<std::int32_t, 3> expected{t.interior_edges(e, 0), t.interior_edges(e, 2), opposite};
+      std::sort(face.begin(), face.end());
+      std::sort(expected.begin(), expected.end());
+      EXPECT_EQ(face, expected) << "edge " << e << " side " << side;
+    }
+  }
+}
+
+TEST(Topology, PlaneBoundaryAndVertexAdjacentFaces) {
+  const int n = 4;
+  const TriMesh m = test::plane(n);
+  const Topology t = Topology::build(m.F, static_cast<std::int32_t>(m.V.rows()));
+  EXPECT_EQ(t.boundary_edges.rows(), 4 * n);
+  const auto mask = t.boundary_vertex_mask();
+  EXPECT_EQ(std::count(mask.begin(), mask.end(), true), 4 * n);
+  // N(i) excludes i, is sorted, and is symmetric.
+  for (std::int32_t f = 0; f < t.num_faces; ++f)
+    for (auto k = t.ff_offsets[f]; k < t.ff_offsets[f + 1]; ++k) {
+      const std::int32_t g = t.ff_faces[static_cast<std::size_t>(k)];
+      EXPECT_NE(g, f);
+      const auto b = t.ff_faces.begin() + t.ff_offsets[g], e = t.ff_faces.begin() + t.ff_offsets[g + 1];
+      EXPECT_TRUE(std::binary_search(b, e, f));
+    }
+}
+
+TEST(Topology, NonManifoldAndDegenerateEdgesGetNoShapingTerm) {
+  // Three triangles around edge (0, 1), plus a degenerate face (2, 2, 3).
+  Triangles F(4, 3);
+  F << 0, 1, 2, 1, 0, 3, 0, 1, 4, 2, 2, 3;
+  const Topology t = Topology::build(F, 5);
+  EXPECT_EQ(t.num_interior_edges(), 0);
+  // (0, 1) has three faces; (2, 3) is traversed twice by the degenerate face alone.
+  ASSERT_EQ(t.nonmanifold_edges.rows(), 2);
+  EXPECT_EQ(t.nonmanifold_edges.row(0), (Eigen::RowVector2i(0, 1)));
+  EXPECT_EQ(t.nonmanifold_edges.row(1), (Eigen::RowVector2i(2, 3)));
+}
+
+}  // namespace
+}  // namespace mdn
