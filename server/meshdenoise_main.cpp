@@ -163,7 +163,9 @@ Parameters (--params), [accepted range], default:
     std::string text = line.str();
     text.resize(std::max<std::size_t>(text.size() + 1, 38), ' ');
     out << text << spec.description;
-    if (!spec.unit.empty()) out << " (" << spec.unit << ")";
+    if (!spec.unit.empty() && spec.description.find(spec.unit) == std::string_view::npos) {
+      out << " (" << spec.unit << ")";
+    }
     if (!spec.equation.empty()) out << ", " << spec.equation;
     out << "\n";
   }
@@ -445,9 +447,9 @@ int run(int argc, char** argv) {
       throw;
     }
     progress.clear();
+    summary = service::job_summary_json(output);  // before the bytes move out
     out_bytes = std::move(output.bytes);
     out_format = output.format;
-    summary = service::job_summary_json(output);
   }
   summary["input"] = {{"path", in_path}, {"format", std::string(io::to_string(in_format))}};
   summary["output"] = out_path;

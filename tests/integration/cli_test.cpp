@@ -214,6 +214,9 @@ TEST_F(Cli, ParamsInlineAndFromFileAndReport) {
   EXPECT_EQ(report["params"]["output"]["format"], "off");
   EXPECT_EQ(report["vertices"], clean_.num_vertices());
   EXPECT_EQ(report["faces"], clean_.num_faces());
+  EXPECT_EQ(report["bytes"], fs::file_size(path("a.off")));
+  EXPECT_EQ(report["output"], path("a.off"));
+  EXPECT_EQ(report["input"]["format"], "off");
   EXPECT_TRUE(report["timings_ms"]["normal"].is_number());
   EXPECT_TRUE(report["timings_ms"]["total"].is_number());
   ASSERT_EQ(report["surfaces"].size(), 1u);
