@@ -52,6 +52,8 @@ std::optional<ConnectionProbe> ConnectionProbe::find(int local_port, const std::
   return found;
 }
 
+void ConnectionProbe::stop_reading() const { shutdown(fd_, SHUT_RD); }
+
 bool ConnectionProbe::peer_gone() const {
   pollfd p{fd_, POLLIN | POLLRDHUP, 0};
   if (poll(&p, 1, 0) <= 0) return false;

@@ -19,6 +19,10 @@ class ConnectionProbe {
   static std::optional<ConnectionProbe> find(int local_port, const std::string& remote_addr, int remote_port);
   // True once the peer closed or reset the connection. Never blocks, never consumes bytes.
   bool peer_gone() const;
+  // Makes the server stop reading this connection: after the current response the keep-alive
+  // loop sees end-of-stream and closes it. cpp-httplib 0.11.4 keeps a connection open even when
+  // a handler answers "Connection: close", and would parse an unread body as the next request.
+  void stop_reading() const;
 
  private:
   explicit ConnectionProbe(int fd) : fd_(fd) {}

@@ -57,6 +57,12 @@ void replace_header(httplib::Response& res, const std::string& key, const std::s
   res.set_header(key, value);
 }
 
+// Answers this request, then closes the connection: used when the body stays unread.
+void close_after_response(const httplib::Request& req, httplib::Response& res) {
+  replace_header(res, "Connection", "close");
+  if (auto probe = ConnectionProbe::find(req.local_port, req.remote_addr, req.remote_port)) probe->stop_reading();
+}
+
 // A header value must not carry CR/LF (response splitting) nor other control characters.
 std::string header_safe(std::string_view text) {
   std::string out;
@@ -174,6 +180,7 @@ struct Context {
   httplib::Response& res;
   const httplib::ContentReader* reader;  // POST routes only
   std::string request_id;
+  bool body_consumed = false;  // POST routes: the whole body was read
 };
 
 }  // namespace
@@ -206,8 +213,14 @@ struct HttpService::Impl {
     char buf[16];
     std::snprintf(buf, sizeof buf, "%08x", unsigned(rd()));
     id_prefix = buf;
-    // All routes, in one table. Patterns match the whole path (std::regex_match).
-    routes = {
+    routes = make_routes();
+    for (Route& r : routes) r.regex = std::regex(r.pattern);
+    install();
+  }
+
+  // All routes, in one table. Patterns match the whole path (std::regex_match).
+  static std::vector<Route> make_routes() {
+    return {
         {"GET", "/healthz", "/healthz", &Impl::healthz, false, {}},
         {"GET", "/readyz", "/readyz", &Impl::readyz, false, {}},
         {"GET", "/metrics", "/metrics", &Impl::metrics_route, false, {}},
@@ -220,8 +233,6 @@ struct HttpService::Impl {
         {"DELETE", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", &Impl::delete_job, false, {}},
         {"GET", "/v1/jobs/([^/]+)/result", "/v1/jobs/{id}/result", &Impl::get_result, false, {}},
     };
-    for (Route& r : routes) r.regex = std::regex(r.pattern);
-    install();
   }
 
   static JobQueueOptions make_queue_options(const ServerConfig& c) {
@@ -312,6 +323,7 @@ struct HttpService::Impl {
       (this->*route.handler)(ctx);
     } catch (...) {
       const Problem p = problem_from_exception(std::current_exception());
+      if (route.reads_body && !ctx.body_consumed && has_request_body(req)) close_after_response(req, res);
       if (p.status >= 500 && log)
         log->error("handler_failed", {{"request_id", ctx.request_id}, {"route", route.name}, {"detail", p.detail}});
       try {
@@ -336,7 +348,7 @@ struct HttpService::Impl {
     }
     auto reject = [&](const Problem& p) {
       // The body (if any) stays unread: close the connection so it is not parsed as a request.
-      if (has_request_body(req)) replace_header(res, "Connection", "close");
+      if (has_request_body(req)) close_after_response(req, res);
       write_problem(req, res, p, id);
       return httplib::Server::HandlerResponse::Handled;
     };
@@ -389,7 +401,7 @@ struct HttpService::Impl {
       case 413:
         p = make_problem(413, "too-large", "Content too large",
                          "the body exceeds the limit of " + std::to_string(config.max_body_bytes) + " bytes");
-        replace_header(res, "Connection", "close");
+        close_after_response(req, res);
         break;
       case 414: p = make_problem(414, "uri-too-long", "URI too long", "the request target is too long"); break;
       case 416:
@@ -467,12 +479,13 @@ struct HttpService::Impl {
     });
     metrics.add_bytes_in(std::int64_t(body.size()));
     if (over) throw_too_large(ctx);
+    ctx.body_consumed = ok;
     if (!ok) throw HttpError(make_problem(400, "bad-body", "Unreadable body", "the request body could not be read"));
     return body;
   }
 
   [[noreturn]] void throw_too_large(Context& ctx) {
-    replace_header(ctx.res, "Connection", "close");  // the rest of the body stays unread
+    close_after_response(ctx.req, ctx.res);  // the rest of the body stays unread
     throw HttpError(make_problem(413, "too-large", "Content too large",
                                  "the body exceeds the limit of " + std::to_string(config.max_body_bytes) + " bytes"));
   }
@@ -481,7 +494,7 @@ struct HttpService::Impl {
     const bool chunked = lower(ctx.req.get_header_value("Transfer-Encoding")).find("chunked") != std::string::npos;
     if (chunked) return;
     if (!ctx.req.has_header("Content-Length")) {
-      replace_header(ctx.res, "Connection", "close");
+      close_after_response(ctx.req, ctx.res);
       throw HttpError(make_problem(411, "length-required", "Length required",
                                    "send Content-Length or Transfer-Encoding: chunked"));
     }
@@ -490,7 +503,7 @@ struct HttpService::Impl {
     auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), n);
     if (ec == std::errc::result_out_of_range) throw_too_large(ctx);
     if (ec != std::errc() || ptr != text.data() + text.size() || text.empty()) {
-      replace_header(ctx.res, "Connection", "close");
+      close_after_response(ctx.req, ctx.res);
       throw HttpError(make_problem(400, "bad-request", "Bad request", "Content-Length is not a number"));
     }
     if (n > std::uint64_t(config.max_body_bytes)) throw_too_large(ctx);
@@ -543,6 +556,7 @@ struct HttpService::Impl {
           });
       metrics.add_bytes_in(total);
       if (over) throw_too_large(ctx);
+      ctx.body_consumed = ok && !unexpected;
       if (unexpected)
         throw HttpError(make_problem(400, "bad-form", "Bad form",
                                      "unexpected form field '" + unexpected_name + "'; expected 'mesh' and 'params'"));
@@ -825,5 +839,11 @@ void HttpService::stop() {
 }
 
 JobQueue& HttpService::queue() { return impl_->queue; }
+
+std::vector<RouteInfo> HttpService::route_table() {
+  std::vector<RouteInfo> out;
+  for (const auto& r : Impl::make_routes()) out.push_back({r.method, r.name});
+  return out;
+}
 
 }  // namespace mdn::http

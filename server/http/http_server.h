@@ -8,12 +8,18 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "server/http/config.h"
 #include "server/http/job_queue.h"
 #include "server/http/log.h"
 
 namespace mdn::http {
+
+// One route: method and path template as in proto/openapi.yaml ("/v1/jobs/{id}").
+struct RouteInfo {
+  std::string method, path;
+};
 
 class HttpService {
  public:
@@ -36,6 +42,9 @@ class HttpService {
   void stop();
 
   JobQueue& queue();
+
+  // Every route the server answers (besides OPTIONS preflights), for contract tests.
+  static std::vector<RouteInfo> route_table();
 
  private:
   struct Impl;

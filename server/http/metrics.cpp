@@ -1,15 +1,15 @@
 #include "server/http/metrics.h"
 
-#include <sstream>
+#include <charconv>
 
 namespace mdn::http {
 namespace {
 
+// Shortest text that reads back as the same double ("0.005", not "0.0050000000000000001").
 std::string format_double(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
+  char buf[64];
+  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
+  return ec == std::errc() ? std::string(buf, end) : std::string("NaN");
 }
 
 // Label values: escape backslash, quote and newline (exposition format).
