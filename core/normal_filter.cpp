@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "core/errors.h"
+#include "core/fast_math.h"
 #include "core/parallel.h"
 #include "core/progress.h"
 
@@ -45,7 +46,7 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
       for (std::int32_t k = topo.ff_offsets[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k) {
         const std::int32_t j = topo.ff_faces[static_cast<std::size_t>(k)];
         const double d2 = (centroid.row(i) - centroid.row(j)).squaredNorm();
-        spatial[static_cast<std::size_t>(k)] = area(j) * std::exp(-d2 * inv_sigma_c2);
+        spatial[static_cast<std::size_t>(k)] = area(j) * detail::exp_nonpositive(-d2 * inv_sigma_c2);
       }
   });
 
@@ -80,13 +81,15 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
       progress->on_progress(Stage::NormalFilter, static_cast<double>(it) / s.iterations);
     }
     ex.parallel_for(num_pairs, [&](std::int64_t begin, std::int64_t end) {
+      const double* n = current.data();  // row-major #F x 3
       for (std::int64_t q = begin; q < end; ++q) {
-        const auto ni = current.row(pair_first[static_cast<std::size_t>(q)]);
-        const auto nj = current.row(pair_second[static_cast<std::size_t>(q)]);
-        const double x = (1.0 - ni.dot(nj)) * inv_range;  // (1 - cos gamma_ij) / (1 - cos sigma_gamma)
-        double g = std::exp(-x * x);
+        const double* ni = n + 3 * pair_first[static_cast<std::size_t>(q)];
+        const double* nj = n + 3 * pair_second[static_cast<std::size_t>(q)];
+        const double dx = ni[0] - nj[0], dy = ni[1] - nj[1], dz = ni[2] - nj[2];
+        const double x = (1.0 - (ni[0] * nj[0] + ni[1] * nj[1] + ni[2] * nj[2])) * inv_range;  // (1 - cos gamma_ij) / (1 - cos sigma_gamma)
+        double g = detail::exp_nonpositive(-x * x);
         if (s.l1_median) {
-          const double dist = (ni - nj).norm();
+          const double dist = std::sqrt(dx * dx + dy * dy + dz * dz);
           // omega_ij = .../||n_i - n_j||; bilateral weights where that is tiny (Eq. 7).
           if (dist >= s.bilateral_switch) g /= dist;
         }
@@ -100,11 +103,16 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
           next.row(i).setZero();
           continue;
         }
-        Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
+        const double* n = current.data();
+        double sx = 0, sy = 0, sz = 0;
         for (std::int32_t k = topo.ff_offsets[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k) {
           const double w = spatial[static_cast<std::size_t>(k)] * range[static_cast<std::size_t>(pair_of[static_cast<std::size_t>(k)])];
-          sum += w * current.row(topo.ff_faces[static_cast<std::size_t>(k)]);
+          const double* nj = n + 3 * topo.ff_faces[static_cast<std::size_t>(k)];
+          sx += w * nj[0];
+          sy += w * nj[1];
+          sz += w * nj[2];
         }
+        const Eigen::RowVector3d sum(sx, sy, sz);
         const double len = sum.norm();
         if (len > 0)
           next.row(i) = sum / len;

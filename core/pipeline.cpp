@@ -45,7 +45,7 @@ DenoiseResult denoise(const TriMesh& input, const DenoiseParams& params, const R
   // Sec. 4.1, Eq. 1. The solver keeps the symbolic analysis for every Eq. 3 step.
   t0 = Clock::now();
   checkpoint(progress, Stage::InitialPrefilter, 0);
-  ShapingSolver solver(topo, params.solver, params.cg_tolerance);
+  ShapingSolver solver(topo, params.solver, params.cg_tolerance, &executor);
   P = solver.solve(P, params.alpha, {});
   times.initial_ms = ms_since(t0);
 

@@ -3,12 +3,15 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <algorithm>
+#include <functional>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <random>
 
 #include "core/errors.h"
+#include "core/fast_math.h"
+#include "core/parallel.h"
 #include "core/progress.h"
 
 namespace mdn {
@@ -34,6 +37,11 @@ struct ShapingSolver::Impl {
   LinearSolver kind;
   double cg_tolerance;
   const Topology* topo;
+  Executor* executor;
+  // ConjugateGradient only: vertex -> (edge, coefficient of the vertex in S(e)), CSR, so that
+  // D^T s is a gather per vertex (parallel, fixed summation order).
+  std::vector<std::int32_t> ve_offsets, ve_edges;
+  std::vector<double> ve_coef;
   // Ldlt only.
   SparseMatrix A;
   std::vector<int> diagonal_slot;           // #V
@@ -41,8 +49,57 @@ struct ShapingSolver::Impl {
   Eigen::SimplicialLDLT<SparseMatrix> ldlt;
   bool analyzed = false;
 
-  Impl(const Topology& t, LinearSolver k, double tol) : kind(k), cg_tolerance(tol), topo(&t) {
-    if (kind == LinearSolver::Ldlt) build_pattern();
+  Impl(const Topology& t, LinearSolver k, double tol, Executor* ex)
+      : kind(k), cg_tolerance(tol), topo(&t), executor(ex) {
+    if (kind == LinearSolver::Ldlt)
+      build_pattern();
+    else
+      build_incidence();
+  }
+
+  void build_incidence() {
+    const Topology& t = *topo;
+    const auto E = t.num_interior_edges();
+    std::vector<std::int32_t> count(static_cast<std::size_t>(t.num_vertices) + 1, 0);
+    for (Eigen::Index e = 0; e < E; ++e)
+      for (int a = 0; a < 4; ++a) ++count[static_cast<std::size_t>(t.interior_edges(e, a)) + 1];
+    ve_offsets.assign(count.size(), 0);
+    for (std::size_t v = 1; v < count.size(); ++v) ve_offsets[v] = ve_offsets[v - 1] + count[v];
+    ve_edges.resize(static_cast<std::size_t>(4 * E));
+    ve_coef.resize(static_cast<std::size_t>(4 * E));
+    std::vector<std::int32_t> cursor(ve_offsets.begin(), ve_offsets.end() - 1);
+    for (Eigen::Index e = 0; e < E; ++e)
+      for (int a = 0; a < 4; ++a) {
+        const auto slot = static_cast<std::size_t>(cursor[static_cast<std::size_t>(t.interior_edges(e, a))]++);
+        ve_edges[slot] = static_cast<std::int32_t>(e);
+        ve_coef[slot] = kShape[a];
+      }
+  }
+
+  void parallel(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& fn) const {
+    if (executor)
+      executor->parallel_for(n, fn);
+    else
+      fn(0, n);
+  }
+
+  // Column-wise dot products with a fixed blocking, so the rounding does not depend on the
+  // number of threads: blocks are summed in parallel, block sums serially in order.
+  Eigen::Array3d dot3(const Vertices& a, const Vertices& b) const {
+    constexpr std::int64_t kBlock = 2048;
+    const std::int64_t n = a.rows(), blocks = (n + kBlock - 1) / kBlock;
+    std::vector<Eigen::Array3d> partial(static_cast<std::size_t>(blocks), Eigen::Array3d::Zero());
+    parallel(blocks, [&](std::int64_t begin, std::int64_t end) {
+      for (std::int64_t blk = begin; blk < end; ++blk) {
+        Eigen::Array3d sum = Eigen::Array3d::Zero();
+        for (std::int64_t i = blk * kBlock; i < std::min(n, (blk + 1) * kBlock); ++i)
+          sum += a.row(i).array().transpose() * b.row(i).array().transpose();
+        partial[static_cast<std::size_t>(blk)] = sum;
+      }
+    });
+    Eigen::Array3d total = Eigen::Array3d::Zero();
+    for (const auto& p : partial) total += p;
+    return total;
   }
 
   void build_pattern() {
@@ -97,61 +154,75 @@ struct ShapingSolver::Impl {
     return Vertices(x);
   }
 
-  // y = A x = x + alpha D^T W D x, one pass over the interior edges.
-  void apply(const Vertices& x, double alpha, const Eigen::VectorXd& weights, Vertices& y) const {
-    y = x;
+  // y = A x = x + alpha D^T W D x: s_e = alpha w_e S(e) per edge, then a gather per vertex.
+  void apply(const Vertices& x, double alpha, const Eigen::VectorXd& weights, Vertices& s, Vertices& y) const {
     const auto E = topo->num_interior_edges();
     const auto& ie = topo->interior_edges;
-    for (Eigen::Index e = 0; e < E; ++e) {
-      const std::int32_t a = ie(e, 0), b = ie(e, 1), c = ie(e, 2), d = ie(e, 3);
-      const double w = alpha * (weights.size() ? weights(e) : 1.0);
-      const Eigen::RowVector3d s = w * (x.row(a) - x.row(b) + x.row(c) - x.row(d));  // w_e S(e)
-      y.row(a) += s;
-      y.row(b) -= s;
-      y.row(c) += s;
-      y.row(d) -= s;
-    }
+    parallel(E, [&](std::int64_t begin, std::int64_t end) {
+      for (std::int64_t e = begin; e < end; ++e) {
+        const double w = alpha * (weights.size() ? weights(e) : 1.0);
+        s.row(e) = w * (x.row(ie(e, 0)) - x.row(ie(e, 1)) + x.row(ie(e, 2)) - x.row(ie(e, 3)));
+      }
+    });
+    parallel(x.rows(), [&](std::int64_t begin, std::int64_t end) {
+      for (std::int64_t v = begin; v < end; ++v) {
+        Eigen::RowVector3d acc = x.row(v);
+        for (std::int32_t k = ve_offsets[static_cast<std::size_t>(v)]; k < ve_offsets[static_cast<std::size_t>(v) + 1]; ++k)
+          acc += ve_coef[static_cast<std::size_t>(k)] * s.row(ve_edges[static_cast<std::size_t>(k)]);
+        y.row(v) = acc;
+      }
+    });
   }
 
   Vertices solve_cg(const Vertices& P, double alpha, const Eigen::VectorXd& weights) {
     const Eigen::Index n = P.rows();
-    // Jacobi preconditioner: diag(A)_v = 1 + alpha sum_{e containing v} w_e (coefficients +-1).
-    Eigen::VectorXd inv_diag = Eigen::VectorXd::Ones(n);
     const auto E = topo->num_interior_edges();
-    for (Eigen::Index e = 0; e < E; ++e) {
-      const double w = alpha * (weights.size() ? weights(e) : 1.0);
-      for (int k = 0; k < 4; ++k) inv_diag(topo->interior_edges(e, k)) += w;
-    }
-    inv_diag = inv_diag.cwiseInverse();
+    // Jacobi preconditioner: diag(A)_v = 1 + alpha sum_{e containing v} w_e (coefficients +-1).
+    Eigen::VectorXd inv_diag(n);
+    parallel(n, [&](std::int64_t begin, std::int64_t end) {
+      for (std::int64_t v = begin; v < end; ++v) {
+        double d = 1;
+        for (std::int32_t k = ve_offsets[static_cast<std::size_t>(v)]; k < ve_offsets[static_cast<std::size_t>(v) + 1]; ++k)
+          d += alpha * (weights.size() ? weights(ve_edges[static_cast<std::size_t>(k)]) : 1.0);
+        inv_diag(v) = 1.0 / d;
+      }
+    });
 
     Vertices x = P;  // start from the anchor: A = I + (small) so P is already close
-    Vertices Ax(n, 3), r(n, 3), z(n, 3), p(n, 3), Ap(n, 3);
-    apply(x, alpha, weights, Ax);
-    r = P - Ax;
-    z = inv_diag.asDiagonal() * r;
+    Vertices s(E, 3), r(n, 3), z(n, 3), p(n, 3), Ap(n, 3);
+    apply(x, alpha, weights, s, Ap);
+    parallel(n, [&](std::int64_t begin, std::int64_t end) {
+      for (std::int64_t v = begin; v < end; ++v) {
+        r.row(v) = P.row(v) - Ap.row(v);
+        z.row(v) = inv_diag(v) * r.row(v);
+      }
+    });
     p = z;
-    Eigen::Array3d rz, b_norm2, r_norm2;
-    for (int c = 0; c < 3; ++c) {
-      rz(c) = r.col(c).dot(z.col(c));
-      b_norm2(c) = P.col(c).squaredNorm();
-      r_norm2(c) = r.col(c).squaredNorm();
-    }
-    const Eigen::Array3d threshold = (cg_tolerance * cg_tolerance) * b_norm2.max(1e-300);
+    Eigen::Array3d rz = dot3(r, z), r_norm2 = dot3(r, r);
+    const Eigen::Array3d threshold = (cg_tolerance * cg_tolerance) * dot3(P, P).max(1e-300);
     const int max_iterations = static_cast<int>(std::max<Eigen::Index>(1000, n));
     for (int it = 0; it < max_iterations; ++it) {
-      if ((r_norm2 <= threshold).all()) return x;
-      apply(p, alpha, weights, Ap);
-      for (int c = 0; c < 3; ++c) {
-        if (r_norm2(c) <= threshold(c)) continue;  // this column has converged: freeze it
-        const double step = rz(c) / p.col(c).dot(Ap.col(c));
-        x.col(c) += step * p.col(c);
-        r.col(c) -= step * Ap.col(c);
-        z.col(c) = inv_diag.cwiseProduct(r.col(c));
-        const double rz_new = r.col(c).dot(z.col(c));
-        p.col(c) = z.col(c) + (rz_new / rz(c)) * p.col(c);
-        rz(c) = rz_new;
-        r_norm2(c) = r.col(c).squaredNorm();
-      }
+      // A converged column is frozen (step 0) so that 0/0 never appears.
+      const Eigen::Array3d active = (r_norm2 > threshold).cast<double>();
+      if ((active == 0).all()) return x;
+      apply(p, alpha, weights, s, Ap);
+      const Eigen::Array3d pAp = dot3(p, Ap);
+      const Eigen::Array3d step = active * rz / pAp.max(1e-300);
+      parallel(n, [&](std::int64_t begin, std::int64_t end) {
+        for (std::int64_t v = begin; v < end; ++v) {
+          x.row(v) += (step * p.row(v).array().transpose()).transpose().matrix();
+          r.row(v) -= (step * Ap.row(v).array().transpose()).transpose().matrix();
+          z.row(v) = inv_diag(v) * r.row(v);
+        }
+      });
+      const Eigen::Array3d rz_new = dot3(r, z);
+      const Eigen::Array3d beta = active * rz_new / rz.max(1e-300);
+      parallel(n, [&](std::int64_t begin, std::int64_t end) {
+        for (std::int64_t v = begin; v < end; ++v)
+          p.row(v) = (z.row(v).array().transpose() + beta * p.row(v).array().transpose()).transpose().matrix();
+      });
+      rz = active * rz_new + (1 - active) * rz;
+      r_norm2 = dot3(r, r);
     }
     throw SolverError("conjugate gradients did not converge on the pre-filter system");
   }
@@ -165,8 +236,8 @@ struct ShapingSolver::Impl {
   }
 };
 
-ShapingSolver::ShapingSolver(const Topology& topo, LinearSolver kind, double cg_tolerance)
-    : impl_(std::make_unique<Impl>(topo, kind, cg_tolerance)) {}
+ShapingSolver::ShapingSolver(const Topology& topo, LinearSolver kind, double cg_tolerance, Executor* executor)
+    : impl_(std::make_unique<Impl>(topo, kind, cg_tolerance, executor)) {}
 ShapingSolver::~ShapingSolver() = default;
 Vertices ShapingSolver::solve(const Vertices& P, double alpha, const Eigen::VectorXd& weights) {
   return impl_->solve(P, alpha, weights);
@@ -192,7 +263,7 @@ Eigen::VectorXd anisotropic_edge_weights(const Vertices& P, const Triangles& F, 
       continue;
     }
     const double cos_theta = std::clamp(n1.dot(n2), -1.0, 1.0);
-    w(e) = std::exp(-log_b * (1.0 - cos_theta) * inv);  // b^-((1 - cos theta) / (1 - cos sigma_theta))
+    w(e) = detail::exp_nonpositive(-log_b * (1.0 - cos_theta) * inv);  // b^-((1 - cos theta) / (1 - cos sigma_theta))
   }
   return w;
 }

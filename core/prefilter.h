@@ -22,7 +22,8 @@ class ProgressObserver;
 // solution warm-starts the next solve (CG). Not thread-safe; one per pipeline run.
 class ShapingSolver {
  public:
-  ShapingSolver(const Topology& topo, LinearSolver kind, double cg_tolerance);
+  // executor: optional threads for the CG solver (results do not depend on the count).
+  ShapingSolver(const Topology& topo, LinearSolver kind, double cg_tolerance, Executor* executor = nullptr);
   ~ShapingSolver();
   // Returns the solution P~ (#V by 3). weights: #E edge weights, or empty for W = I.
   Vertices solve(const Vertices& P, double alpha, const Eigen::VectorXd& weights);
