@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/errors.h"
 #include "core/io/detail.h"
 
 namespace mdn::io::detail {
@@ -38,22 +39,27 @@ std::unique_ptr<draco::Mesh> draco_decode(std::string_view bytes, const std::str
 
 std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options, const std::optional<QuantizationBox>& box) {
   auto check_bits = [](int bits, const char* name) {
-    if (bits < 1 || bits > 30) throw std::invalid_argument(std::string(name) + " must be in [1, 30]");
+    if (bits < 0 || bits > 30) throw InvalidParamsError(name, std::string(name) + " must be 0 (lossless) or in [1, 30]");
   };
-  check_bits(options.position_bits, "position_bits");
+  if (options.position_bits < 8 || options.position_bits > 30)
+    throw InvalidParamsError("position_bits", "position_bits must be in [8, 30]");
   check_bits(options.normal_bits, "normal_bits");
   check_bits(options.texcoord_bits, "texcoord_bits");
   check_bits(options.color_bits, "color_bits");
   check_bits(options.generic_bits, "generic_bits");
   if (options.compression_level < 0 || options.compression_level > 10)
-    throw std::invalid_argument("compression_level must be in [0, 10]");
+    throw InvalidParamsError("compression_level", "compression_level must be in [0, 10]");
   draco::Encoder encoder;
   if (box) encoder.SetAttributeExplicitQuantization(draco::GeometryAttribute::POSITION, options.position_bits, 3, box->origin, box->range);
   else encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, options.position_bits);
-  encoder.SetAttributeQuantization(draco::GeometryAttribute::NORMAL, options.normal_bits);
-  encoder.SetAttributeQuantization(draco::GeometryAttribute::TEX_COORD, options.texcoord_bits);
-  encoder.SetAttributeQuantization(draco::GeometryAttribute::COLOR, options.color_bits);
-  encoder.SetAttributeQuantization(draco::GeometryAttribute::GENERIC, options.generic_bits);
+  // Attributes without quantisation bits are stored losslessly by Draco.
+  const std::pair<draco::GeometryAttribute::Type, int> others[] = {
+      {draco::GeometryAttribute::NORMAL, options.normal_bits},
+      {draco::GeometryAttribute::TEX_COORD, options.texcoord_bits},
+      {draco::GeometryAttribute::COLOR, options.color_bits},
+      {draco::GeometryAttribute::GENERIC, options.generic_bits}};
+  for (const auto& [type, bits] : others)
+    if (bits > 0) encoder.SetAttributeQuantization(type, bits);
   // Draco's speed is the inverse of the compression level (0 = best compression).
   const int speed = 10 - options.compression_level;
   encoder.SetSpeedOptions(speed, speed);
