@@ -20,6 +20,7 @@
 #include <iterator>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <unordered_map>
 #include <vector>
 
@@ -189,9 +190,9 @@ void table_section(const TriMesh& truth, const Options& o) {
 
   std::printf("\n== Table 1, Fandisk: MSAE (x1e-2) and E_v (x1e-3, ground truth's unit box) ==\n");
   std::printf("DenoiseParams defaults (alpha %.2f, sigma_theta %.0f, n_aniso %d, sigma_gamma %.0f, n_normal %d, "
-              "n_vertex %d), region_mode auto, threads 1, %d seeds per row (mean +- sd; times: median)\n",
+              "n_vertex %d), region_mode %s, solver %s, threads 1, %d seeds per row (mean +- sd; times: median)\n",
               params.alpha, params.sigma_theta, params.n_aniso, params.sigma_gamma, params.n_normal, params.n_vertex,
-              o.seeds);
+              std::string(to_string(params.region_mode)).c_str(), std::string(to_string(params.solver)).c_str(), o.seeds);
   std::printf("paper (sigma = 0.2 l, Figure 10; noise convention unstated): MSAE %.3f, E_v %.3f (frame unstated); "
               "Table 2 (i7-3770): pre-filter %.3f s, normal %.3f s, vertex %.3f s, total %.3f s\n",
               kPaperMsae, kPaperEv, kPaperPrefilterS, kPaperNormalS, kPaperVertexS, kPaperTotalS);
@@ -334,6 +335,10 @@ void scale_section(const TriMesh& fandisk) {
 
 int main(int argc, char** argv) {
   const Options o = parse(argc, argv);
+  double load[3] = {0, 0, 0};
+  getloadavg(load, 3);  // timings on a shared machine mean little without it
+  std::printf("machine: %u hardware threads, load average %.2f %.2f %.2f\n", std::thread::hardware_concurrency(),
+              load[0], load[1], load[2]);
   try {
     const TriMesh fandisk = load_fandisk(o.data);
     if (o.table) table_section(fandisk, o);

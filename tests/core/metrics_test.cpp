@@ -146,14 +146,14 @@ TEST(Msae, DifferentConnectivityIsRejected) {
 }
 
 TEST(SurfaceDistance, MatchesBruteForceOnASphere) {
-  expect_matches_brute_force(sphere(4), 2000, 1.6, 7);
+  expect_matches_brute_force(sphere(3), 1000, 1.6, 7);
 }
 
 TEST(SurfaceDistance, MatchesBruteForceOnARandomSoupWithDegenerateTriangles) {
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> u(-1, 1);
   std::uniform_real_distribution<double> size(0.001, 0.4);
-  const int n = 600;
+  const int n = 400;
   TriMesh soup;
   soup.V.resize(3 * n, 3);
   soup.F.resize(n, 3);
@@ -164,14 +164,14 @@ TEST(SurfaceDistance, MatchesBruteForceOnARandomSoupWithDegenerateTriangles) {
     soup.F.row(f) << 3 * f, 3 * f + 1, 3 * f + 2;
   }
   // Degenerate triangles: collinear corners, two coincident corners, all three coincident.
-  for (int f = 0; f < 30; ++f) {
+  for (int f = 0; f < 30; ++f) {  // 30 of the 400
     const Vec3 a = soup.V.row(3 * f).transpose();
     const Vec3 b = soup.V.row(3 * f + 1).transpose();
     if (f % 3 == 0) soup.V.row(3 * f + 2) = (a + 0.37 * (b - a)).transpose();
     if (f % 3 == 1) soup.V.row(3 * f + 2) = a.transpose();
     if (f % 3 == 2) soup.V.row(3 * f + 1) = soup.V.row(3 * f + 2) = a.transpose();
   }
-  expect_matches_brute_force(soup, 3000, 1.5, 13);
+  expect_matches_brute_force(soup, 2000, 1.5, 13);
 }
 
 TEST(SurfaceDistance, OnlyDegenerateTrianglesGiveSegmentAndPointDistances) {
