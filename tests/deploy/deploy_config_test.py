@@ -1,0 +1,205 @@
+#!/usr/bin/env python3
+"""The deployment files agree with each other and with the server they deploy.
+
+The server's own --help is the reference for settings: every MDN_* variable set in the
+Dockerfile, docker-compose.yml or the Kubernetes manifests must exist and hold a value the server
+accepts (it exits 2 on a bad one), and docker/README.md must list every setting with the default
+--help prints. Then the numbers that must fit together: nginx's body limit equals the server's,
+its read timeout exceeds the job time limit, its keep-alive stays below the server's, stop and
+grace periods exceed the drain, workers equal CPU limits, ports, user and probes match.
+"""
+
+import argparse
+import os
+import re
+import subprocess
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from deploy_support import TestFailure, check, log, read_dockerfile, run_main  # noqa: E402
+
+try:
+    import yaml  # python3-yaml (scripts/deps/apt-test.txt)
+except ImportError:
+    yaml = None
+
+
+def parse_args():
+    p = argparse.ArgumentParser(description=__doc__)
+    p.add_argument("--server", required=True)
+    p.add_argument("--docker-dir", required=True)
+    return p.parse_args()
+
+
+def server_settings(server):
+    """{env var: (flag, default text)} from meshdenoise-server --help (with no MDN_* set)."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith("MDN_")}
+    out = subprocess.run([server, "--help"], env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    check(out.returncode == 0, "meshdenoise-server --help failed: %s" % out.stdout.decode(errors="replace"))
+    text = out.stdout.decode()
+    settings = {}
+    for flag, var, default in re.findall(r"^  --([a-z-]+) \((MDN_[A-Z_]+)\)\n      .*; default: (.*)$", text, re.M):
+        settings[var] = (flag, default.strip())
+    check(len(settings) >= 10, "could not read the settings from --help:\n" + text)
+    return settings
+
+
+def check_env_accepted(server, settings, env, where):
+    """Every variable is a setting and the server starts its parsing without complaint."""
+    for k in env:
+        check(k in settings, "%s sets %s, which is not a meshdenoise-server setting" % (where, k))
+    base = {k: v for k, v in os.environ.items() if not k.startswith("MDN_")}
+    base.update({k: str(v) for k, v in env.items()})
+    r = subprocess.run([server, "--help"], env=base, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    check(r.returncode == 0, "the server rejects the environment of %s: %s" % (where, r.stdout.decode(errors="replace")))
+
+
+def seconds(text):
+    m = re.fullmatch(r"\s*(\d+(?:\.\d+)?)\s*(ms|s|m|h)?\s*", str(text))
+    check(m is not None, "not a duration: %r" % text)
+    scale = {"ms": 0.001, "s": 1, None: 1, "m": 60, "h": 3600}[m.group(2)]
+    return float(m.group(1)) * scale
+
+
+def size_bytes(text):
+    m = re.fullmatch(r"\s*(\d+)\s*([kKmMgG])?\s*", str(text))
+    check(m is not None, "not a size: %r" % text)
+    return int(m.group(1)) << {None: 0, "k": 10, "m": 20, "g": 30}[(m.group(2) or "").lower() or None]
+
+
+def cpus(text):
+    text = str(text)
+    return float(text[:-1]) / 1000 if text.endswith("m") else float(text)
+
+
+def nginx_directive(conf, name, context=None):
+    """The single value of a directive in docker/nginx/meshdenoise.conf (comments stripped)."""
+    body = re.sub(r"#[^\n]*", "", conf)
+    if context:
+        m = re.search(context + r"\s*\{(.*?)\}", body, re.S)
+        check(m is not None, "no %s block in the nginx configuration" % context)
+        body = m.group(1)
+    values = re.findall(r"(?:^|[;{\s])" + re.escape(name) + r"\s+([^;]*);", body)
+    check(len(values) == 1, "expected one '%s' in the nginx configuration, found %s" % (name, values))
+    return values[0].strip()
+
+
+def main():
+    args = parse_args()
+    check(yaml is not None, "python3-yaml is not installed (scripts/install-deps.sh test)")
+    d = args.docker_dir
+    settings = server_settings(args.server)
+    defaults = {k: v[1] for k, v in settings.items()}
+
+    # --- The Dockerfile's runtime stage.
+    stage = read_dockerfile(os.path.join(d, "Dockerfile"))
+    check_env_accepted(args.server, settings, stage.env, "Dockerfile ENV")
+    image_env = dict(defaults, **stage.env)
+    port = int(image_env["MDN_PORT"])
+    uid = int(stage.user.split(":")[0])
+    check(image_env["MDN_HOST"] == "0.0.0.0", "the image listens on %s, not 0.0.0.0" % image_env["MDN_HOST"])
+    check(str(port) in stage.expose, "EXPOSE %s but MDN_PORT %d" % (stage.expose, port))
+    check(any("/healthz" in a for a in stage.healthcheck), "the HEALTHCHECK does not ask /healthz: %s" % stage.healthcheck)
+
+    # --- docker-compose.yml
+    with open(os.path.join(d, "docker-compose.yml")) as f:
+        compose = yaml.safe_load(f)
+    svc = compose["services"]["meshdenoise"]
+    compose_env = {k: ("" if v is None else str(v)) for k, v in svc.get("environment", {}).items()}
+    # ${VAR:-} interpolation: compose fills it from the shell; check the empty default.
+    compose_env = {k: re.sub(r"\$\{[A-Z_]+:-([^}]*)\}", r"\1", v) for k, v in compose_env.items()}
+    check_env_accepted(args.server, settings, compose_env, "docker-compose.yml")
+    env = dict(image_env, **compose_env)
+    check(svc["deploy"]["replicas"] >= 2, "compose runs fewer than 2 replicas")
+    check(int(env["MDN_WORKERS"]) == cpus(svc["deploy"]["resources"]["limits"]["cpus"]),
+          "compose: MDN_WORKERS %s but a CPU limit of %s" % (env["MDN_WORKERS"], svc["deploy"]["resources"]["limits"]["cpus"]))
+    check(seconds(svc["stop_grace_period"]) > float(env["MDN_DRAIN_GRACE"]),
+          "compose: stop_grace_period %s does not exceed MDN_DRAIN_GRACE %s" % (svc["stop_grace_period"], env["MDN_DRAIN_GRACE"]))
+    check("ports" not in svc, "compose publishes the replicas themselves; only nginx should be")
+    lb = compose["services"]["nginx"]
+    mounts = [v for v in lb["volumes"] if "nginx/meshdenoise.conf" in v]
+    check(mounts and mounts[0].split(":")[1] == "/etc/nginx/conf.d/default.conf",
+          "compose does not mount nginx/meshdenoise.conf as the nginx site: %s" % lb["volumes"])
+    check(lb["depends_on"]["meshdenoise"]["condition"] == "service_healthy", "nginx starts before the replicas are healthy")
+
+    # --- nginx
+    with open(os.path.join(d, "nginx", "meshdenoise.conf")) as f:
+        conf = f.read()
+    check(re.search(r"upstream\s+meshdenoise\s*\{[^}]*\bleast_conn;", conf) is not None, "the upstream is not least_conn")
+    check(re.search(r"server\s+meshdenoise:%d\b" % port, conf) is not None,
+          "the nginx upstream does not point at the compose service on port %d" % port)
+    body = size_bytes(nginx_directive(conf, "client_max_body_size"))
+    check(body == int(env["MDN_MAX_BODY"]) if env["MDN_MAX_BODY"].isdigit() else body == size_bytes(env["MDN_MAX_BODY"]),
+          "nginx client_max_body_size %d differs from MDN_MAX_BODY %s" % (body, env["MDN_MAX_BODY"]))
+    check(seconds(nginx_directive(conf, "proxy_read_timeout")) > float(env["MDN_JOB_TIME_LIMIT"]),
+          "proxy_read_timeout must exceed MDN_JOB_TIME_LIMIT %s" % env["MDN_JOB_TIME_LIMIT"])
+    check(seconds(nginx_directive(conf, "keepalive_timeout", r"upstream\s+meshdenoise")) < float(env["MDN_KEEP_ALIVE_TIMEOUT"]),
+          "nginx's upstream keepalive_timeout must stay below MDN_KEEP_ALIVE_TIMEOUT")
+    check(int(nginx_directive(conf, "keepalive_requests", r"upstream\s+meshdenoise")) <= int(env["MDN_KEEP_ALIVE_MAX"]),
+          "nginx's upstream keepalive_requests must not exceed MDN_KEEP_ALIVE_MAX")
+    check(nginx_directive(conf, "max_ranges") == "1", "max_ranges is not 1")
+    check(nginx_directive(conf, "proxy_request_buffering") == "on", "proxy_request_buffering is not on")
+    retry = nginx_directive(conf, "proxy_next_upstream").split()
+    check("error" in retry and "non_idempotent" in retry, "nginx does not resend a POST whose replica failed: %s" % retry)
+    check(not any(s in retry for s in ("http_500", "http_400", "http_404", "http_429")),
+          "nginx retries answers that a replica gave on purpose: %s" % retry)
+
+    # --- Kubernetes
+    docs = []
+    for name in sorted(os.listdir(os.path.join(d, "k8s"))):
+        if name.endswith(".yaml") and name != "kustomization.yaml":
+            with open(os.path.join(d, "k8s", name)) as f:
+                docs += [doc for doc in yaml.safe_load_all(f) if doc]
+    kinds = {doc["kind"]: doc for doc in docs}
+    for kind in ("Deployment", "Service", "HorizontalPodAutoscaler"):
+        check(kind in kinds, "docker/k8s has no %s" % kind)
+    dep, svc_k8s, hpa = kinds["Deployment"], kinds["Service"], kinds["HorizontalPodAutoscaler"]
+    pod = dep["spec"]["template"]["spec"]
+    c = pod["containers"][0]
+    k8s_env = {e["name"]: e.get("value", "") for e in c.get("env", []) if "value" in e}
+    check_env_accepted(args.server, settings, k8s_env, "the Kubernetes Deployment")
+    for e in c.get("env", []):
+        check(e["name"] in settings, "the Deployment sets %s, which is not a setting" % e["name"])
+    env = dict(image_env, **k8s_env)
+    check(c["ports"][0]["containerPort"] == port, "containerPort %s, image port %d" % (c["ports"][0]["containerPort"], port))
+    check(c["readinessProbe"]["httpGet"]["path"] == "/readyz", "the readiness probe is not /readyz")
+    check(c["livenessProbe"]["httpGet"]["path"] == "/healthz", "the liveness probe is not /healthz")
+    check(int(env["MDN_WORKERS"]) == cpus(c["resources"]["limits"]["cpu"]),
+          "Kubernetes: MDN_WORKERS %s but a CPU limit of %s" % (env["MDN_WORKERS"], c["resources"]["limits"]["cpu"]))
+    check("requests" in c["resources"] and "memory" in c["resources"]["limits"], "resource requests/limits incomplete")
+    pre_stop = 0.0
+    cmd = c.get("lifecycle", {}).get("preStop", {}).get("exec", {}).get("command", [])
+    if cmd[:1] == ["sleep"]:
+        pre_stop = float(cmd[1])
+    check(pod["terminationGracePeriodSeconds"] > pre_stop + float(env["MDN_DRAIN_GRACE"]),
+          "terminationGracePeriodSeconds %s does not cover preStop %g s + MDN_DRAIN_GRACE %s"
+          % (pod["terminationGracePeriodSeconds"], pre_stop, env["MDN_DRAIN_GRACE"]))
+    sc = pod.get("securityContext", {})
+    check(sc.get("runAsNonRoot") is True and sc.get("runAsUser") == uid,
+          "the pod must run as non-root uid %d (the image's USER): %s" % (uid, sc))
+    labels = dep["spec"]["template"]["metadata"]["labels"]
+    check(all(labels.get(k) == v for k, v in svc_k8s["spec"]["selector"].items()), "the Service selects no pod of the Deployment")
+    target = svc_k8s["spec"]["ports"][0]["targetPort"]
+    check(target in (port, c["ports"][0].get("name")), "the Service targets %s, not the container port" % target)
+    ref = hpa["spec"]["scaleTargetRef"]
+    check(ref["kind"] == "Deployment" and ref["name"] == dep["metadata"]["name"], "the HPA scales %s" % ref)
+    check([m["resource"]["name"] for m in hpa["spec"]["metrics"]] == ["cpu"], "the HPA does not scale on CPU")
+
+    # --- docker/README.md lists every setting with --help's default.
+    with open(os.path.join(d, "README.md")) as f:
+        readme = f.read()
+    rows = {m[1]: (m[0], m[2]) for m in re.findall(r"^\| `--([a-z-]+)` \| `(MDN_[A-Z_]+)` \| ([^|]*) \|", readme, re.M)}
+    for var, (flag, default) in settings.items():
+        check(var in rows, "docker/README.md's configuration table lacks %s" % var)
+        check(rows[var][0] == flag, "docker/README.md names the flag of %s --%s, the server --%s" % (var, rows[var][0], flag))
+        doc_default = rows[var][1].strip().strip("`")
+        # --help prints "0 (N here)" for workers: the documented default is the setting, 0.
+        check(default == doc_default or default.startswith(doc_default + " ("),
+              "docker/README.md gives %s the default '%s', --help says '%s'" % (var, doc_default, default))
+    for var in rows:
+        check(var in settings, "docker/README.md documents %s, which the server does not have" % var)
+    log("deployment files: %d settings documented, Dockerfile/compose/Kubernetes/nginx consistent" % len(settings))
+
+
+if __name__ == "__main__":
+    run_main(main)
