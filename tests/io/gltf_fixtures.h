@@ -141,9 +141,18 @@ inline std::string sphere_scene_glb(const SphereFixture& f, Variant variant = Va
   int position = -1;
   if (variant == Variant::Quantized) {
     // KHR_mesh_quantization: SHORT normalized positions (scaled back by the node in a real asset).
+    // Vertex attributes must be 4-byte aligned: 6-byte elements get a byteStride of 8.
     std::vector<std::int16_t> q;
-    for (float v : f.noisy) q.push_back(static_cast<std::int16_t>(std::lround(std::clamp(v / 1.2f, -1.0f, 1.0f) * 32767)));
-    position = b.accessor(q, 5122, "VEC3", 3, true, 34962, true);
+    for (std::size_t i = 0; i < f.noisy.size(); ++i) {
+      q.push_back(static_cast<std::int16_t>(std::lround(std::clamp(f.noisy[i] / 1.2f, -1.0f, 1.0f) * 32767)));
+      if (i % 3 == 2) q.push_back(0);
+    }
+    position = b.accessor(q, 5122, "VEC4", 4, true, 34962, true);
+    Json& acc = b.json["accessors"][position];
+    acc["type"] = "VEC3";
+    acc["min"].erase(3);
+    acc["max"].erase(3);
+    b.json["bufferViews"][acc["bufferView"].get<int>()]["byteStride"] = 8;
   } else if (variant == Variant::Sparse) {
     // Dense clean positions, with the noisy ones substituted through a sparse accessor on
     // every second vertex (so both paths matter).

@@ -1,0 +1,142 @@
+// Outputs read back by tools we did not write: the Khronos glTF validator and glTF-Transform
+// (tests/tools/check_gltf.mjs, Draco through draco3dgltf), and Draco's own draco_decoder.
+// Needs `npm install` in tests/tools (scripts/install-deps.sh test does it) and the Debian
+// package `draco`; without them these tests fail with a message saying so.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+
+#include "core/io/document.h"
+#include "gltf_fixtures.h"
+#include "io_test_support.h"
+
+namespace mdn::io {
+namespace {
+
+namespace fs = std::filesystem;
+using test_io::Json;
+
+fs::path tools_dir() {
+  const char* source = std::getenv("MDN_SOURCE_DIR");
+  // ctest sets MDN_SOURCE_DIR; run by hand, the tree is found from this file.
+  const fs::path root = source ? fs::path(source) : fs::path(__FILE__).parent_path().parent_path().parent_path();
+  return root / "tests" / "tools";
+}
+
+// Runs check_gltf.mjs on bytes written to `name`; fails the test if the tool cannot run.
+Json check(const std::string& bytes, const std::string& name) {
+  const fs::path dir = tools_dir();
+  if (!fs::exists(dir / "node_modules" / "gltf-validator")) {
+    ADD_FAILURE() << "tests/tools/node_modules is missing: run `npm install` in " << dir
+                  << " (scripts/install-deps.sh build test does it)";
+    return Json();
+  }
+  const fs::path file = test_io::temp_dir() / name;
+  test_io::write_file(file, bytes);
+  std::string output;
+  const int rc = test_io::run_command("cd '" + dir.string() + "' && node check_gltf.mjs '" + file.string() + "'", &output);
+  if (rc != 0) {
+    ADD_FAILURE() << "check_gltf.mjs failed on " << name << ":\n" << output;
+    return Json();
+  }
+  return Json::parse(output.substr(output.find('{')));
+}
+
+// Sorted UVs of every corner of every primitive of mesh 0 (independent of vertex order).
+std::vector<std::vector<double>> corner_uvs(const Json& report) {
+  std::vector<std::vector<double>> uvs;
+  for (const auto& prim : report["meshes"][0])
+    for (const auto& c : prim["corners"])
+      if (c.size() == 5) uvs.push_back({c[3].get<double>(), c[4].get<double>()});
+  std::sort(uvs.begin(), uvs.end());
+  return uvs;
+}
+
+TEST(ExternalTools, GlbAndGltfOutputsValidateAndLoad) {
+  const auto f = test_io::make_sphere();
+  for (auto variant : {test_io::Variant::Plain, test_io::Variant::Quantized, test_io::Variant::Sparse}) {
+    const std::string input = test_io::sphere_scene_glb(f, variant);
+    const Json in = check(input, "input.glb");
+    ASSERT_TRUE(in.is_object());
+    EXPECT_EQ(in["errors"], 0) << in["messages"];  // the fixture itself is valid
+    auto doc = decode(input, Format::Glb);
+    TriMesh& s = doc->surfaces()[0];
+    for (Eigen::Index i = 0; i < s.V.rows(); ++i) s.V.row(i) = s.V.row(i).normalized();
+    for (const auto& [draco, format] : {std::pair{true, Format::Glb}, {false, Format::Glb}, {true, Format::Gltf}, {false, Format::Gltf}}) {
+      EncodeOptions options;
+      options.draco = draco;
+      options.format = format;
+      const std::string name = std::string("out") + (draco ? "-draco" : "") + (format == Format::Glb ? ".glb" : ".gltf");
+      const Json out = check(doc->encode(options), name);
+      ASSERT_TRUE(out.is_object()) << name;
+      EXPECT_EQ(out["errors"], 0) << name << ": " << out["messages"];
+      const bool listed = std::find(out["extensionsUsed"].begin(), out["extensionsUsed"].end(), "KHR_draco_mesh_compression") !=
+                          out["extensionsUsed"].end();
+      EXPECT_EQ(listed, draco) << name;
+      // Same corners, same UVs (bit for bit: Draco stores them losslessly by default).
+      EXPECT_EQ(corner_uvs(out), corner_uvs(in)) << name;
+      // Positions are the clean sphere (16-bit Draco quantisation: within 1e-4).
+      double worst = 0;
+      for (const auto& prim : out["meshes"][0])
+        for (const auto& c : prim["corners"])
+          worst = std::max(worst, std::abs(std::hypot(c[0].get<double>(), c[1].get<double>(), c[2].get<double>()) - 1.0));
+      EXPECT_LT(worst, 1e-4) << name;
+      // The points primitive passed through.
+      EXPECT_EQ(out["meshes"][1], in["meshes"][1]) << name;
+    }
+  }
+}
+
+TEST(ExternalTools, StripsAndDracoInputsValidate) {
+  auto strips = decode(test_io::strip_and_fan_glb(6), Format::Glb);
+  for (bool draco : {false, true}) {
+    EncodeOptions options;
+    options.draco = draco;
+    const Json out = check(strips->encode(options), draco ? "strips-draco.glb" : "strips.glb");
+    ASSERT_TRUE(out.is_object());
+    EXPECT_EQ(out["errors"], 0) << out["messages"];
+  }
+  // Draco in (our own output), uncompressed and Draco out again.
+  const auto f = test_io::make_sphere();
+  auto first = decode(test_io::sphere_scene_glb(f), Format::Glb);
+  auto doc = decode(first->encode({}), Format::Glb);
+  for (bool draco : {false, true}) {
+    EncodeOptions options;
+    options.draco = draco;
+    const Json out = check(doc->encode(options), draco ? "redraco.glb" : "undraco.glb");
+    ASSERT_TRUE(out.is_object());
+    EXPECT_EQ(out["errors"], 0) << out["messages"];
+  }
+}
+
+TEST(ExternalTools, DrcOutputDecodesWithDracoDecoder) {
+  std::string which;
+  if (test_io::run_command("command -v draco_decoder", &which) != 0) {
+    FAIL() << "draco_decoder is missing: install the Debian package `draco` (scripts/deps/apt-test.txt)";
+  }
+  const TriMesh m = test_io::sphere(10, 16);
+  std::string off = "OFF\n" + std::to_string(m.V.rows()) + " " + std::to_string(m.F.rows()) + " 0\n";
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i) off += std::to_string(m.V(i, 0)) + " " + std::to_string(m.V(i, 1)) + " " + std::to_string(m.V(i, 2)) + "\n";
+  for (Eigen::Index i = 0; i < m.F.rows(); ++i) off += "3 " + std::to_string(m.F(i, 0)) + " " + std::to_string(m.F(i, 1)) + " " + std::to_string(m.F(i, 2)) + "\n";
+  auto doc = decode(off, Format::Off);
+  EncodeOptions options;
+  options.format = Format::Drc;
+  const std::string drc = doc->encode(options);
+  const fs::path dir = test_io::temp_dir();
+  test_io::write_file(dir / "sphere.drc", drc);
+  std::string output;
+  ASSERT_EQ(test_io::run_command("draco_decoder -i '" + (dir / "sphere.drc").string() + "' -o '" + (dir / "sphere.ply").string() + "'", &output), 0) << output;
+  auto ply = decode(test_io::read_file(dir / "sphere.ply"), Format::Ply);
+  EXPECT_EQ(ply->surfaces()[0].F.rows(), m.F.rows());
+  for (Eigen::Index i = 0; i < ply->surfaces()[0].V.rows(); ++i) EXPECT_NEAR(ply->surfaces()[0].V.row(i).norm(), 1.0, 1e-3);
+  // And a .drc made by draco_encoder reads back, and re-encodes as .drc.
+  ASSERT_EQ(test_io::run_command("draco_encoder -i '" + (dir / "sphere.ply").string() + "' -o '" + (dir / "again.drc").string() + "'", &output), 0) << output;
+  auto again = decode(test_io::read_file(dir / "again.drc"), Format::Drc);
+  EXPECT_EQ(again->surfaces()[0].F.rows(), m.F.rows());
+  EXPECT_EQ(sniff_format(again->encode({})), Format::Drc);
+}
+
+}  // namespace
+}  // namespace mdn::io
