@@ -10,13 +10,16 @@ grace periods exceed the drain, workers equal CPU limits, ports, user and probes
 """
 
 import argparse
+import glob
 import os
 import re
+import shutil
 import subprocess
 import sys
+import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from deploy_support import TestFailure, check, log, read_dockerfile, run_main  # noqa: E402
+from deploy_support import TestFailure, check, log, read_dockerfile, read_stages, run_main  # noqa: E402
 
 try:
     import yaml  # python3-yaml (scripts/deps/apt-test.txt)
@@ -28,7 +31,55 @@ def parse_args():
     p = argparse.ArgumentParser(description=__doc__)
     p.add_argument("--server", required=True)
     p.add_argument("--docker-dir", required=True)
+    p.add_argument("--source-dir", help="repository root: configure what the build stage copies")
     return p.parse_args()
+
+
+def check_build_context(dockerfile, source_dir):
+    """The build stage's COPY lines bring everything CMake needs: copy exactly those paths from
+    the repository and configure them with the Dockerfile's own cmake --preset command."""
+    build = [s for s in read_stages(dockerfile) if s.name == "build"]
+    check(len(build) == 1, "the Dockerfile has no stage named build")
+    build = build[0]
+    configure = [r for r in build.other_runs + [build.package_run] if "cmake --preset" in r]
+    check(len(configure) == 1, "the build stage has no RUN with cmake --preset")
+    command = configure[0].split("&&")[0].strip()
+    check(command.startswith("cmake --preset"), "the build RUN should start with cmake --preset: " + command)
+    tmp = tempfile.mkdtemp(prefix="mdn-docker-context-")
+    try:
+        work = os.path.join(tmp, build.workdir.lstrip("/"))
+        for copy in build.local_copies:
+            sources, dest = copy[:-1], copy[-1]
+            target = os.path.join(work, dest) if not dest.startswith("/") else os.path.join(tmp, dest.lstrip("/"))
+            for src in sources:
+                matches = glob.glob(os.path.join(source_dir, src))
+                check(matches, "the build stage copies %s, which is not in the repository" % src)
+                for m in matches:
+                    to = target if (len(sources) == 1 and not dest.endswith("/") and dest != "./") \
+                        else os.path.join(target, os.path.basename(m))
+                    os.makedirs(os.path.dirname(to) or ".", exist_ok=True)
+                    if os.path.isdir(m):
+                        shutil.copytree(m, to, dirs_exist_ok=True,
+                                        ignore=shutil.ignore_patterns("build", "node_modules"))
+                    else:
+                        shutil.copy2(m, to)
+        # Ninja here (the image uses CMake's default generator; the files needed are the same) so
+        # that `ninja -t inputs` can list every source file of the two executables.
+        env = dict(os.environ, CMAKE_GENERATOR="Ninja")
+        r = subprocess.run(command, shell=True, cwd=work, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+        check(r.returncode == 0, "'%s' fails on exactly what the build stage copies (a COPY is missing?):\n%s"
+              % (command, r.stdout.decode(errors="replace")[-3000:]))
+        r = subprocess.run(["ninja", "-C", os.path.join(work, "build", "release"), "-t", "inputs",
+                            "meshdenoise-server", "meshdenoise"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+        check(r.returncode == 0, "ninja -t inputs failed: " + r.stdout.decode(errors="replace"))
+        inputs = [line for line in r.stdout.decode().splitlines() if line.startswith(work + "/")]
+        generated = os.path.join(work, "build") + "/"
+        missing = [i[len(work) + 1:] for i in inputs if not i.startswith(generated) and not os.path.exists(i)]
+        check(not missing, "the executables need files the build stage does not COPY: %s" % missing)
+        check(any(i.endswith("main.cpp") for i in inputs), "ninja listed no sources: %s" % inputs[:5])
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    log("Dockerfile build stage: its COPY lines configure with '%s'" % command)
 
 
 def server_settings(server):
@@ -198,6 +249,8 @@ def main():
               "docker/README.md gives %s the default '%s', --help says '%s'" % (var, doc_default, default))
     for var in rows:
         check(var in settings, "docker/README.md documents %s, which the server does not have" % var)
+    if args.source_dir:
+        check_build_context(os.path.join(d, "Dockerfile"), args.source_dir)
     log("deployment files: %d settings documented, Dockerfile/compose/Kubernetes/nginx consistent" % len(settings))
 
 

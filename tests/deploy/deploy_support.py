@@ -54,6 +54,9 @@ class RuntimeStage:
         self.healthcheck = []       # HEALTHCHECK CMD, exec form
         self.expose = []            # EXPOSE
         self.copies = []            # COPY --from=... sources and destination
+        self.name = ""              # FROM ... AS name
+        self.workdir = "/"          # WORKDIR
+        self.local_copies = []      # COPY from the build context: [sources..., destination]
 
 
 def _instructions(text):
@@ -94,6 +97,12 @@ def _parse_assignments(text):
 
 
 def read_dockerfile(path):
+    """The runtime (last) stage, checked for what the tests rely on."""
+    return read_stages(path)[-1]
+
+
+def read_stages(path):
+    """Every stage of the Dockerfile, in order; the last one is checked as the runtime stage."""
     with open(path, encoding="utf-8") as f:
         instructions = _instructions(f.read())
     global_args, stage_vars, stages = {}, {}, []
@@ -103,8 +112,10 @@ def read_dockerfile(path):
             stage = RuntimeStage()
             stages.append(stage)
             stage_vars = {}
-            image = rest.split()[0]
-            stage.base = _expand(image, global_args)
+            words = rest.split()
+            stage.base = _expand(words[0], global_args)
+            if len(words) == 3 and words[1].upper() == "AS":
+                stage.name = words[2]
             continue
         if stage is None:
             if keyword == "ARG":
@@ -131,6 +142,10 @@ def read_dockerfile(path):
             stage.expose += rest.split()
         elif keyword == "COPY" and rest.startswith("--from="):
             stage.copies.append(rest.split()[1:])
+        elif keyword == "COPY":
+            stage.local_copies.append(rest.split())
+        elif keyword == "WORKDIR":
+            stage.workdir = os.path.join(stage.workdir, rest)
         if "RUNTIME_PACKAGES" in stage_vars:
             stage.packages = stage_vars["RUNTIME_PACKAGES"].split()
     check(stages, "no FROM in " + path)
@@ -142,7 +157,7 @@ def read_dockerfile(path):
     check(runtime.user.split(":")[0] != "0", "the runtime stage runs as root")
     check(runtime.entrypoint, "ENTRYPOINT must be in exec form [\"...\"]")
     check(runtime.healthcheck, "the runtime stage has no HEALTHCHECK")
-    return runtime
+    return stages
 
 
 # ----------------------------------------------------------------------------- meshes
