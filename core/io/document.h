@@ -53,13 +53,14 @@ struct EncodeOptions {
   std::optional<Format> format;  // default: the input's container
   bool draco = true;             // glTF: KHR_draco_mesh_compression; DRC is always Draco
   // Draco quantisation bits. Positions: [8, 30] (11 bits costs about 0.8 mm on a 2 m scan).
-  // The other attributes: [1, 30], or 0 = stored losslessly (UVs, colours, joints and weights
-  // then come back bit for bit; the server's schema does not accept 0 yet).
+  // The other attributes: [1, 30], or 0 = stored losslessly. UVs, colours, joints and weights
+  // default to 0, so they come back bit for bit (the assets' other data is untouched, and
+  // so are they); NORMAL is recomputed from the denoised surface, so it is quantised.
   int position_bits = 16;
   int normal_bits = 10;
-  int texcoord_bits = 12;
-  int color_bits = 10;
-  int generic_bits = 12;
+  int texcoord_bits = 0;
+  int color_bits = 0;
+  int generic_bits = 0;
   int compression_level = 7;     // Draco encoder speed/size trade-off, [0, 10] (10 = smallest)
 };
 
