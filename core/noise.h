@@ -27,7 +27,9 @@ struct NoiseSpec {
   double impulse_fraction = 0;   // [0, 1]
 };
 
-// Returns the noisy positions (#V by 3); connectivity is unchanged.
+// Returns the noisy positions (#V by 3); connectivity is unchanged. Throws InvalidMeshError
+// for an invalid mesh and InvalidParamsError (field "sigma" or "impulse_fraction") for a
+// negative or non-finite sigma or a fraction outside [0, 1].
 Vertices add_noise(const TriMesh& mesh, const NoiseSpec& spec);
 
 }  // namespace mdn
