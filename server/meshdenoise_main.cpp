@@ -175,9 +175,12 @@ Parameters (--params), [accepted range], default:
       << defaults.kmeans_seed << R"(
   solver "ldlt"|"cg", default ")"
       << mdn::to_string(defaults.solver) << R"("
-  output {"format": "off"|"obj"|"ply"|"drc"|"glb"|"gltf", "draco": true, "position_bits": 16 [8, 30],
-          "normal_bits": 10, "texcoord_bits": 12, "color_bits": 10, "generic_bits": 12 [1, 30],
-          "compression_level": 7 [0, 10]}
+  output {...}  output container and Draco settings, defaults:
+         )" << service::to_json(service::JobParams{})["output"].dump()
+      << R"(
+         format: "off"|"obj"|"ply"|"drc"|"glb"|"gltf", null = IN's; position_bits [8, 30];
+         normal_bits, texcoord_bits, color_bits, generic_bits [0, 30], 0 = lossless;
+         compression_level [0, 10] (10 = smallest)
 
 Exit codes: 0 ok; 2 bad command line or parameters; 3 a file cannot be read or written, is
 malformed or is not a valid mesh; 4 solver failure or internal error; 130 cancelled (Ctrl-C).

@@ -104,9 +104,10 @@ const std::string& string_value(const json& value, const std::string& path, cons
   return value.get_ref<const std::string&>();
 }
 
-// Draco settings of the "output" object. Draco itself accepts 1..30 quantisation bits for
-// every attribute; positions below 8 bits wreck any mesh worth denoising (EncodeOptions says
-// [8, 30]). Compression level is Draco's speed/size knob, 0..10.
+// Draco settings of the "output" object, ranges as documented by io::EncodeOptions: Draco
+// accepts 1..30 quantisation bits; positions below 8 bits wreck any mesh worth denoising, so
+// [8, 30]; for the other attributes 0 means "stored losslessly" (no quantisation), so [0, 30].
+// Compression level is Draco's speed/size knob, 0..10.
 struct OutputIntSpec {
   const char* name;
   int io::EncodeOptions::*field;
@@ -114,10 +115,10 @@ struct OutputIntSpec {
 };
 constexpr OutputIntSpec kOutputInts[] = {
     {"position_bits", &io::EncodeOptions::position_bits, 8, 30},
-    {"normal_bits", &io::EncodeOptions::normal_bits, 1, 30},
-    {"texcoord_bits", &io::EncodeOptions::texcoord_bits, 1, 30},
-    {"color_bits", &io::EncodeOptions::color_bits, 1, 30},
-    {"generic_bits", &io::EncodeOptions::generic_bits, 1, 30},
+    {"normal_bits", &io::EncodeOptions::normal_bits, 0, 30},
+    {"texcoord_bits", &io::EncodeOptions::texcoord_bits, 0, 30},
+    {"color_bits", &io::EncodeOptions::color_bits, 0, 30},
+    {"generic_bits", &io::EncodeOptions::generic_bits, 0, 30},
     {"compression_level", &io::EncodeOptions::compression_level, 0, 10},
 };
 

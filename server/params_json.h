@@ -30,8 +30,8 @@ JobParams job_params_from_text(std::string_view text);
 nlohmann::json to_json(const JobParams& p);
 
 // Added by the cli engineer (additive; the HTTP server may call these for JobParams it builds
-// itself rather than parses): range checks of the "output" object (Draco bits [8|1, 30],
-// compression_level [0, 10]) and of everything (DenoiseParams::validate() plus the output
+// itself rather than parses): range checks of the "output" object (position_bits [8, 30],
+// the other Draco bits [0, 30] with 0 = lossless, compression_level [0, 10]) and of everything (DenoiseParams::validate() plus the output
 // checks). Throw InvalidParamsError with the JSON path, e.g. "output.position_bits".
 // job_params_from_json() already calls validate(); run_job() calls it before decoding.
 void validate_output_options(const io::EncodeOptions& options);
