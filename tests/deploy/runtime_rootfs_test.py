@@ -154,6 +154,25 @@ def proc_status(pid):
         return dict(line.rstrip("\n").split(":\t", 1) for line in f if ":\t" in line)
 
 
+def listening_addresses(port):
+    """Local IPv4 addresses with a listening TCP socket on `port` in this network namespace."""
+    out = []
+    with open("/proc/net/tcp") as f:
+        for line in f.readlines()[1:]:
+            fields = line.split()
+            addr, hex_port = fields[1].split(":")
+            if fields[3] == "0A" and int(hex_port, 16) == port:  # 0A: TCP_LISTEN
+                out.append(".".join(str(b) for b in reversed(bytes.fromhex(addr))))
+    return out
+
+
+def check_namespaces():
+    r = subprocess.run(["unshare", "--net", "--pid", "--mount", "--fork", "true"],
+                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    check(r.returncode == 0, "cannot create network/PID/mount namespaces here (unshare: %s); "
+          "this test needs root with CAP_SYS_ADMIN" % r.stdout.decode(errors="replace").strip())
+
+
 def run_healthcheck(stage, rootfs, env):
     """Docker runs HEALTHCHECK CMD [...] inside the container, as its user, with its ENV."""
     try:
@@ -226,6 +245,8 @@ def inner(args):
         with open("/proc/%d/cmdline" % pid, "rb") as f:
             argv = [a.decode() for a in f.read().split(b"\0") if a]
         check(argv == stage.entrypoint, "PID 1 is %s, ENTRYPOINT is %s" % (argv, stage.entrypoint))
+        addresses = listening_addresses(port)
+        check(addresses == ["0.0.0.0"], "the server listens on %s:%d, expected 0.0.0.0 only" % (addresses, port))
         log("server: PID 1, uid %s, %s, listening on 0.0.0.0:%d, read-only root" % (uid, argv[0], port))
 
         rc, out = run_healthcheck(stage, rootfs, env)
@@ -287,6 +308,7 @@ def inner(args):
 def outer(args):
     check(os.geteuid() == 0, "needs root (mmdebstrap root mode, chroot, namespaces); run ctest as root")
     stage = read_dockerfile(args.dockerfile)
+    check_namespaces()
     os.makedirs(args.cache_dir, exist_ok=True)
     # One run at a time per cache: the root filesystem is built once and its /usr/local/bin changes.
     with open(os.path.join(args.cache_dir, ".lock"), "w") as lock:
