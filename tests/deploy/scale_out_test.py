@@ -8,7 +8,9 @@ rewritten to loopback).
   2. Failover: one replica is killed (SIGKILL) while it runs requests; no synchronous request is
      lost (nginx resends it to another replica, seen in its access log), and afterwards the two
      survivors serve everything.
-  3. The balancer's own answers: /v1/jobs refused with a problem (jobs are per replica until the
+  3. Graceful stop: SIGTERM to a busy replica; it drains (503 to new work, which nginx resends)
+     and exits 0 while every request still succeeds.
+  4. The balancer's own answers: /v1/jobs refused with a problem (jobs are per replica until the
      queue is shared), an oversized body refused with 413 before any replica sees it, /metrics
      not proxied, and a replica's own error passed through unchanged and not retried.
 
@@ -231,6 +233,33 @@ def main():
         log("after the kill: %d requests all 200, survivors served %s" % (len(after_ids), gained))
         check(sum(gained) == len(after_ids), "survivors served %s of %d requests" % (gained, len(after_ids)))
         check(all(g > 0 for g in gained), "one survivor got nothing after the kill: %s" % gained)
+
+        # A graceful stop (what docker stop / a rolling update does) under load: SIGTERM to a
+        # busy replica. It finishes what it accepted and answers 503 to new work, which nginx
+        # resends to the last replica; no request fails and the replica exits 0.
+        draining = 0
+
+        def stop_when_busy():
+            end = time.monotonic() + 60
+            while time.monotonic() < end:
+                ready = request(replicas[draining], "GET", "/readyz", timeout=5)
+                if ready.status == 200 and ready.json().get("running", 0) >= 1:
+                    servers[draining].send_signal(signal.SIGTERM)
+                    return
+                time.sleep(0.01)
+            raise TestFailure("replica %d never ran a request to be stopped in" % replicas[draining])
+
+        drain_ids = ["drain-%03d" % i for i in range(4 * args.replicas)]
+        run_batch(lb, heavy, drain_ids, args.concurrency, heavy_params, on_submit=stop_when_busy)
+        try:
+            code = servers[draining].wait(60)
+        except subprocess.TimeoutExpired:
+            raise TestFailure("replica %d did not exit within 60 s of SIGTERM" % replicas[draining])
+        check(code == 0, "replica %d exited %d after SIGTERM" % (replicas[draining], code))
+        entries = {e["request_id"]: e for e in read_access_log(access_log)}
+        refused = sum(1 for rid in drain_ids if "503" in entries.get(rid, {}).get("upstream_status", ""))
+        log("graceful stop: %d requests all 200 while replica %d drained and exited 0 "
+            "(%d answered 503 by it and resent)" % (len(drain_ids), replicas[draining], refused))
 
         # 3. The balancer's own answers.
         for method, path in (("POST", "/v1/jobs"), ("GET", "/v1/jobs/0123abcd"), ("GET", "/v1/jobs/0123abcd/result")):
