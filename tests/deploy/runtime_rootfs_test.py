@@ -29,6 +29,7 @@ import tempfile
 import threading
 import time
 
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from deploy_support import (Processes, TestFailure, check, check_denoised, log, request,  # noqa: E402
                             noisy_icosphere_off, read_dockerfile, run_main, tail, wait_http)

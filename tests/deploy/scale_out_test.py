@@ -30,6 +30,7 @@ import sys
 import tempfile
 import time
 
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from deploy_support import (Processes, TestFailure, check, check_denoised, free_port, request, log,  # noqa: E402
                             metric, noisy_icosphere_off, run_main, tail, wait_http)
