@@ -61,6 +61,7 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
   out.bytes = document->encode(encode);
   out.encode_ms = ms_since(start);
   out.notes = document->notes();
+  out.surfaces = std::move(document->surfaces());  // the document is done with them
   return out;
 }
 

@@ -29,6 +29,10 @@ struct JobOutput {
   std::int64_t vertices = 0, faces = 0; // summed over surfaces
   double decode_ms = 0, denoise_ms = 0, encode_ms = 0;
   StageTimings stages;                  // summed over surfaces
+  // Added by the cli engineer (additive): the denoised surfaces in the document's order, in the
+  // input frame, exactly as encoded (before any quantisation of the output format). Moved out
+  // of the document after encoding, so it costs nothing; the CLI's --metrics measures these.
+  std::vector<TriMesh> surfaces;
 };
 
 // Throws what io::decode and mdn::denoise throw (FormatError, UnsupportedError, LimitError,

@@ -145,7 +145,9 @@ Options:
   --metrics GT         print {"msae": ..., "msae_deg2": ..., "ev": ...} on stdout: MSAE (mean
                        squared face-normal angle, radians^2; msae_deg2 in degrees^2) and E_v
                        (in GT's unit-box frame) of OUT (or of IN when there is no OUT) against
-                       GT, which must have the same faces. Measures the file as written.
+                       GT, which must have the same faces in the same order. With OUT it
+                       measures the computed surface (any OUT format gives the same figures);
+                       without OUT it measures the file IN as it is.
   --report             print a JSON summary on stdout: effective parameters, per-stage timings
                        (ms), fold ratio and region pre-filter decision per surface; with
                        --metrics the metrics go into it under "metrics".
@@ -184,6 +186,7 @@ Parameters (--params), [accepted range], default:
 
 Exit codes: 0 ok; 2 bad command line or parameters; 3 a file cannot be read or written, is
 malformed or is not a valid mesh; 4 solver failure or internal error; 130 cancelled (Ctrl-C).
+On any error OUT is not written.
 )";
   return out.str();
 }
@@ -352,17 +355,23 @@ LoadedMesh decode_mesh(const std::string& path, const std::string& bytes, io::Fo
   });
 }
 
-json measure(const std::string& truth_path, const std::string& result_path, const mdn::TriMesh& result,
-             int threads) {
-  const std::string truth_bytes = read_file(truth_path);
-  const LoadedMesh truth = decode_mesh(truth_path, truth_bytes, input_format(truth_path, truth_bytes));
-  if (truth.merged.num_faces() != result.num_faces() || truth.merged.F != result.F) {
+mdn::TriMesh load_truth(const std::string& path) {
+  const std::string bytes = read_file(path);
+  return decode_mesh(path, bytes, input_format(path, bytes)).merged;
+}
+
+// MSAE and E_v of `result` against the ground truth (Sec. 7). Both need the same faces in the
+// same order; formats that renumber them (Draco) cannot be compared after the fact.
+json measure(const mdn::TriMesh& truth, const std::string& truth_path, const mdn::TriMesh& result,
+             const std::string& result_path, int threads) {
+  if (truth.num_faces() != result.num_faces() || truth.F != result.F) {
     throw FileError(result_path + " and the ground truth " + truth_path +
-                    " do not have the same faces (MSAE and E_v compare meshes of identical connectivity)");
+                    " do not have the same faces in the same order (MSAE compares face by face; "
+                    "Draco-compressed files renumber faces: measure while writing, or use another format)");
   }
   mdn::Executor executor(threads);
-  const double msae = mdn::msae(result, truth.merged);
-  const double ev = mdn::vertex_error(result, truth.merged, &executor);
+  const double msae = mdn::msae(result, truth);
+  const double ev = mdn::vertex_error(result, truth, &executor);
   constexpr double kDeg = 180.0 / std::numbers::pi;
   return {{"msae", msae}, {"msae_deg2", msae * kDeg * kDeg}, {"ev", ev}};
 }
@@ -399,10 +408,13 @@ int run(int argc, char** argv) {
   const std::string& in_path = pos[0];
   const std::string in_bytes = read_file(in_path);
   const io::Format in_format = input_format(in_path, in_bytes);
+  // The ground truth is read before any long work, so a bad GT fails fast.
+  std::optional<mdn::TriMesh> truth;
+  if (options.metrics) truth = load_truth(*options.metrics);
 
   if (measure_only) {
     const LoadedMesh loaded = decode_mesh(in_path, in_bytes, in_format);
-    std::cout << measure(*options.metrics, in_path, loaded.merged, threads).dump(2) << "\n";
+    std::cout << measure(*truth, *options.metrics, loaded.merged, in_path, threads).dump(2) << "\n";
     return kExitOk;
   }
 
@@ -417,7 +429,7 @@ int run(int argc, char** argv) {
 
   json summary;
   std::string out_bytes;
-  io::Format out_format{};
+  mdn::TriMesh result;  // all output surfaces, as computed (before the format's quantisation)
   if (noise) {
     LoadedMesh loaded = decode_mesh(in_path, in_bytes, in_format);
     std::uint64_t index = 0;
@@ -430,13 +442,13 @@ int run(int argc, char** argv) {
     }
     io::EncodeOptions encode = params.output;
     if (!encode.format) encode.format = in_format;
-    out_format = *encode.format;
     out_bytes = blame_file(in_path, [&] { return loaded.document->encode(encode); });
+    result = merge_surfaces(loaded.document->surfaces());
     summary = {{"noise", service::to_json(*noise)},
-               {"format", std::string(io::to_string(out_format))},
+               {"format", std::string(io::to_string(*encode.format))},
                {"bytes", out_bytes.size()},
-               {"vertices", loaded.merged.num_vertices()},
-               {"faces", loaded.merged.num_faces()},
+               {"vertices", result.num_vertices()},
+               {"faces", result.num_faces()},
                {"notes", loaded.document->notes()}};
   } else {
     install_sigint_handler();
@@ -452,18 +464,18 @@ int run(int argc, char** argv) {
     progress.clear();
     summary = service::job_summary_json(output);  // before the bytes move out
     out_bytes = std::move(output.bytes);
-    out_format = output.format;
+    if (truth) result = merge_surfaces(output.surfaces);
   }
   summary["input"] = {{"path", in_path}, {"format", std::string(io::to_string(in_format))}};
   summary["output"] = out_path;
+
+  // Metrics before writing: a failed comparison leaves no OUT behind (non-zero exit, no file).
+  // They measure the computed surface, so every output format gives the same figures; the
+  // file's own quantisation (Draco) can be measured afterwards with --metrics GT OUT.
+  std::optional<json> metrics;
+  if (truth) metrics = measure(*truth, *options.metrics, result, in_path, threads);
   write_file(out_path, out_bytes);
 
-  std::optional<json> metrics;
-  if (options.metrics) {
-    // Measure the file as written (after any quantisation of its format), not the doubles.
-    const LoadedMesh written = decode_mesh(out_path, out_bytes, out_format);
-    metrics = measure(*options.metrics, out_path, written.merged, threads);
-  }
   if (options.report) {
     if (metrics) summary["metrics"] = *metrics;
     std::cout << summary.dump(2) << "\n";

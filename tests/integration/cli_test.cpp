@@ -160,6 +160,24 @@ TEST_F(Cli, DenoisingImprovesAgainstGroundTruth) {
   const Result remeasured = run("--metrics " + quote(path("clean.off")) + " " + quote(path("out.off")));
   ASSERT_EQ(remeasured.code, 0) << remeasured.err;
   EXPECT_EQ(parse_stdout(remeasured), after);
+
+  // With OUT the computed surface is measured, so a Draco-compressed glb (which renumbers
+  // faces) gives the same figures.
+  const Result glb = run("--metrics " + quote(path("clean.off")) + " " + quote(path("noisy.off")) + " " +
+                         quote(path("out.glb")));
+  ASSERT_EQ(glb.code, 0) << glb.err;
+  EXPECT_EQ(parse_stdout(glb), after);
+  EXPECT_EQ(read_text(path("out.glb")).rfind("glTF", 0), 0u);
+}
+
+TEST_F(Cli, MetricsAgainstAnotherMeshFailBeforeWriting) {
+  write_sphere_pair(2);
+  write_text(path("plane.off"), off_text(test::plane(4)));
+  const Result r = run("--metrics " + quote(path("plane.off")) + " " + quote(path("noisy.off")) + " " +
+                       quote(path("out.off")));
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_NE(r.err.find("do not have the same faces"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("out.off")));
 }
 
 TEST_F(Cli, AddNoiseThenDenoiseThenMeasure) {
