@@ -8,6 +8,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <iterator>
@@ -260,11 +261,17 @@ CliOptions parse_command_line(int argc, char** argv) {
 }
 
 std::string read_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw FileError("cannot read " + path + ": it is a directory");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw FileError("cannot read " + path + ": " + std::strerror(errno));
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw FileError("cannot read " + path + ": " + std::strerror(errno));
-  return bytes;
+  try {
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) throw FileError("cannot read " + path + ": " + std::strerror(errno));
+    return bytes;
+  } catch (const std::ios_base::failure& e) {  // libstdc++ throws from underflow on read errors
+    throw FileError("cannot read " + path + ": " + e.what());
+  }
 }
 
 void write_file(const std::string& path, const std::string& bytes) {

@@ -316,6 +316,7 @@ TEST_F(Cli, BadInputFilesExitThree) {
   const std::string out = quote(path("out.off"));
   const std::vector<std::string> cases = {
       quote(path("missing.off")) + " " + out,
+      quote(dir_.string()) + " " + out,  // a directory
       quote(path("truncated.off")) + " " + out,
       quote(path("nonsense.off")) + " " + out,
       quote(path("nonsense.dat")) + " " + out,
