@@ -182,7 +182,7 @@ Parameters (--params), [accepted range], default:
          )" << service::to_json(service::JobParams{})["output"].dump()
       << R"(
          format: "off"|"obj"|"ply"|"drc"|"glb"|"gltf", null = IN's; position_bits [8, 30];
-         normal_bits, texcoord_bits, color_bits, generic_bits [0, 30], 0 = lossless;
+         normal_bits [1, 30]; texcoord_bits, color_bits, generic_bits [0, 30], 0 = lossless;
          compression_level [0, 10] (10 = smallest)
 
 Exit codes: 0 ok; 2 bad command line or parameters; 3 a file cannot be read or written, is

@@ -104,10 +104,11 @@ const std::string& string_value(const json& value, const std::string& path, cons
   return value.get_ref<const std::string&>();
 }
 
-// Draco settings of the "output" object, ranges as documented by io::EncodeOptions: Draco
-// accepts 1..30 quantisation bits; positions below 8 bits wreck any mesh worth denoising, so
-// [8, 30]; for the other attributes 0 means "stored losslessly" (no quantisation), so [0, 30].
-// Compression level is Draco's speed/size knob, 0..10.
+// Draco settings of the "output" object, ranges as in proto/params.schema.json and
+// io::EncodeOptions: Draco accepts 1..30 quantisation bits; positions below 8 bits wreck any
+// mesh worth denoising, so [8, 30]. For UVs, colours and generic attributes 0 means "stored
+// losslessly", so [0, 30]. Normals are recomputed from the denoised surface, so storing them
+// losslessly buys nothing: [1, 30] (the schema's choice). Compression level: 0..10.
 struct OutputIntSpec {
   const char* name;
   int io::EncodeOptions::*field;
@@ -115,7 +116,7 @@ struct OutputIntSpec {
 };
 constexpr OutputIntSpec kOutputInts[] = {
     {"position_bits", &io::EncodeOptions::position_bits, 8, 30},
-    {"normal_bits", &io::EncodeOptions::normal_bits, 0, 30},
+    {"normal_bits", &io::EncodeOptions::normal_bits, 1, 30},
     {"texcoord_bits", &io::EncodeOptions::texcoord_bits, 0, 30},
     {"color_bits", &io::EncodeOptions::color_bits, 0, 30},
     {"generic_bits", &io::EncodeOptions::generic_bits, 0, 30},

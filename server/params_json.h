@@ -31,7 +31,8 @@ nlohmann::json to_json(const JobParams& p);
 
 // Added by the cli engineer (additive; the HTTP server may call these for JobParams it builds
 // itself rather than parses): range checks of the "output" object (position_bits [8, 30],
-// the other Draco bits [0, 30] with 0 = lossless, compression_level [0, 10]) and of everything (DenoiseParams::validate() plus the output
+// normal_bits [1, 30], texcoord/color/generic_bits [0, 30] with 0 = lossless,
+// compression_level [0, 10]) and of everything (DenoiseParams::validate() plus the output
 // checks). Throw InvalidParamsError with the JSON path, e.g. "output.position_bits".
 // job_params_from_json() already calls validate(); run_job() calls it before decoding.
 void validate_output_options(const io::EncodeOptions& options);

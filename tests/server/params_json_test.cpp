@@ -194,7 +194,10 @@ TEST(ParamsJson, OutOfRangeValuesNameTheAcceptedRange) {
   EXPECT_EQ(parse_error({{"output", {{"color_bits", -1}}}}).field(), "output.color_bits");
   EXPECT_EQ(parse_error({{"output", {{"position_bits", 0}}}}).field(), "output.position_bits");
   // 0 = stored losslessly, for every attribute but positions (io::EncodeOptions).
-  EXPECT_EQ(job_params_from_json({{"output", {{"texcoord_bits", 0}, {"normal_bits", 0}}}}).output.texcoord_bits, 0);
+  EXPECT_EQ(job_params_from_json({{"output", {{"texcoord_bits", 0}, {"color_bits", 0}, {"generic_bits", 0}}}})
+                .output.texcoord_bits,
+            0);
+  EXPECT_EQ(parse_error({{"output", {{"normal_bits", 0}}}}).field(), "output.normal_bits");  // recomputed anyway
   EXPECT_EQ(parse_error({{"output", {{"generic_bits", 100}}}}).field(), "output.generic_bits");
   EXPECT_EQ(parse_error({{"output", {{"compression_level", 11}}}}).field(), "output.compression_level");
   EXPECT_EQ(parse_error({{"kmeans_seed", -1}}).field(), "kmeans_seed");
