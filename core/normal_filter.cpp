@@ -70,7 +70,7 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
       pair_of[static_cast<std::size_t>(std::lower_bound(jb, je, static_cast<std::int32_t>(i)) - topo.ff_faces.begin())] = id;
     }
   const auto num_pairs = static_cast<std::int64_t>(pair_first.size());
-  std::vector<double> range(static_cast<std::size_t>(num_pairs));
+  std::vector<double> range(static_cast<std::size_t>(num_pairs)), range_x(static_cast<std::size_t>(num_pairs));
 
   // Eq. 7 typo: both denominators mean 1 - cos(sigma_gamma) (NOTES reading 8).
   const double inv_range = 1.0 / (1.0 - std::cos(s.sigma_gamma_deg * std::numbers::pi / 180.0));
@@ -82,18 +82,29 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
     }
     ex.parallel_for(num_pairs, [&](std::int64_t begin, std::int64_t end) {
       const double* n = current.data();  // row-major #F x 3
+      // Gather: (1 - cos gamma_ij) / (1 - cos sigma_gamma) and ||n_i - n_j|| per pair...
       for (std::int64_t q = begin; q < end; ++q) {
         const double* ni = n + 3 * pair_first[static_cast<std::size_t>(q)];
         const double* nj = n + 3 * pair_second[static_cast<std::size_t>(q)];
         const double dx = ni[0] - nj[0], dy = ni[1] - nj[1], dz = ni[2] - nj[2];
-        const double x = (1.0 - (ni[0] * nj[0] + ni[1] * nj[1] + ni[2] * nj[2])) * inv_range;  // (1 - cos gamma_ij) / (1 - cos sigma_gamma)
-        double g = detail::exp_nonpositive(-x * x);
-        if (s.l1_median) {
-          const double dist = std::sqrt(dx * dx + dy * dy + dz * dz);
-          // omega_ij = .../||n_i - n_j||; bilateral weights where that is tiny (Eq. 7).
-          if (dist >= s.bilateral_switch) g /= dist;
+        range_x[static_cast<std::size_t>(q)] = (1.0 - (ni[0] * nj[0] + ni[1] * nj[1] + ni[2] * nj[2])) * inv_range;
+        range[static_cast<std::size_t>(q)] = dx * dx + dy * dy + dz * dz;
+      }
+      // ...then the weights over contiguous arrays, branch-free so that it vectorises:
+      // phi(x) / ||n_i - n_j||, with bilateral weights where ||n_i - n_j|| < switch (Eq. 7).
+      const double sw = s.bilateral_switch;
+      if (s.l1_median) {
+        for (std::int64_t q = begin; q < end; ++q) {
+          const double x = range_x[static_cast<std::size_t>(q)];
+          const double dist = std::sqrt(range[static_cast<std::size_t>(q)]);
+          const double denom = dist >= sw ? dist : 1.0;
+          range[static_cast<std::size_t>(q)] = detail::exp_nonpositive(-x * x) / denom;
         }
-        range[static_cast<std::size_t>(q)] = g;
+      } else {
+        for (std::int64_t q = begin; q < end; ++q) {
+          const double x = range_x[static_cast<std::size_t>(q)];
+          range[static_cast<std::size_t>(q)] = detail::exp_nonpositive(-x * x);
+        }
       }
     });
     // Eq. 7: one Jacobi step of the weighted L1-median, all faces from the previous iterate.
