@@ -37,9 +37,21 @@ Topology Topology::build(const Triangles& F, std::int32_t num_vertices) {
       if (a == b) continue;  // a face with a repeated index has no edge here
       half.push_back({std::min(a, b), std::max(a, b), a, b, c, f});
     }
-  std::sort(half.begin(), half.end(), [](const HalfEdge& x, const HalfEdge& y) {
-    return x.lo != y.lo ? x.lo < y.lo : x.hi != y.hi ? x.hi < y.hi : x.face < y.face;
-  });
+  // Counting sort by the smaller vertex (O(n)), then each small bucket by (hi, face): the
+  // same order as one comparison sort on (lo, hi, face), at a fraction of its cost.
+  {
+    std::vector<std::int32_t> start(static_cast<std::size_t>(num_vertices) + 1, 0);
+    for (const HalfEdge& h : half) ++start[static_cast<std::size_t>(h.lo) + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    std::vector<HalfEdge> sorted(half.size());
+    std::vector<std::int32_t> cursor(start.begin(), start.end() - 1);
+    for (const HalfEdge& h : half) sorted[static_cast<std::size_t>(cursor[static_cast<std::size_t>(h.lo)]++)] = h;
+    for (std::size_t v = 0; v + 1 < start.size(); ++v)
+      std::sort(sorted.begin() + start[v], sorted.begin() + start[v + 1], [](const HalfEdge& x, const HalfEdge& y) {
+        return x.hi != y.hi ? x.hi < y.hi : x.face < y.face;
+      });
+    half.swap(sorted);
+  }
 
   std::vector<std::array<std::int32_t, 4>> interior;
   std::vector<std::array<std::int32_t, 2>> interior_faces, boundary, nonmanifold, unique_edges;
@@ -120,18 +132,21 @@ Topology Topology::build(const Triangles& F, std::int32_t num_vertices) {
   // --- Face -> vertex-adjacent faces N(i), itself excluded (NOTES reading 9). ---
   t.ff_offsets.assign(static_cast<std::size_t>(t.num_faces) + 1, 0);
   t.ff_faces.reserve(static_cast<std::size_t>(t.num_faces) * 13);
-  std::vector<std::int32_t> scratch;
+  std::vector<std::int32_t> scratch, seen(static_cast<std::size_t>(t.num_faces), -1);
   for (std::int32_t f = 0; f < t.num_faces; ++f) {
     scratch.clear();
+    seen[static_cast<std::size_t>(f)] = f;  // excludes f itself
     for (int k = 0; k < 3; ++k) {
       const auto v = static_cast<std::size_t>(F(f, k));
       for (std::int32_t s = t.vf_offsets[v]; s < t.vf_offsets[v + 1]; ++s) {
         const std::int32_t g = t.vf_faces[static_cast<std::size_t>(s)];
-        if (g != f) scratch.push_back(g);
+        if (seen[static_cast<std::size_t>(g)] != f) {
+          seen[static_cast<std::size_t>(g)] = f;
+          scratch.push_back(g);
+        }
       }
     }
     std::sort(scratch.begin(), scratch.end());
-    scratch.erase(std::unique(scratch.begin(), scratch.end()), scratch.end());
     t.ff_faces.insert(t.ff_faces.end(), scratch.begin(), scratch.end());
     t.ff_offsets[static_cast<std::size_t>(f) + 1] = static_cast<std::int32_t>(t.ff_faces.size());
   }
