@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cstdlib>
 
 namespace mdn::http {
@@ -52,7 +53,20 @@ std::optional<ConnectionProbe> ConnectionProbe::find(int local_port, const std::
   return found;
 }
 
-void ConnectionProbe::stop_reading() const { shutdown(fd_, SHUT_RD); }
+void ConnectionProbe::linger_close(int max_wait_ms) const {
+  shutdown(fd_, SHUT_WR);
+  char sink[16384];
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(max_wait_ms);
+  for (;;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) break;
+    pollfd p{fd_, POLLIN, 0};
+    if (poll(&p, 1, int(left.count())) <= 0) break;
+    const ssize_t n = recv(fd_, sink, sizeof sink, MSG_DONTWAIT);
+    if (n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) break;
+  }
+  shutdown(fd_, SHUT_RD);
+}
 
 bool ConnectionProbe::peer_gone() const {
   pollfd p{fd_, POLLIN | POLLRDHUP, 0};

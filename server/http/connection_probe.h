@@ -19,10 +19,13 @@ class ConnectionProbe {
   static std::optional<ConnectionProbe> find(int local_port, const std::string& remote_addr, int remote_port);
   // True once the peer closed or reset the connection. Never blocks, never consumes bytes.
   bool peer_gone() const;
-  // Makes the server stop reading this connection: after the current response the keep-alive
-  // loop sees end-of-stream and closes it. cpp-httplib 0.11.4 keeps a connection open even when
-  // a handler answers "Connection: close", and would parse an unread body as the next request.
-  void stop_reading() const;
+  // Closes the connection after a response that left the request body unread (a "lingering
+  // close", as Apache does): sends FIN after the response, discards what the client still sends
+  // until it closes or `max_wait` passes, then ends reading so cpp-httplib's keep-alive loop sees
+  // end-of-stream. Needed because 0.11.4 keeps a connection open even when the response says
+  // "Connection: close" and would parse the unread body as the next request; closing at once
+  // would reset the connection and could destroy the response before the client reads it.
+  void linger_close(int max_wait_ms) const;
 
  private:
   explicit ConnectionProbe(int fd) : fd_(fd) {}

@@ -57,10 +57,10 @@ void replace_header(httplib::Response& res, const std::string& key, const std::s
   res.set_header(key, value);
 }
 
-// Answers this request, then closes the connection: used when the body stays unread.
-void close_after_response(const httplib::Request& req, httplib::Response& res) {
+// Answers this request, then closes the connection (access_log does it once the response is
+// written): used when the request body stays unread.
+void close_after_response(const httplib::Request&, httplib::Response& res) {
   replace_header(res, "Connection", "close");
-  if (auto probe = ConnectionProbe::find(req.local_port, req.remote_addr, req.remote_port)) probe->stop_reading();
 }
 
 // A header value must not carry CR/LF (response splitting) nor other control characters.
@@ -435,6 +435,10 @@ struct HttpService::Impl {
   }
 
   void access_log(const httplib::Request& req, const httplib::Response& res) {
+    // Runs after the response was written: close connections whose body was left unread.
+    if (res.get_header_value("Connection") == "close" && req.get_header_value("Connection") != "close")
+      if (auto probe = ConnectionProbe::find(req.local_port, req.remote_addr, req.remote_port))
+        probe->linger_close(1000);
     const std::string route = route_name(req);
     metrics.count_request(route, req.method, res.status);
     metrics.add_bytes_out(std::int64_t(res.body.size()));

@@ -1,0 +1,152 @@
+// A table of bad requests, each answered with the right 4xx application/problem+json, and the
+// server healthy afterwards. Runs against the real binary with small limits.
+#include <cmath>
+#include <functional>
+
+#include "http_fixture.h"
+
+namespace mdn::test {
+namespace {
+
+using nlohmann::json;
+
+std::string off_with(const std::string& vertices, const std::string& faces, int nv, int nf) {
+  return "OFF\n" + std::to_string(nv) + " " + std::to_string(nf) + " 0\n" + vertices + faces;
+}
+
+struct BadRequest {
+  std::string name;
+  std::function<httplib::Result(httplib::Client&)> send;  // or raw:
+  std::string raw;
+  int status;
+  std::string type;   // problem slug ("" = do not check)
+  std::string field;  // invalid-params: the named field
+};
+
+class HttpBadRequests : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    server_ = new ServerProcess({"--workers", "1", "--max-body", "65536", "--max-faces", "1000"});
+  }
+  static void TearDownTestSuite() {
+    delete server_;
+    server_ = nullptr;
+  }
+  static ServerProcess* server_;
+};
+ServerProcess* HttpBadRequests::server_ = nullptr;
+
+httplib::Result post(httplib::Client& c, const std::string& path, const std::string& body, const std::string& type,
+                     httplib::Headers headers = {}) {
+  return c.Post(path, headers, body, type);
+}
+
+TEST_F(HttpBadRequests, EachIsAnsweredWithTheRightProblemAndTheServerStaysHealthy) {
+  ASSERT_TRUE(server_->started()) << server_->log();
+  const std::string good = noisy_sphere_off(1);  // 80 faces
+  const std::string tri = "0 0 0\n1 0 0\n0 1 0\n";
+  const std::string big(100000, 'x');
+  const std::string glb_header = std::string("glTF\x02\x00\x00\x00", 8);
+  std::string huge_glb = glb_header + std::string("\xff\xff\xff\x7f", 4) + std::string(40, '\0');
+  const std::string gltf_external =
+      R"({"asset":{"version":"2.0"},"buffers":[{"uri":"http://example.org/x.bin","byteLength":36}],)"
+      R"("bufferViews":[{"buffer":0,"byteLength":36}],"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],)"
+      R"("meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],"nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}]})";
+  const std::string p = "/v1/denoise?params=";
+
+  std::vector<BadRequest> table = {
+      {"malformed glb", [&](auto& c) { return post(c, "/v1/denoise", glb_header + "garbage", "model/gltf-binary"); }, "", 400, "malformed-mesh", ""},
+      {"glb with an impossible length", [&](auto& c) { return post(c, "/v1/denoise", huge_glb, "model/gltf-binary"); }, "", 400, "malformed-mesh", ""},
+      {"malformed gltf json", [&](auto& c) { return post(c, "/v1/denoise", "{\"asset\": [", "model/gltf+json"); }, "", 400, "malformed-mesh", ""},
+      {"gltf with an external buffer", [&](auto& c) { return post(c, "/v1/denoise", gltf_external, "model/gltf+json"); }, "", 422, "unsupported-content", ""},
+      {"malformed drc", [&](auto& c) { return post(c, "/v1/denoise", "DRACO\x02\x02\x01\x01garbage", "model/x-draco"); }, "", 400, "malformed-mesh", ""},
+      {"unrecognisable octet-stream", [&](auto& c) { return post(c, "/v1/denoise", std::string(64, '\x07'), "application/octet-stream"); }, "", 415, "unsupported-media-type", ""},
+      {"wrong content type", [&](auto& c) { return post(c, "/v1/denoise", good, "image/png"); }, "", 415, "unsupported-media-type", ""},
+      {"json content type", [&](auto& c) { return post(c, "/v1/jobs", good, "application/json"); }, "", 415, "unsupported-media-type", ""},
+      {"form-urlencoded (curl -d)", [&](auto& c) { return post(c, "/v1/denoise", good, "application/x-www-form-urlencoded"); }, "", 415, "unsupported-media-type", ""},
+      {"empty body", [&](auto& c) { return post(c, "/v1/denoise", "", "model/x-off"); }, "", 400, "empty-body", ""},
+      {"body over the limit", [&](auto& c) { return post(c, "/v1/denoise", big, "model/x-off"); }, "", 413, "too-large", ""},
+      {"chunked body over the limit",
+       [&](auto& c) {
+         return c.Post("/v1/denoise", [&](std::size_t offset, httplib::DataSink& sink) {
+           if (offset < big.size()) sink.write(big.data(), 8192); else sink.done();
+           return true;
+         }, "model/x-off");
+       }, "", 413, "too-large", ""},
+      {"huge declared size", nullptr,
+       "POST /v1/denoise HTTP/1.1\r\nHost: x\r\nContent-Type: model/x-off\r\nContent-Length: 99999999999999\r\n\r\nOFF\n", 413, "too-large", ""},
+      {"no length", nullptr, "POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: model/x-off\r\n\r\n", 411, "length-required", ""},
+      {"too many faces", [&](auto& c) { return post(c, "/v1/denoise", noisy_sphere_off(3), "model/x-off"); }, "", 413, "too-large", ""},
+      {"NaN coordinate", [&](auto& c) { return post(c, "/v1/denoise", off_with("0 0 0\n1 nan 0\n0 1 0\n", "3 0 1 2\n", 3, 1), "model/x-off"); }, "", 400, "", ""},
+      {"index out of range", [&](auto& c) { return post(c, "/v1/denoise", off_with(tri, "3 0 1 7\n", 3, 1), "model/x-off"); }, "", 400, "", ""},
+      {"truncated off", [&](auto& c) { return post(c, "/v1/denoise", off_with(tri, "", 3, 5), "model/x-off"); }, "", 400, "malformed-mesh", ""},
+      {"bad params json (query)", [&](auto& c) { return post(c, p + url_encode("{\"alpha\":"), good, "model/x-off"); }, "", 400, "invalid-params", "params"},
+      {"bad params json (header)", [&](auto& c) { return post(c, "/v1/denoise", good, "model/x-off", {{"X-Denoise-Params", "{oops}"}}); }, "", 400, "invalid-params", "params"},
+      {"params not an object", [&](auto& c) { return post(c, p + url_encode("[1,2]"), good, "model/x-off"); }, "", 400, "invalid-params", "params"},
+      {"parameter out of range", [&](auto& c) { return post(c, p + url_encode("{\"alpha\":11}"), good, "model/x-off"); }, "", 400, "invalid-params", "alpha"},
+      {"negative iterations", [&](auto& c) { return post(c, p + url_encode("{\"n_vertex\":-1}"), good, "model/x-off"); }, "", 400, "invalid-params", "n_vertex"},
+      {"parameter of the wrong type", [&](auto& c) { return post(c, p + url_encode("{\"n_normal\":\"ten\"}"), good, "model/x-off"); }, "", 400, "invalid-params", "n_normal"},
+      {"non-integer iterations", [&](auto& c) { return post(c, p + url_encode("{\"n_normal\":2.5}"), good, "model/x-off"); }, "", 400, "invalid-params", "n_normal"},
+      {"unknown parameter", [&](auto& c) { return post(c, p + url_encode("{\"sigma\":1}"), good, "model/x-off"); }, "", 400, "invalid-params", "sigma"},
+      {"unknown enumeration value", [&](auto& c) { return post(c, p + url_encode("{\"region_mode\":\"maybe\"}"), good, "model/x-off"); }, "", 400, "invalid-params", "region_mode"},
+      {"unknown output format", [&](auto& c) { return post(c, p + url_encode("{\"output\":{\"format\":\"stl\"}}"), good, "model/x-off"); }, "", 400, "invalid-params", "output.format"},
+      {"draco bits out of range", [&](auto& c) { return post(c, p + url_encode("{\"output\":{\"position_bits\":4}}"), good, "model/x-off"); }, "", 400, "invalid-params", "output.position_bits"},
+      {"parameters given twice", [&](auto& c) { return post(c, p + url_encode("{}"), good, "model/x-off", {{"X-Denoise-Params", "{}"}}); }, "", 400, "invalid-params", ""},
+      {"form without mesh", [&](auto& c) { return c.Post("/v1/denoise", httplib::MultipartFormDataItems{{"params", "{}", "", ""}}); }, "", 400, "bad-form", ""},
+      {"form with an unknown field", [&](auto& c) { return c.Post("/v1/jobs", httplib::MultipartFormDataItems{{"file", good, "a.off", ""}}); }, "", 400, "bad-form", ""},
+      {"bad Idempotency-Key", [&](auto& c) { return post(c, "/v1/jobs", good, "model/x-off", {{"Idempotency-Key", std::string(300, 'k')}}); }, "", 400, "bad-idempotency-key", ""},
+      {"multi-range request", [&](auto& c) { return c.Get("/v1/params", {{"Range", "bytes=0-1,5-6,9-10"}}); }, "", 416, "multiple-ranges", ""},
+      {"unknown job id", [&](auto& c) { return c.Get("/v1/jobs/0123456789abcdef0123456789abcdef"); }, "", 404, "job-not-found", ""},
+      {"unknown job result", [&](auto& c) { return c.Get("/v1/jobs/nope/result"); }, "", 404, "job-not-found", ""},
+      {"cancel an unknown job", [&](auto& c) { return c.Delete("/v1/jobs/nope"); }, "", 404, "job-not-found", ""},
+      {"unknown route", [&](auto& c) { return c.Get("/v2/denoise"); }, "", 404, "not-found", ""},
+      {"wrong method", [&](auto& c) { return c.Get("/v1/denoise"); }, "", 405, "method-not-allowed", ""},
+      {"garbage request line", nullptr, "NOT-HTTP\r\n\r\n", 400, "", ""},
+  };
+  ASSERT_GE(table.size(), 30u);
+
+  auto c = server_->client();
+  for (const BadRequest& row : table) {
+    SCOPED_TRACE(row.name);
+    if (row.send) {
+      auto r = row.send(*c);
+      const json problem = expect_problem(r, row.status);
+      if (!row.type.empty()) EXPECT_EQ(problem.value("type", ""), "urn:meshdenoise:problem:" + row.type) << r->body;
+      if (!row.field.empty()) EXPECT_EQ(problem.value("field", ""), row.field) << r->body;
+      if (row.field == "alpha") {
+        EXPECT_EQ(problem.value("minimum", -1.0), 0.0);
+        EXPECT_EQ(problem.value("maximum", -1.0), 10.0);
+      }
+    } else {
+      std::string response;
+      EXPECT_EQ(raw_status(server_->port(), row.raw, &response), row.status) << response;
+      EXPECT_NE(response.find("application/problem+json"), std::string::npos) << response;
+      if (!row.type.empty()) EXPECT_NE(response.find("urn:meshdenoise:problem:" + row.type), std::string::npos) << response;
+    }
+    // Healthy after every bad request, on the same keep-alive client.
+    auto health = c->Get("/healthz");
+    ASSERT_TRUE(health) << "server unreachable after: " << row.name;
+    ASSERT_EQ(health->status, 200);
+  }
+  // Still does real work.
+  auto ok = c->Post("/v1/denoise", good, "model/x-off");
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(ok->status, 200) << ok->body;
+}
+
+TEST_F(HttpBadRequests, AnUnreadBodyDoesNotBecomeTheNextRequest) {
+  ASSERT_TRUE(server_->started()) << server_->log();
+  // Refused before its body is read (two ranges): the connection must close rather than parse
+  // the body as a second request.
+  std::string response;
+  const int status = raw_status(server_->port(),
+                                "POST /v1/denoise HTTP/1.1\r\nHost: x\r\nContent-Type: model/x-off\r\n"
+                                "Range: bytes=0-1,2-3\r\nContent-Length: 44\r\n\r\n"
+                                "GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n12345678",
+                                &response, /*read_until_close=*/true);
+  EXPECT_EQ(status, 416);
+  EXPECT_EQ(response.find("HTTP/1.1", 10), std::string::npos) << response;
+}
+
+}  // namespace
+}  // namespace mdn::test

@@ -1,0 +1,207 @@
+// Concurrency and operations against the real binary: 32 concurrent clients answered
+// correctly, overload answered with 503 + Retry-After, a vanished client cancels its job,
+// and SIGTERM drains without losing an accepted job.
+#include <netinet/in.h>
+#include <sys/socket.h>
+
+#include <atomic>
+#include <map>
+#include <mutex>
+
+#include "http_fixture.h"
+
+namespace mdn::test {
+namespace {
+
+using nlohmann::json;
+
+const char* kHeavyParams = R"({"n_normal":1000,"n_vertex":1000,"n_aniso":20})";
+
+std::string cli_denoise(const std::string& dir, const std::string& input, const std::string& name) {
+  write_file(dir + "/" + name + ".off", input);
+  const auto [code, out] = run_command(cli_binary() + " " + shell_quote(dir + "/" + name + ".off") + " " +
+                                       shell_quote(dir + "/" + name + "_out.off") + " 2>&1");
+  EXPECT_EQ(code, 0) << out;
+  return read_file(dir + "/" + name + "_out.off");
+}
+
+double metric_value(const std::string& metrics, const std::string& series) {
+  const auto pos = metrics.find(series + " ");
+  if (pos == std::string::npos) return 0;
+  return std::atof(metrics.c_str() + pos + series.size() + 1);
+}
+
+TEST(HttpLoad, ThirtyTwoConcurrentClientsAllAnsweredCorrectly) {
+  ServerProcess server({"--workers", "2", "--queue-capacity", "64"});
+  ASSERT_TRUE(server.started()) << server.log();
+  const std::string dir = temp_dir("load");
+  // Four distinct inputs, each sent by eight clients at once; every answer must equal the CLI's.
+  std::vector<std::string> inputs, expected;
+  for (int i = 0; i < 4; ++i) {
+    inputs.push_back(noisy_sphere_off(2, 100 + std::uint64_t(i)));
+    expected.push_back(cli_denoise(dir, inputs.back(), "in" + std::to_string(i)));
+  }
+  std::atomic<int> correct{0};
+  std::mutex failures_mutex;
+  std::vector<std::string> failures;
+  std::vector<std::thread> clients;
+  for (int k = 0; k < 32; ++k) {
+    clients.emplace_back([&, k] {
+      auto c = server.client();
+      const int i = k % 4;
+      const bool async = k % 2 == 1;
+      std::string body;
+      int status = 0;
+      if (!async) {
+        auto r = c->Post("/v1/denoise", inputs[std::size_t(i)], "model/x-off");
+        status = r ? r->status : -1;
+        if (r) body = r->body;
+      } else {
+        auto r = c->Post("/v1/jobs", inputs[std::size_t(i)], "model/x-off");
+        status = r ? r->status : -1;
+        if (r && r->status == 202) {
+          const json job = wait_job(*c, parse_json(r->body).value("id", ""));
+          auto res = c->Get("/v1/jobs/" + job.value("id", "") + "/result");
+          status = res ? res->status : -1;
+          if (res) body = res->body;
+        }
+      }
+      if (status == 200 && body == expected[std::size_t(i)]) {
+        ++correct;
+      } else {
+        std::lock_guard lock(failures_mutex);
+        failures.push_back("client " + std::to_string(k) + ": status " + std::to_string(status));
+      }
+    });
+  }
+  for (auto& t : clients) t.join();
+  EXPECT_EQ(correct.load(), 32) << (failures.empty() ? "" : failures.front());
+  EXPECT_EQ(server.client()->Get("/healthz")->status, 200);
+  fs::remove_all(dir);
+}
+
+TEST(HttpLoad, OverloadGives503WithRetryAfterAndNothingWorse) {
+  ServerProcess server({"--workers", "1", "--queue-capacity", "2"});
+  ASSERT_TRUE(server.started()) << server.log();
+  auto c = server.client();
+  const std::string heavy = noisy_sphere_off(4, 5);
+  std::vector<std::string> accepted;
+  int refused = 0;
+  for (int i = 0; i < 8; ++i) {
+    auto r = c->Post("/v1/jobs", {{"X-Denoise-Params", kHeavyParams}}, heavy, "model/x-off");
+    ASSERT_TRUE(r);
+    if (r->status == 202) {
+      accepted.push_back(r->get_header_value("Location"));
+    } else {
+      const json p = expect_problem(r, 503);
+      EXPECT_EQ(p.value("type", ""), "urn:meshdenoise:problem:queue-full");
+      EXPECT_GE(std::atoi(r->get_header_value("Retry-After").c_str()), 1);
+      ++refused;
+    }
+  }
+  // One running and two queued at most, whatever the timing.
+  EXPECT_LE(accepted.size(), 3u);
+  EXPECT_GE(refused, 5);
+  // A full queue also refuses synchronous work, and /readyz reports it.
+  expect_problem(c->Post("/v1/denoise", heavy, "model/x-off"), 503);
+  auto ready = c->Get("/readyz");
+  expect_problem(ready, 503);
+  EXPECT_FALSE(ready->get_header_value("Retry-After").empty());
+  EXPECT_EQ(c->Get("/healthz")->status, 200);
+  for (const auto& url : accepted) c->Delete(url);
+  // Once the queue drains, the server takes work again.
+  for (int i = 0; i < 500 && c->Get("/readyz")->status != 200; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_EQ(c->Get("/readyz")->status, 200);
+  auto ok = c->Post("/v1/denoise", noisy_sphere_off(1), "model/x-off");
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(ok->status, 200);
+}
+
+TEST(HttpLoad, VanishedClientCancelsItsJob) {
+  ServerProcess server({"--workers", "1"});
+  ASSERT_TRUE(server.started()) << server.log();
+  const std::string heavy = noisy_sphere_off(5, 6);
+  {
+    // A raw client: send the whole request, then go away without reading the answer.
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(std::uint16_t(server.port()));
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+    const std::string head = std::string("POST /v1/denoise HTTP/1.1\r\nHost: x\r\nContent-Type: model/x-off\r\n") +
+                             "X-Denoise-Params: " + kHeavyParams + "\r\nContent-Length: " +
+                             std::to_string(heavy.size()) + "\r\n\r\n";
+    const std::string request = head + heavy;
+    std::size_t sent = 0;
+    while (sent < request.size()) {
+      const ssize_t n = send(fd, request.data() + sent, request.size() - sent, MSG_NOSIGNAL);
+      ASSERT_GT(n, 0);
+      sent += std::size_t(n);
+    }
+    auto c = server.client();
+    for (int i = 0; i < 200 && c->Get("/readyz")->body.find("\"running\":1") == std::string::npos; ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    close(fd);
+  }
+  auto c = server.client();
+  double cancelled = 0;
+  for (int i = 0; i < 250 && cancelled < 1; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    cancelled = metric_value(c->Get("/metrics")->body, "mdn_jobs_total{state=\"cancelled\"}");
+  }
+  EXPECT_EQ(cancelled, 1) << server.log();
+  EXPECT_NE(server.log().find("client_gone"), std::string::npos);
+  // The worker is free again at once.
+  auto ok = c->Post("/v1/denoise", noisy_sphere_off(1), "model/x-off");
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(ok->status, 200);
+}
+
+TEST(HttpLoad, SigtermDrainsWithoutLosingAcceptedJobs) {
+  ServerProcess server({"--workers", "1", "--drain-grace", "60"});
+  ASSERT_TRUE(server.started()) << server.log();
+  auto c = server.client();
+  const std::string medium = noisy_sphere_off(4, 7);
+  const std::string params = R"({"n_normal":60,"n_vertex":30})";
+  std::vector<std::string> ids;
+  for (int i = 0; i < 3; ++i) {
+    auto r = c->Post("/v1/jobs", {{"X-Denoise-Params", params}}, medium, "model/x-off");
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 202);
+    ids.push_back(parse_json(r->body)["id"]);
+  }
+  // A synchronous request in flight when the signal comes is answered too.
+  std::string sync_body;
+  int sync_status = 0;
+  std::thread sync_client([&] {
+    auto sc = server.client();
+    auto r = sc->Post("/v1/denoise", {{"X-Denoise-Params", params}}, medium, "model/x-off");
+    sync_status = r ? r->status : -1;
+    if (r) sync_body = r->body;
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  server.signal(SIGTERM);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  // Draining: not ready, no new jobs, but accepted jobs run and their results are served.
+  expect_problem(c->Get("/readyz"), 503);
+  const json refused = expect_problem(c->Post("/v1/jobs", medium, "model/x-off"), 503);
+  EXPECT_EQ(refused.value("type", ""), "urn:meshdenoise:problem:draining");
+  for (const auto& id : ids) {
+    const json job = wait_job(*c, id);
+    EXPECT_EQ(job.value("state", ""), "succeeded") << job.dump();
+    auto result = c->Get("/v1/jobs/" + id + "/result");
+    ASSERT_TRUE(result);
+    EXPECT_EQ(result->status, 200);
+    EXPECT_EQ(result->body.rfind("OFF", 0), 0u);
+  }
+  sync_client.join();
+  EXPECT_EQ(sync_status, 200);
+  EXPECT_EQ(sync_body.rfind("OFF", 0), 0u);
+  // Every accepted job done and fetched: the process exits 0 on its own.
+  EXPECT_EQ(server.wait_exit(std::chrono::seconds(30)), 0) << server.log();
+}
+
+}  // namespace
+}  // namespace mdn::test

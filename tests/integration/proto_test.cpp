@@ -1,0 +1,242 @@
+// The contract in proto/ against the code and the running server:
+//  - params.schema.json agrees with core's param_specs() and server/params_json (names,
+//    types, ranges, defaults, enumerations); its examples are accepted and its counter-examples
+//    refused by an independent validator (python3-jsonschema), by job_params_from_json and by
+//    the running server;
+//  - openapi.yaml lists exactly the server's routes, and every status the server answers on a
+//    route is documented there, and every documented status (but 500) is produced by a probe.
+#include <map>
+#include <set>
+
+#include "http_fixture.h"
+#include "core/params.h"
+#include "server/http/http_server.h"
+#include "server/params_json.h"
+
+namespace mdn::test {
+namespace {
+
+using nlohmann::json;
+
+json load_json(const std::string& path) { return json::parse(read_file(path)); }
+
+std::string proto_dir() { return source_dir() + "/proto"; }
+
+// Runs proto_check.py once: the OpenAPI document as JSON plus the schema's (counter-)examples.
+const json& checked_proto() {
+  static const json result = [] {
+    const std::string out = fs::temp_directory_path() / ("mdn_proto_" + std::to_string(getpid()) + ".json");
+    const auto [code, text] = run_command("python3 " + shell_quote(source_dir() + "/tests/integration/proto_check.py") +
+                                          " " + shell_quote(proto_dir()) + " " + shell_quote(out) + " 2>&1");
+    EXPECT_EQ(code, 0) << text;
+    json j = code == 0 ? load_json(out) : json::object();
+    fs::remove(out);
+    return j;
+  }();
+  return result;
+}
+
+TEST(Proto, ParamsSchemaAgreesWithCoreParamSpecs) {
+  const json schema = load_json(proto_dir() + "/params.schema.json");
+  const json& props = schema.at("properties");
+  for (const ParamSpec& spec : param_specs()) {
+    SCOPED_TRACE(std::string(spec.name));
+    ASSERT_TRUE(props.contains(std::string(spec.name)));
+    const json& p = props.at(std::string(spec.name));
+    EXPECT_EQ(p.at("type"), spec.integer ? "integer" : "number");
+    EXPECT_DOUBLE_EQ(p.at("minimum").get<double>(), spec.min);
+    EXPECT_DOUBLE_EQ(p.at("maximum").get<double>(), spec.max);
+    EXPECT_DOUBLE_EQ(p.at("default").get<double>(), spec.default_value());
+  }
+  // Exactly the fields server/params_json reads and writes, with its defaults.
+  const json defaults = service::to_json(service::JobParams{});
+  std::set<std::string> schema_keys, code_keys, schema_out, code_out;
+  for (const auto& [k, v] : props.items()) schema_keys.insert(k);
+  for (const auto& [k, v] : defaults.items()) code_keys.insert(k);
+  EXPECT_EQ(schema_keys, code_keys);
+  for (const auto& [k, v] : props.at("output").at("properties").items()) {
+    schema_out.insert(k);
+    EXPECT_EQ(v.at("default"), defaults.at("output").at(k)) << "output." << k;
+  }
+  for (const auto& [k, v] : defaults.at("output").items()) code_out.insert(k);
+  EXPECT_EQ(schema_out, code_out);
+  EXPECT_EQ(props.at("region_mode").at("default"), defaults.at("region_mode"));
+  EXPECT_EQ(props.at("solver").at("default"), defaults.at("solver"));
+  EXPECT_EQ(props.at("kmeans_seed").at("default"), defaults.at("kmeans_seed"));
+  // Every enumeration value is accepted by the parser, and nothing else.
+  for (const char* key : {"region_mode", "solver"}) {
+    for (const auto& value : props.at(key).at("enum"))
+      EXPECT_NO_THROW(service::job_params_from_json({{key, value}})) << key << "=" << value;
+    EXPECT_THROW(service::job_params_from_json({{key, "not-a-value"}}), InvalidParamsError);
+  }
+  for (const auto& value : props.at("output").at("properties").at("format").at("enum"))
+    EXPECT_NO_THROW(service::job_params_from_json({{"output", {{"format", value}}}})) << value;
+  // Output integer ranges: the bounds are accepted, one past them refused.
+  for (const auto& [k, v] : props.at("output").at("properties").items()) {
+    if (v.at("type") != "integer") continue;
+    const int lo = v.at("minimum"), hi = v.at("maximum");
+    EXPECT_NO_THROW(service::job_params_from_json({{"output", {{k, lo}}}})) << k;
+    EXPECT_NO_THROW(service::job_params_from_json({{"output", {{k, hi}}}})) << k;
+    EXPECT_THROW(service::job_params_from_json({{"output", {{k, lo - 1}}}}), InvalidParamsError) << k;
+    EXPECT_THROW(service::job_params_from_json({{"output", {{k, hi + 1}}}}), InvalidParamsError) << k;
+  }
+}
+
+TEST(Proto, SchemaExamplesAcceptedAndCounterExamplesRefusedEverywhere) {
+  const json& proto = checked_proto();  // the independent validator agrees (or this fails)
+  ASSERT_TRUE(proto.contains("examples"));
+  ASSERT_GE(proto["examples"].size(), 3u);
+  ASSERT_GE(proto["counter_examples"].size(), 10u);
+  ServerProcess server({"--workers", "2"});
+  ASSERT_TRUE(server.started()) << server.log();
+  auto c = server.client();
+  const std::string mesh = noisy_sphere_off(1);
+  for (const json& example : proto["examples"]) {
+    SCOPED_TRACE(example.dump());
+    EXPECT_NO_THROW(service::job_params_from_json(example));
+    auto r = c->Post(("/v1/denoise?params=" + url_encode(example.dump())).c_str(), mesh, "model/x-off");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 200) << r->body;
+  }
+  for (const json& counter : proto["counter_examples"]) {
+    SCOPED_TRACE(counter.dump());
+    EXPECT_THROW(service::job_params_from_json(counter), InvalidParamsError);
+    const json p = expect_problem(c->Post("/v1/denoise", {{"X-Denoise-Params", counter.dump()}}, mesh, "model/x-off"), 400);
+    EXPECT_FALSE(p.value("field", "").empty());
+  }
+}
+
+// Observed (method, route template) -> statuses.
+using Observed = std::map<std::pair<std::string, std::string>, std::set<int>>;
+
+void observe(Observed& seen, const std::string& method, const std::string& route, const httplib::Result& r) {
+  ASSERT_TRUE(r) << method << " " << route;
+  seen[{method, route}].insert(r->status);
+}
+
+TEST(Proto, OpenApiDocumentsExactlyTheServersRoutesAndStatuses) {
+  const json& proto = checked_proto();
+  ASSERT_TRUE(proto.contains("openapi"));
+  const json& doc = proto["openapi"];
+  EXPECT_EQ(doc.value("openapi", "").rfind("3.1", 0), 0u);
+  // Routes: the document's operations and the server's table are the same set.
+  std::set<std::pair<std::string, std::string>> documented_routes, server_routes;
+  std::map<std::pair<std::string, std::string>, std::set<int>> documented;
+  for (const auto& [path, item] : doc.at("paths").items()) {
+    for (const auto& [method, op] : item.items()) {
+      if (method == "parameters") continue;
+      std::string m = method;
+      for (char& ch : m) ch = char(std::toupper(static_cast<unsigned char>(ch)));
+      documented_routes.insert({m, path});
+      for (const auto& [status, response] : op.at("responses").items()) documented[{m, path}].insert(std::stoi(status));
+    }
+  }
+  for (const auto& r : http::HttpService::route_table()) server_routes.insert({r.method, r.path});
+  EXPECT_EQ(documented_routes, server_routes);
+
+  Observed seen;
+  const std::string mesh = noisy_sphere_off(1);
+  const std::string heavy = noisy_sphere_off(5, 9);
+  const httplib::Headers heavy_params = {{"X-Denoise-Params", R"({"n_normal":1000,"n_vertex":1000,"n_aniso":20})"}};
+  const httplib::Headers two_ranges = {{"Range", "bytes=0-1,4-5"}};
+  const std::string gltf_external =
+      R"({"asset":{"version":"2.0"},"buffers":[{"uri":"http://example.org/x.bin","byteLength":36}],)"
+      R"("bufferViews":[{"buffer":0,"byteLength":36}],"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],)"
+      R"("meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],"nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}]})";
+  {
+    ServerProcess server({"--workers", "2", "--max-body", "65536"});
+    ASSERT_TRUE(server.started()) << server.log();
+    auto c = server.client();
+    for (const std::string route : {"/v1/denoise", "/v1/jobs"}) {
+      observe(seen, "POST", route, c->Post(route.c_str(), mesh, "model/x-off"));
+      observe(seen, "POST", route, c->Post(route.c_str(), {{"X-Denoise-Params", "{\"alpha\":-1}"}}, mesh, "model/x-off"));
+      observe(seen, "POST", route, c->Post(route.c_str(), std::string(70000, 'x'), "model/x-off"));
+      observe(seen, "POST", route, c->Post(route.c_str(), mesh, "image/png"));
+      observe(seen, "POST", route, c->Post(route.c_str(), two_ranges, mesh, "model/x-off"));
+      observe(seen, "POST", route, c->Post(route.c_str(), gltf_external, "model/gltf+json"));
+      const int no_length = raw_status(server.port(), "POST " + route + " HTTP/1.1\r\nHost: x\r\nContent-Type: model/x-off\r\n\r\n");
+      seen[{"POST", route}].insert(no_length);
+    }
+    // An Idempotency-Key reused with another body.
+    ASSERT_EQ(c->Post("/v1/jobs", {{"Idempotency-Key", "same"}}, mesh, "model/x-off")->status, 202);
+    observe(seen, "POST", "/v1/jobs", c->Post("/v1/jobs", {{"Idempotency-Key", "same"}}, mesh + "\n", "model/x-off"));
+    // A failed asynchronous job (its error is found when it runs) and a succeeded one.
+    auto failed = c->Post("/v1/jobs", gltf_external, "model/gltf+json");
+    auto good = c->Post("/v1/jobs", mesh, "model/x-off");
+    ASSERT_TRUE(good && good->status == 202);
+    const std::string good_url = good->get_header_value("Location");
+    wait_job(*c, parse_json(good->body)["id"]);
+    observe(seen, "GET", "/v1/jobs/{id}", c->Get(good_url));
+    observe(seen, "GET", "/v1/jobs/{id}", c->Get("/v1/jobs/unknown"));
+    observe(seen, "GET", "/v1/jobs/{id}", c->Get(good_url, two_ranges));
+    observe(seen, "GET", "/v1/jobs/{id}/result", c->Get(good_url + "/result"));
+    observe(seen, "GET", "/v1/jobs/{id}/result", c->Get(good_url + "/result", {{"Range", "bytes=0-3"}}));
+    observe(seen, "GET", "/v1/jobs/{id}/result", c->Get(good_url + "/result", two_ranges));
+    observe(seen, "GET", "/v1/jobs/{id}/result", c->Get("/v1/jobs/unknown/result"));
+    if (failed && failed->status == 202) {
+      wait_job(*c, parse_json(failed->body)["id"]);
+      observe(seen, "GET", "/v1/jobs/{id}/result", c->Get(failed->get_header_value("Location") + "/result"));
+    }
+    observe(seen, "DELETE", "/v1/jobs/{id}", c->Delete("/v1/jobs/unknown"));
+    observe(seen, "DELETE", "/v1/jobs/{id}", c->Delete(good_url, two_ranges));
+    observe(seen, "DELETE", "/v1/jobs/{id}", c->Delete(good_url));
+    for (const std::string route : {"/v1/params", "/v1/params/schema", "/openapi.yaml", "/healthz", "/readyz", "/metrics"}) {
+      observe(seen, "GET", route, c->Get(route));
+      observe(seen, "GET", route, c->Get(route, two_ranges));
+    }
+    // The served contract is the file, byte for byte.
+    EXPECT_EQ(c->Get("/openapi.yaml")->body, read_file(proto_dir() + "/openapi.yaml"));
+    EXPECT_EQ(c->Get("/v1/params/schema")->body, read_file(proto_dir() + "/params.schema.json"));
+  }
+  {
+    ServerProcess server({"--auth-token", "t0ken"});
+    ASSERT_TRUE(server.started()) << server.log();
+    auto c = server.client();
+    for (const auto& [method, route] : server_routes) {
+      if (route.rfind("/v1/", 0) != 0) continue;
+      std::string path = route;
+      if (auto pos = path.find("{id}"); pos != std::string::npos) path.replace(pos, 4, "x");
+      httplib::Result r = method == "GET"    ? c->Get(path)
+                          : method == "POST" ? c->Post(path, mesh, "model/x-off")
+                                             : c->Delete(path);
+      observe(seen, method, route, r);
+    }
+  }
+  {
+    ServerProcess server({"--workers", "1", "--queue-capacity", "1", "--job-time-limit", "2"});
+    ASSERT_TRUE(server.started()) << server.log();
+    auto c = server.client();
+    auto running = c->Post("/v1/jobs", heavy_params, heavy, "model/x-off");
+    ASSERT_TRUE(running && running->status == 202);
+    for (int i = 0; i < 200 && parse_json(c->Get(running->get_header_value("Location"))->body).value("state", "") != "running"; ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    auto queued = c->Post("/v1/jobs", heavy_params, heavy, "model/x-off");
+    ASSERT_TRUE(queued && queued->status == 202);
+    observe(seen, "POST", "/v1/jobs", c->Post("/v1/jobs", heavy_params, heavy, "model/x-off"));        // 503
+    observe(seen, "POST", "/v1/denoise", c->Post("/v1/denoise", heavy_params, heavy, "model/x-off"));  // 503
+    observe(seen, "GET", "/readyz", c->Get("/readyz"));                                                 // 503
+    observe(seen, "GET", "/v1/jobs/{id}/result", c->Get(queued->get_header_value("Location") + "/result"));  // 409
+    observe(seen, "DELETE", "/v1/jobs/{id}", c->Delete(queued->get_header_value("Location")));   // 200
+    observe(seen, "DELETE", "/v1/jobs/{id}", c->Delete(running->get_header_value("Location")));  // 202
+    wait_job(*c, parse_json(running->body)["id"]);
+    observe(seen, "POST", "/v1/denoise", c->Post("/v1/denoise", heavy_params, heavy, "model/x-off"));  // 504
+  }
+
+  // Every observed status is documented; every documented status but 500 was observed.
+  for (const auto& [route, statuses] : seen) {
+    ASSERT_TRUE(documented.count(route)) << route.first << " " << route.second;
+    for (int s : statuses)
+      EXPECT_TRUE(documented[route].count(s)) << route.first << " " << route.second << " answered " << s
+                                              << " which openapi.yaml does not document";
+  }
+  for (const auto& [route, statuses] : documented) {
+    for (int s : statuses) {
+      if (s == 500) continue;  // a bug, not a behaviour to provoke
+      EXPECT_TRUE(seen[route].count(s)) << route.first << " " << route.second << " documents " << s
+                                        << " but no probe produced it";
+    }
+  }
+}
+
+}  // namespace
+}  // namespace mdn::test
