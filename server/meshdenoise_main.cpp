@@ -274,12 +274,37 @@ std::string read_file(const std::string& path) {
   }
 }
 
-void write_file(const std::string& path, const std::string& bytes) {
+void write_bytes(const std::string& path, const std::string& bytes, const std::string& shown) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) throw FileError("cannot write " + path + ": " + std::strerror(errno));
+  if (!out) throw FileError("cannot write " + shown + ": " + std::strerror(errno));
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   out.close();
-  if (!out) throw FileError("cannot write " + path + ": " + std::strerror(errno));
+  if (!out) throw FileError("cannot write " + shown + ": " + std::strerror(errno));
+}
+
+// Writes OUT through a temporary file in the same folder and a rename, so a failure (disk
+// full, Ctrl-C) never leaves a truncated OUT behind or clobbers an existing one. Special files
+// (/dev/stdout, pipes) and symbolic links are written in place.
+void write_file(const std::string& path, const std::string& bytes) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status status = fs::symlink_status(path, ec);
+  if (fs::exists(status) && !fs::is_regular_file(status)) {
+    if (fs::is_directory(status)) throw FileError("cannot write " + path + ": it is a directory");
+    write_bytes(path, bytes, path);
+    return;
+  }
+  const std::string partial = path + ".partial-" + std::to_string(::getpid());
+  try {
+    write_bytes(partial, bytes, path);
+    fs::rename(partial, path);
+  } catch (const fs::filesystem_error& e) {
+    fs::remove(partial, ec);
+    throw FileError("cannot write " + path + ": " + e.code().message());
+  } catch (...) {
+    fs::remove(partial, ec);
+    throw;
+  }
 }
 
 // --params / --add-noise take inline JSON (anything starting with '{' after blanks) or a file.

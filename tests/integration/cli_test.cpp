@@ -178,6 +178,11 @@ TEST_F(Cli, MetricsAgainstAnotherMeshFailBeforeWriting) {
   EXPECT_EQ(r.code, 3) << r.err;
   EXPECT_NE(r.err.find("do not have the same faces"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(path("out.off")));
+  // An existing OUT is left as it was.
+  write_text(path("out.off"), "previous result");
+  EXPECT_EQ(run("--metrics " + quote(path("plane.off")) + " " + quote(path("noisy.off")) + " " +
+                quote(path("out.off"))).code, 3);
+  EXPECT_EQ(read_text(path("out.off")), "previous result");
 }
 
 TEST_F(Cli, AddNoiseThenDenoiseThenMeasure) {
@@ -216,6 +221,10 @@ TEST_F(Cli, SameBytesForOneAndTwoThreads) {
   const std::string one = read_text(path("t1.off"));
   EXPECT_FALSE(one.empty());
   EXPECT_EQ(one, read_text(path("t2.off")));
+  // OUT is written through a temporary file that is renamed: nothing else is left behind.
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
+  }
 }
 
 TEST_F(Cli, ParamsInlineAndFromFileAndReport) {
