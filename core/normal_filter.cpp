@@ -11,6 +11,30 @@
 
 namespace mdn {
 
+namespace {
+
+// range[q] <- phi(x[q]) / ||n_i - n_j||, the symmetric factor of omega_ij (Eq. 7), with
+// bilateral weights where ||n_i - n_j|| = sqrt(dist2[q]) < sw; phi(x) = exp(-x^2). On entry
+// range[q] holds ||n_i - n_j||^2. Branch-free so that it vectorises; compiled for AVX2 too
+// and picked at run time. Without FMA contraction (-ffp-contract=off) both versions do the
+// same IEEE operations, so the weights are identical on every x86-64 machine.
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__) && !defined(__SANITIZE_ADDRESS__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+void range_weights(const double* x, double* range, std::int64_t n, double sw, bool l1_median) {
+  if (l1_median) {
+    for (std::int64_t q = 0; q < n; ++q) {
+      const double dist = std::sqrt(range[q]);
+      const double denom = dist >= sw ? dist : 1.0;
+      range[q] = detail::exp_nonpositive(-x[q] * x[q]) / denom;
+    }
+  } else {
+    for (std::int64_t q = 0; q < n; ++q) range[q] = detail::exp_nonpositive(-x[q] * x[q]);
+  }
+}
+
+}  // namespace
+
 Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const Topology& topo,
                                  const NormalFilterSettings& s, Executor* executor, ProgressObserver* progress) {
   Executor serial(1);
@@ -90,22 +114,8 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
         range_x[static_cast<std::size_t>(q)] = (1.0 - (ni[0] * nj[0] + ni[1] * nj[1] + ni[2] * nj[2])) * inv_range;
         range[static_cast<std::size_t>(q)] = dx * dx + dy * dy + dz * dz;
       }
-      // ...then the weights over contiguous arrays, branch-free so that it vectorises:
-      // phi(x) / ||n_i - n_j||, with bilateral weights where ||n_i - n_j|| < switch (Eq. 7).
-      const double sw = s.bilateral_switch;
-      if (s.l1_median) {
-        for (std::int64_t q = begin; q < end; ++q) {
-          const double x = range_x[static_cast<std::size_t>(q)];
-          const double dist = std::sqrt(range[static_cast<std::size_t>(q)]);
-          const double denom = dist >= sw ? dist : 1.0;
-          range[static_cast<std::size_t>(q)] = detail::exp_nonpositive(-x * x) / denom;
-        }
-      } else {
-        for (std::int64_t q = begin; q < end; ++q) {
-          const double x = range_x[static_cast<std::size_t>(q)];
-          range[static_cast<std::size_t>(q)] = detail::exp_nonpositive(-x * x);
-        }
-      }
+      // ...then the weights over contiguous arrays (branch-free, vectorised).
+      range_weights(range_x.data() + begin, range.data() + begin, end - begin, s.bilateral_switch, s.l1_median);
     });
     // Eq. 7: one Jacobi step of the weighted L1-median, all faces from the previous iterate.
     ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
