@@ -139,7 +139,8 @@ OUT's format is its extension's, else params.output.format, else IN's.
 Options:
   --params JSON|FILE   parameters as a JSON object (inline, or the name of a file holding it),
                        the same shape as the HTTP API; missing fields keep their defaults.
-  --add-noise SPEC     add Gaussian noise instead of denoising; SPEC is JSON (inline or a file):
+  --add-noise SPEC     add Gaussian noise instead of denoising (--params may then only hold
+                       "output"); SPEC is JSON (inline or a file):
                        {"kind": "along_normal"|"per_coordinate"|"random_direction",
                         "sigma": 0.2 (x mean edge length, [0, 10]), "seed": 1,
                         "impulse_fraction": 0 ([0, 1]; > 0 displaces only that fraction)}
@@ -424,7 +425,6 @@ int run(int argc, char** argv) {
     throw UsageError(pos.size() == 1 ? "missing OUT (or give --metrics GT to only measure IN)"
                                      : "expected IN and OUT, got " + std::to_string(pos.size()) + " file arguments");
   }
-  if (options.add_noise && options.params) throw UsageError("--add-noise and --params cannot be combined");
   if (measure_only && (options.params || options.add_noise)) {
     throw UsageError("--params and --add-noise need an OUT file");
   }
@@ -433,7 +433,18 @@ int run(int argc, char** argv) {
 
   // Parse everything the user typed before touching any mesh.
   service::JobParams params;
-  if (options.params) params = service::job_params_from_text(json_argument("--params", *options.params));
+  if (options.params) {
+    const std::string text = json_argument("--params", *options.params);
+    params = service::job_params_from_text(text);
+    if (options.add_noise) {
+      // Only the output settings apply when no denoising happens; anything else would be
+      // silently ignored, so it is refused.
+      const json fields = json::parse(text);  // valid: job_params_from_text accepted it
+      for (const auto& [key, value] : fields.items()) {
+        if (key != "output") throw UsageError("with --add-noise, --params may only hold \"output\", not \"" + key + "\"");
+      }
+    }
+  }
   std::optional<mdn::NoiseSpec> noise;
   if (options.add_noise) noise = service::noise_spec_from_text(json_argument("--add-noise", *options.add_noise));
 
