@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Installs the Debian packages listed in scripts/deps/<list>.txt (and, for tests, the npm
+# Installs the Debian packages listed in scripts/deps/apt-<list>.txt (and, for tests, the npm
 # tools of tests/tools). Idempotent; needs root on a Debian bookworm machine.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
@@ -10,7 +10,7 @@ for list in "$@"; do
   while read -r line; do
     line="${line%%#*}"; line="$(echo "$line" | xargs)"
     [ -n "$line" ] && packages+=("$line")
-  done < "$here/deps/$list.txt"
+  done < "$here/deps/apt-$list.txt"
 done
 
 missing=()
