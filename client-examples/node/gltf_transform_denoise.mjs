@@ -7,9 +7,10 @@
 //   await document.transform(dedup(), denoiseTransform({ params: { n_normal: 20 } }), prune());
 //
 // Usage as a script: node gltf_transform_denoise.mjs <in.glb> <out.glb> [params-json]
-// Needs @gltf-transform/core, /extensions and draco3dgltf (tests/tools/package.json pins them).
+// Needs @gltf-transform/core, /extensions, /functions and draco3dgltf (tests/tools/package.json pins them).
 import { NodeIO } from '@gltf-transform/core';
 import { ALL_EXTENSIONS } from '@gltf-transform/extensions';
+import { mergeDocuments } from '@gltf-transform/functions';
 import draco3d from 'draco3dgltf';
 import { denoise } from './denoise_client.mjs';
 
@@ -27,12 +28,17 @@ export function denoiseTransform({ params = {}, baseUrl } = {}) {
     const result = await denoise(glb, 'model/gltf-binary', { ...params, output: { format: 'glb', ...(params.output ?? {}) } },
                                  baseUrl);
     const denoised = await io.readBinary(result.bytes);
-    // Replace the document's content with the denoised one, keeping the Document object.
+    // Replace the document's content with the denoised one, keeping the Document object (the
+    // service may reorder vertices, e.g. through Draco, so positions cannot be copied by index).
     const root = document.getRoot();
-    for (const child of root.listChildren()) child.dispose();
-    document.merge(denoised);
-    const scenes = document.getRoot().listScenes();
-    if (scenes.length) document.getRoot().setDefaultScene(scenes[0]);
+    for (const list of [root.listScenes(), root.listNodes(), root.listMeshes(), root.listSkins(), root.listAnimations(),
+                        root.listCameras(), root.listMaterials(), root.listTextures(), root.listAccessors(),
+                        root.listBuffers()]) {
+      for (const property of list) property.dispose();
+    }
+    mergeDocuments(document, denoised);
+    const scenes = root.listScenes();
+    if (scenes.length) root.setDefaultScene(scenes[0]);
     document.getLogger().info(`meshdenoise: ${result.timing}`);
   };
 }

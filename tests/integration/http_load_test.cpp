@@ -55,10 +55,11 @@ TEST(HttpLoad, ThirtyTwoConcurrentClientsAllAnsweredCorrectly) {
       if (!async) {
         auto r = c->Post("/v1/denoise", inputs[std::size_t(i)], "model/x-off");
         status = r ? r->status : -1;
-        if (r) body = r->body;
+        body = r ? r->body : httplib::to_string(r.error());
       } else {
         auto r = c->Post("/v1/jobs", inputs[std::size_t(i)], "model/x-off");
         status = r ? r->status : -1;
+        if (!r) body = httplib::to_string(r.error());
         if (r && r->status == 202) {
           const json job = wait_job(*c, parse_json(r->body).value("id", ""));
           auto res = c->Get("/v1/jobs/" + job.value("id", "") + "/result");
@@ -70,12 +71,16 @@ TEST(HttpLoad, ThirtyTwoConcurrentClientsAllAnsweredCorrectly) {
         ++correct;
       } else {
         std::lock_guard lock(failures_mutex);
-        failures.push_back("client " + std::to_string(k) + ": status " + std::to_string(status));
+        failures.push_back("client " + std::to_string(k) + (async ? " (async)" : " (sync)") + ": status " +
+                           std::to_string(status) + (status == 200 ? " with other bytes" : "") + "; " +
+                           body.substr(0, 300));
       }
     });
   }
   for (auto& t : clients) t.join();
-  EXPECT_EQ(correct.load(), 32) << (failures.empty() ? "" : failures.front());
+  std::string all;
+  for (const auto& f : failures) all += f + "\n";
+  EXPECT_EQ(correct.load(), 32) << all << server.log();
   EXPECT_EQ(server.client()->Get("/healthz")->status, 200);
   fs::remove_all(dir);
 }
