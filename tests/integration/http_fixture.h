@@ -37,13 +37,14 @@ namespace mdn::test {
 
 namespace fs = std::filesystem;
 
+// The environment wins (ctest sets MDN_BUILD_DIR); the build's own paths are the fallback.
 inline std::string build_dir() {
   const char* dir = std::getenv("MDN_BUILD_DIR");
-  return dir ? dir : "";
+  return dir ? dir : MDN_DEFAULT_BUILD_DIR;
 }
 inline std::string source_dir() {
   const char* dir = std::getenv("MDN_SOURCE_DIR");
-  return dir ? dir : "";
+  return dir ? dir : MDN_DEFAULT_SOURCE_DIR;
 }
 inline std::string server_binary() { return build_dir() + "/server/http/meshdenoise-server"; }
 inline std::string cli_binary() { return build_dir() + "/server/meshdenoise"; }
