@@ -85,6 +85,29 @@ TEST(HttpLoad, ThirtyTwoConcurrentClientsAllAnsweredCorrectly) {
   fs::remove_all(dir);
 }
 
+TEST(HttpLoad, IdleConnectionsDoNotStarveOtherClients) {
+  // cpp-httplib holds one I/O thread per open connection: with 4 threads, 12 idle connections
+  // would block everyone else if idle connections were kept long. The short keep-alive frees
+  // their threads, so a new client is still answered.
+  ServerProcess server({"--io-threads", "4", "--keep-alive-timeout", "1"});
+  ASSERT_TRUE(server.started()) << server.log();
+  std::vector<int> idle;
+  for (int i = 0; i < 12; ++i) {
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(std::uint16_t(server.port()));
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+    idle.push_back(fd);
+  }
+  auto c = server.client(/*read_timeout_s=*/20);
+  auto r = c->Get("/healthz");
+  ASSERT_TRUE(r) << httplib::to_string(r.error());
+  EXPECT_EQ(r->status, 200);
+  for (int fd : idle) close(fd);
+}
+
 TEST(HttpLoad, OverloadGives503WithRetryAfterAndNothingWorse) {
   ServerProcess server({"--workers", "1", "--queue-capacity", "2"});
   ASSERT_TRUE(server.started()) << server.log();
