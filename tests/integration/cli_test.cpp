@@ -47,20 +47,6 @@ void write_text(const fs::path& path, const std::string& text) {
   out << text;
 }
 
-std::string off_text(const TriMesh& mesh) {
-  std::string out = "OFF\n" + std::to_string(mesh.num_vertices()) + " " + std::to_string(mesh.num_faces()) + " 0\n";
-  char buffer[96];
-  for (Eigen::Index i = 0; i < mesh.V.rows(); ++i) {
-    std::snprintf(buffer, sizeof buffer, "%.17g %.17g %.17g\n", mesh.V(i, 0), mesh.V(i, 1), mesh.V(i, 2));
-    out += buffer;
-  }
-  for (Eigen::Index f = 0; f < mesh.F.rows(); ++f) {
-    out += "3 " + std::to_string(mesh.F(f, 0)) + " " + std::to_string(mesh.F(f, 1)) + " " +
-           std::to_string(mesh.F(f, 2)) + "\n";
-  }
-  return out;
-}
-
 std::string quote(const std::string& s) {
   std::string out = "'";
   for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
@@ -108,8 +94,8 @@ class Cli : public ::testing::Test {
     clean_ = test::sphere(levels);
     noisy_ = clean_;
     noisy_.V = add_noise(clean_, {NoiseKind::AlongNormal, 0.3, 11, 0});
-    write_text(path("clean.off"), off_text(clean_));
-    write_text(path("noisy.off"), off_text(noisy_));
+    write_text(path("clean.off"), test::off_text(clean_));
+    write_text(path("noisy.off"), test::off_text(noisy_));
   }
 
   fs::path dir_;
@@ -172,7 +158,7 @@ TEST_F(Cli, DenoisingImprovesAgainstGroundTruth) {
 
 TEST_F(Cli, MetricsAgainstAnotherMeshFailBeforeWriting) {
   write_sphere_pair(2);
-  write_text(path("plane.off"), off_text(test::plane(4)));
+  write_text(path("plane.off"), test::off_text(test::plane(4)));
   const Result r = run("--metrics " + quote(path("plane.off")) + " " + quote(path("noisy.off")) + " " +
                        quote(path("out.off")));
   EXPECT_EQ(r.code, 3) << r.err;
@@ -186,7 +172,7 @@ TEST_F(Cli, MetricsAgainstAnotherMeshFailBeforeWriting) {
 }
 
 TEST_F(Cli, AddNoiseThenDenoiseThenMeasure) {
-  write_text(path("clean.off"), off_text(test::sphere(3)));
+  write_text(path("clean.off"), test::off_text(test::sphere(3)));
   const std::string spec = quote(R"({"kind":"along_normal","sigma":0.3,"seed":5,"impulse_fraction":0})");
   const Result noise = run("--add-noise " + spec + " " + quote(path("clean.off")) + " " + quote(path("noisy.off")));
   ASSERT_EQ(noise.code, 0) << noise.err;
@@ -217,7 +203,7 @@ TEST_F(Cli, AddNoiseThenDenoiseThenMeasure) {
 // glTF end to end: a clean OFF becomes a noisy uncompressed GLB (--add-noise with output
 // settings), which is denoised to GLB and measured against the clean mesh.
 TEST_F(Cli, GlbRoundTrip) {
-  write_text(path("clean.off"), off_text(test::sphere(3)));
+  write_text(path("clean.off"), test::off_text(test::sphere(3)));
   const std::string plain = quote(R"({"output": {"draco": false}})");
   const Result noise = run("--add-noise '{\"sigma\":0.3,\"seed\":2}' --params " + plain + " " +
                            quote(path("clean.off")) + " " + quote(path("noisy.glb")));
@@ -346,7 +332,7 @@ TEST_F(Cli, BadInputFilesExitThree) {
   write_text(path("quad.off"), "OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n");
   write_text(path("nan.off"), "OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n");
   write_text(path("badindex.off"), "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
-  write_text(path("other.off"), off_text(test::plane(3)));
+  write_text(path("other.off"), test::off_text(test::plane(3)));
   const std::string out = quote(path("out.off"));
   const std::vector<std::string> cases = {
       quote(path("missing.off")) + " " + out,
@@ -375,7 +361,7 @@ TEST_F(Cli, BadInputFilesExitThree) {
 // SIGINT cancels cooperatively: exit 130, no output file. The signal is sent only once the
 // process has installed its handler (read from /proc), so the test does not depend on timing.
 TEST_F(Cli, SigintCancelsWithExit130) {
-  write_text(path("big.off"), off_text(test::sphere(5)));
+  write_text(path("big.off"), test::off_text(test::sphere(5)));
   const std::string params = R"({"n_aniso": 100, "n_normal": 1000, "n_vertex": 1000})";
   const std::string out = path("never.off"), err = path("stderr.txt");
   const std::string bin = binary(), p = path("big.off");

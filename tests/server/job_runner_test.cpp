@@ -17,20 +17,6 @@
 namespace mdn::service {
 namespace {
 
-std::string off_text(const TriMesh& mesh) {
-  std::string out = "OFF\n" + std::to_string(mesh.num_vertices()) + " " + std::to_string(mesh.num_faces()) + " 0\n";
-  char buffer[96];
-  for (Eigen::Index i = 0; i < mesh.V.rows(); ++i) {
-    std::snprintf(buffer, sizeof buffer, "%.17g %.17g %.17g\n", mesh.V(i, 0), mesh.V(i, 1), mesh.V(i, 2));
-    out += buffer;
-  }
-  for (Eigen::Index f = 0; f < mesh.F.rows(); ++f) {
-    out += "3 " + std::to_string(mesh.F(f, 0)) + " " + std::to_string(mesh.F(f, 1)) + " " +
-           std::to_string(mesh.F(f, 2)) + "\n";
-  }
-  return out;
-}
-
 TriMesh decode_single(const std::string& bytes, io::Format format) {
   auto document = io::decode(bytes, format);
   EXPECT_EQ(document->surfaces().size(), 1u);
@@ -46,7 +32,7 @@ struct NoisySphere {
 
 JobInput off_job(const TriMesh& mesh, int threads = 1) {
   JobInput input;
-  input.bytes = off_text(mesh);
+  input.bytes = test::off_text(mesh);
   input.format = io::Format::Off;
   input.threads = threads;
   return input;

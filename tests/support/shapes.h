@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <string>
 #include <map>
 #include <numbers>
 #include <utility>
@@ -230,6 +232,23 @@ inline TriMesh irregular_sphere(int levels) {
   TriMesh m = refine_where(refine_where(sphere(levels), cap), cap);
   for (Eigen::Index i = 0; i < m.V.rows(); ++i) m.V.row(i).normalize();
   return m;
+}
+
+}  // namespace mdn::test
+
+namespace mdn::test {
+
+// The mesh as OFF text, coordinates with 17 significant digits (round trips exactly).
+inline std::string off_text(const TriMesh& mesh) {
+  std::string out = "OFF\n" + std::to_string(mesh.num_vertices()) + " " + std::to_string(mesh.num_faces()) + " 0\n";
+  char buffer[96];
+  for (Eigen::Index i = 0; i < mesh.V.rows(); ++i) {
+    std::snprintf(buffer, sizeof buffer, "%.17g %.17g %.17g\n", mesh.V(i, 0), mesh.V(i, 1), mesh.V(i, 2));
+    out += buffer;
+  }
+  for (Eigen::Index f = 0; f < mesh.F.rows(); ++f)
+    out += "3 " + std::to_string(mesh.F(f, 0)) + " " + std::to_string(mesh.F(f, 1)) + " " + std::to_string(mesh.F(f, 2)) + "\n";
+  return out;
 }
 
 }  // namespace mdn::test
