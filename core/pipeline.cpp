@@ -53,7 +53,7 @@ DenoiseResult denoise(const TriMesh& input, const DenoiseParams& params, const R
   t0 = Clock::now();
   if (params.region_mode != RegionMode::Off) {
     checkpoint(progress, Stage::RegionPrefilter, 0);
-    const FaceClusters clusters = cluster_faces(P, F, params.kmeans_k, params.kmeans_seed);
+    const FaceClusters clusters = cluster_faces(P, F, params.kmeans_k, params.kmeans_seed, 100, &executor);
     report.cluster_area_ratio = clusters.area_ratio;
     const bool irregular = clusters.area_ratio >= params.irregular_area_ratio;
     const bool noisy = report.fold_ratio >= params.fold_ratio;

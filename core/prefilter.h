@@ -62,7 +62,7 @@ struct FaceClusters {
 // Sec. 4.2: K-means over faces in (centroid, area) space, seeded with k-means++. Features:
 // centroids scaled to unit total variance, log(area) standardised (see core/README.md).
 FaceClusters cluster_faces(const Vertices& P, const Triangles& F, int k, std::uint64_t seed,
-                           int max_iterations = 100);
+                           int max_iterations = 100, Executor* executor = nullptr);
 
 // Eq. 2 on one set of faces: their vertices are unknowns, every other vertex is fixed.
 // Minimises ||P~ - P||^2 + beta ||L P~||^2 over the unknowns, L the uniform Laplacian of
