@@ -71,19 +71,6 @@ inline void write_file(const fs::path& path, const std::string& bytes) {
   out << bytes;
 }
 
-inline std::string off_text(const TriMesh& mesh) {
-  std::string out = "OFF\n" + std::to_string(mesh.num_vertices()) + " " + std::to_string(mesh.num_faces()) + " 0\n";
-  char buffer[96];
-  for (Eigen::Index i = 0; i < mesh.V.rows(); ++i) {
-    std::snprintf(buffer, sizeof buffer, "%.17g %.17g %.17g\n", mesh.V(i, 0), mesh.V(i, 1), mesh.V(i, 2));
-    out += buffer;
-  }
-  for (Eigen::Index f = 0; f < mesh.F.rows(); ++f)
-    out += "3 " + std::to_string(mesh.F(f, 0)) + " " + std::to_string(mesh.F(f, 1)) + " " +
-           std::to_string(mesh.F(f, 2)) + "\n";
-  return out;
-}
-
 // A noisy sphere (seeded): `levels` subdivisions of an icosahedron (20 * 4^levels faces).
 inline std::string noisy_sphere_off(int levels, std::uint64_t seed = 1) {
   TriMesh mesh = sphere(levels);

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -97,6 +98,15 @@ inline int run_command(const std::string& command, std::string* output = nullptr
   const int status = pclose(pipe);
   if (output) *output = text;
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// tests/tools (the npm tools that read our outputs back).
+inline std::filesystem::path tools_dir() {
+  const char* source = std::getenv("MDN_SOURCE_DIR");
+  // Run by hand, the tree is found from this file (tests/io/io_test_support.h).
+  const std::filesystem::path root =
+      source ? std::filesystem::path(source) : std::filesystem::path(__FILE__).parent_path().parent_path().parent_path();
+  return root / "tests" / "tools";
 }
 
 }  // namespace mdn::test_io

@@ -21,13 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using test_io::Json;
-
-fs::path tools_dir() {
-  const char* source = std::getenv("MDN_SOURCE_DIR");
-  // ctest sets MDN_SOURCE_DIR; run by hand, the tree is found from this file.
-  const fs::path root = source ? fs::path(source) : fs::path(__FILE__).parent_path().parent_path().parent_path();
-  return root / "tests" / "tools";
-}
+using test_io::tools_dir;
 
 struct Output {
   std::string name;
