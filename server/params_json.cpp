@@ -44,7 +44,13 @@ std::string describe(const json& value) {
 }
 
 std::string range_text(double min, double max) {
-  return "[" + number_text(min) + ", " + number_text(max) + "]";
+  // Appended piecewise: GCC 12's -Wrestrict misfires on "[" + std::string&& (a known false positive).
+  std::string text = "[";
+  text += number_text(min);
+  text += ", ";
+  text += number_text(max);
+  text += "]";
+  return text;
 }
 
 [[noreturn]] void fail(const std::string& path, const std::string& requirement, const json& got) {
