@@ -42,7 +42,8 @@ DenoiseResult denoise(const TriMesh& input, const DenoiseParams& params, const R
   report.fold_ratio = fold_ratio(P, F, topo, params.fold_angle);  // on the noisy input (reading 5)
   times.setup_ms = ms_since(t0);
 
-  // Sec. 4.1, Eq. 1. The solver keeps the symbolic analysis for every Eq. 3 step.
+  // Sec. 4.1, Eq. 1. One solver serves Eq. 1 and every Eq. 3 step (it keeps the edge
+  // incidence for CG, the pattern and symbolic analysis for LDLT).
   t0 = Clock::now();
   checkpoint(progress, Stage::InitialPrefilter, 0);
   ShapingSolver solver(topo, params.solver, params.cg_tolerance, &executor);

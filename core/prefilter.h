@@ -18,8 +18,9 @@ class ProgressObserver;
 
 // Solves the systems (I + alpha D^T W D) P~ = P of Eq. 1 (W = I) and Eq. 3 (W = diag(w_e)),
 // with D the #E by #V shaping operator, one row per interior manifold edge. All systems
-// share one sparsity pattern, so the symbolic analysis is done once (LDLT) or the previous
-// solution warm-starts the next solve (CG). Not thread-safe; one per pipeline run.
+// share one sparsity pattern, so the symbolic analysis is done once (LDLT); CG is matrix-free
+// and starts from the anchor P, i.e. the previous iterate for Eq. 3. Not thread-safe; one per
+// pipeline run.
 class ShapingSolver {
  public:
   // executor: optional threads for the CG solver (results do not depend on the count).
