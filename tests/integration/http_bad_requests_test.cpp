@@ -111,8 +111,12 @@ TEST_F(HttpBadRequests, EachIsAnsweredWithTheRightProblemAndTheServerStaysHealth
     if (row.send) {
       auto r = row.send(*c);
       const json problem = expect_problem(r, row.status);
-      if (!row.type.empty()) EXPECT_EQ(problem.value("type", ""), "urn:meshdenoise:problem:" + row.type) << r->body;
-      if (!row.field.empty()) EXPECT_EQ(problem.value("field", ""), row.field) << r->body;
+      if (!row.type.empty()) {
+        EXPECT_EQ(problem.value("type", ""), "urn:meshdenoise:problem:" + row.type) << r->body;
+      }
+      if (!row.field.empty()) {
+        EXPECT_EQ(problem.value("field", ""), row.field) << r->body;
+      }
       if (row.field == "alpha") {
         EXPECT_EQ(problem.value("minimum", -1.0), 0.0);
         EXPECT_EQ(problem.value("maximum", -1.0), 10.0);
@@ -121,7 +125,9 @@ TEST_F(HttpBadRequests, EachIsAnsweredWithTheRightProblemAndTheServerStaysHealth
       std::string response;
       EXPECT_EQ(raw_status(server_->port(), row.raw, &response), row.status) << response;
       EXPECT_NE(response.find("application/problem+json"), std::string::npos) << response;
-      if (!row.type.empty()) EXPECT_NE(response.find("urn:meshdenoise:problem:" + row.type), std::string::npos) << response;
+      if (!row.type.empty()) {
+        EXPECT_NE(response.find("urn:meshdenoise:problem:" + row.type), std::string::npos) << response;
+      }
     }
     // Healthy after every bad request, on the same keep-alive client.
     auto health = c->Get("/healthz");

@@ -82,7 +82,9 @@ TEST_P(GltfOutputs, DenoisedGeometryComesBackEverythingElseUnchanged) {
   const bool has_draco = out_json.value("extensionsRequired", Json::array()).dump().find("KHR_draco_mesh_compression") != std::string::npos;
   EXPECT_EQ(has_draco, GetParam());
   EXPECT_EQ(out_json["meshes"][1], in_json["meshes"][1]);  // points primitive untouched
-  if (GetParam()) EXPECT_LT(out.size(), input.size());
+  if (GetParam()) {
+    EXPECT_LT(out.size(), input.size());
+  }
 
   // Read back: the surface is the clean sphere (within Draco's 16-bit quantisation), welded
   // exactly as before, so seam copies got the same position (no cracks).
