@@ -100,10 +100,7 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
   const double inv_range = 1.0 / (1.0 - std::cos(s.sigma_gamma_deg * std::numbers::pi / 180.0));
   Vertices next(nf, 3);
   for (int it = 0; it < s.iterations; ++it) {
-    if (progress) {
-      if (progress->cancel_requested()) throw CancelledError();
-      progress->on_progress(Stage::NormalFilter, static_cast<double>(it) / s.iterations);
-    }
+    checkpoint(progress, Stage::NormalFilter, static_cast<double>(it) / s.iterations);
     ex.parallel_for(num_pairs, [&](std::int64_t begin, std::int64_t end) {
       const double* n = current.data();  // row-major #F x 3
       // Gather: (1 - cos gamma_ij) / (1 - cos sigma_gamma) and ||n_i - n_j|| per pair...

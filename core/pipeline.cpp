@@ -16,11 +16,6 @@ using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
-void checkpoint(ProgressObserver* progress, Stage stage, double fraction) {
-  if (!progress) return;
-  if (progress->cancel_requested()) throw CancelledError();
-  progress->on_progress(stage, fraction);
-}
 }  // namespace
 
 DenoiseResult denoise(const TriMesh& input, const DenoiseParams& params, const RunOptions& options) {

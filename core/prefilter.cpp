@@ -282,10 +282,7 @@ Vertices anisotropic_prefilter(const Vertices& P, const Triangles& F, const Topo
   }
   Vertices current = P;
   for (int it = 0; it < params.n_aniso; ++it) {
-    if (progress) {
-      if (progress->cancel_requested()) throw CancelledError();
-      progress->on_progress(Stage::AnisotropicPrefilter, static_cast<double>(it) / params.n_aniso);
-    }
+    checkpoint(progress, Stage::AnisotropicPrefilter, static_cast<double>(it) / params.n_aniso);
     const Eigen::VectorXd w = anisotropic_edge_weights(current, F, topo, params.sigma_theta, params.b);
     current = solver->solve(current, params.alpha, w);
   }

@@ -1,5 +1,7 @@
 #include "core/progress.h"
 
+#include "core/errors.h"
+
 namespace mdn {
 
 std::string_view to_string(Stage stage) {
@@ -11,6 +13,12 @@ std::string_view to_string(Stage stage) {
     case Stage::VertexUpdate: return "vertex_update";
   }
   return "unknown";
+}
+
+void checkpoint(ProgressObserver* progress, Stage stage, double fraction) {
+  if (!progress) return;
+  if (progress->cancel_requested()) throw CancelledError();
+  progress->on_progress(stage, fraction);
 }
 
 }  // namespace mdn

@@ -25,4 +25,8 @@ class ProgressObserver {
   virtual bool cancel_requested() { return false; }
 };
 
+// Between iterations: throws CancelledError if cancellation was requested, else reports
+// progress. A null observer does nothing.
+void checkpoint(ProgressObserver* progress, Stage stage, double fraction);
+
 }  // namespace mdn

@@ -13,10 +13,7 @@ Vertices vertex_update(const Vertices& V, const Triangles& F, const Topology& to
   const std::int64_t nf = F.rows(), nv = V.rows();
   Vertices current = V, next(nv, 3), centroid(nf, 3);
   for (int it = 0; it < iterations; ++it) {
-    if (progress) {
-      if (progress->cancel_requested()) throw CancelledError();
-      progress->on_progress(Stage::VertexUpdate, static_cast<double>(it) / iterations);
-    }
+    checkpoint(progress, Stage::VertexUpdate, static_cast<double>(it) / iterations);
     ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
       for (std::int64_t f = begin; f < end; ++f)
         centroid.row(f) = (current.row(F(f, 0)) + current.row(F(f, 1)) + current.row(F(f, 2))) / 3.0;

@@ -208,14 +208,21 @@ inline std::string url_encode(const std::string& text) {
 // Sends raw bytes on a fresh connection and returns the status of the first response (0 if
 // none came), for requests cpp-httplib's client refuses to send. Reads the first response
 // (by its Content-Length), or everything until the server closes (at most 3 s).
-inline int raw_status(int port, const std::string& bytes, std::string* response = nullptr,
-                      bool read_until_close = false) {
+// A TCP socket connected to 127.0.0.1:port, or -1.
+inline int connect_loopback(int port) {
   const int fd = socket(AF_INET, SOCK_STREAM, 0);
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
   addr.sin_port = htons(std::uint16_t(port));
   addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  if (connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) return close(fd), 0;
+  if (connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) return close(fd), -1;
+  return fd;
+}
+
+inline int raw_status(int port, const std::string& bytes, std::string* response = nullptr,
+                      bool read_until_close = false) {
+  const int fd = connect_loopback(port);
+  if (fd < 0) return 0;
   send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL);
   timeval tv{3, 0};
   setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);

@@ -93,12 +93,8 @@ TEST(HttpLoad, IdleConnectionsDoNotStarveOtherClients) {
   ASSERT_TRUE(server.started()) << server.log();
   std::vector<int> idle;
   for (int i = 0; i < 12; ++i) {
-    const int fd = socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in addr{};
-    addr.sin_family = AF_INET;
-    addr.sin_port = htons(std::uint16_t(server.port()));
-    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+    const int fd = connect_loopback(server.port());
+    ASSERT_GE(fd, 0);
     idle.push_back(fd);
   }
   auto c = server.client(/*read_timeout_s=*/20);
@@ -152,12 +148,8 @@ TEST(HttpLoad, VanishedClientCancelsItsJob) {
   const std::string heavy = noisy_sphere_off(5, 6);
   {
     // A raw client: send the whole request, then go away without reading the answer.
-    const int fd = socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in addr{};
-    addr.sin_family = AF_INET;
-    addr.sin_port = htons(std::uint16_t(server.port()));
-    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+    const int fd = connect_loopback(server.port());
+    ASSERT_GE(fd, 0);
     const std::string head = std::string("POST /v1/denoise HTTP/1.1\r\nHost: x\r\nContent-Type: model/x-off\r\n") +
                              "X-Denoise-Params: " + kHeavyParams + "\r\nContent-Length: " +
                              std::to_string(heavy.size()) + "\r\n\r\n";
