@@ -296,7 +296,14 @@ def main():
                                                                             "X-Request-Id": "bad-mesh"})
         check(bad.status == 400 and bad.json().get("type", "").startswith("urn:meshdenoise:problem:"),
               "a malformed mesh through the balancer: %d %r" % (bad.status, bad.body[:300]))
+        # nginx writes the access-log line when it finalises the request, which can be just
+        # after the client has the answer: wait for the line (2 s at most).
+        deadline = time.monotonic() + 2.0
         entries = {e["request_id"]: e for e in read_access_log(access_log)}
+        while "bad-mesh" not in entries and time.monotonic() < deadline:
+            time.sleep(0.05)
+            entries = {e["request_id"]: e for e in read_access_log(access_log)}
+        check("bad-mesh" in entries, "nginx logged no line for the bad-mesh request")
         # nginx may first try the replica stopped above (502: connection refused) and move on;
         # what must not happen is a 400 answered by one replica and then sent to another.
         statuses = [x.strip() for x in entries["bad-mesh"]["upstream_status"].split(",")]
