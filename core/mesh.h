@@ -4,11 +4,16 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>  // cross products
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace mdn {
 
 using Vertices = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;      // #V by 3
+// Observes an iterative filter: called with its input (count 0), then after each iteration
+// with the count done so far and the current iterate (positions or normals). Used by the parameter search (core/tune.h),
+// which reads every iteration count of one run instead of rerunning the filter.
+using IterationHook = std::function<void(int iterations_done, const Vertices& state)>;
 using Triangles = Eigen::Matrix<std::int32_t, Eigen::Dynamic, 3, Eigen::RowMajor>; // #F by 3
 using Vec3 = Eigen::Vector3d;
 

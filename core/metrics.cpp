@@ -230,8 +230,11 @@ double msae(const TriMesh& result, const TriMesh& truth) {
   validate_mesh(truth);
   if (result.num_faces() != truth.num_faces() || result.F != truth.F)
     throw InvalidMeshError("msae: the result and the ground truth must have the same faces");
-  const Vertices nr = face_normals(result.V, result.F);
-  const Vertices nt = face_normals(truth.V, truth.F);
+  return msae_of_normals(face_normals(result.V, result.F), face_normals(truth.V, truth.F));
+}
+
+double msae_of_normals(const Vertices& nr, const Vertices& nt) {
+  if (nr.rows() != nt.rows()) throw InvalidMeshError("msae: the result and the ground truth must have the same faces");
   double sum = 0;
   std::int64_t counted = 0;
   for (std::int64_t f = 0; f < nr.rows(); ++f) {

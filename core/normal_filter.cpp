@@ -99,6 +99,7 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
   // Eq. 7 typo: both denominators mean 1 - cos(sigma_gamma) (NOTES reading 8).
   const double inv_range = 1.0 / (1.0 - std::cos(s.sigma_gamma_deg * std::numbers::pi / 180.0));
   Vertices next(nf, 3);
+  if (s.on_iteration) s.on_iteration(0, current);
   for (int it = 0; it < s.iterations; ++it) {
     checkpoint(progress, Stage::NormalFilter, static_cast<double>(it) / s.iterations);
     ex.parallel_for(num_pairs, [&](std::int64_t begin, std::int64_t end) {
@@ -139,6 +140,7 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
       }
     });
     current.swap(next);
+    if (s.on_iteration) s.on_iteration(it + 1, current);
   }
   if (progress) progress->on_progress(Stage::NormalFilter, 1.0);
   return current;

@@ -15,6 +15,7 @@ struct NormalFilterSettings {
   double sigma_c_factor = 1.5;     // sigma_c = factor x mean centroid distance of edge-adjacent faces
   double bilateral_switch = 1e-3;  // below this ||n_i - n_j|| the weight drops its 1/||n_i - n_j||
   bool l1_median = true;           // false: always bilateral weights (for comparison only)
+  IterationHook on_iteration;      // optional; sees the normals after every iteration
 };
 
 // Filters the face normals of the mesh (V, F). Areas and centroids are those of (V, F)

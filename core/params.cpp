@@ -24,6 +24,27 @@ std::optional<RegionMode> region_mode_from_string(std::string_view text) {
   return std::nullopt;
 }
 
+std::string_view to_string(ParamMode mode) { return mode == ParamMode::Auto ? "auto" : "manual"; }
+
+std::optional<ParamMode> param_mode_from_string(std::string_view text) {
+  if (text == "auto") return ParamMode::Auto;
+  if (text == "manual") return ParamMode::Manual;
+  return std::nullopt;
+}
+
+namespace {
+constexpr std::array<std::string_view, kAutoFieldCount> kAutoFieldNames{
+    "alpha", "sigma_theta", "n_aniso", "sigma_gamma", "n_normal", "n_vertex", "region_mode"};
+}
+
+std::string_view to_string(AutoField field) { return kAutoFieldNames[static_cast<std::size_t>(field)]; }
+
+std::optional<AutoField> auto_field_from_string(std::string_view name) {
+  for (std::size_t i = 0; i < kAutoFieldNames.size(); ++i)
+    if (kAutoFieldNames[i] == name) return static_cast<AutoField>(i);
+  return std::nullopt;
+}
+
 std::string_view to_string(LinearSolver solver) {
   return solver == LinearSolver::Ldlt ? "ldlt" : "cg";
 }

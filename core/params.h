@@ -27,7 +27,27 @@ enum class LinearSolver {
 std::string_view to_string(LinearSolver solver);
 std::optional<LinearSolver> linear_solver_from_string(std::string_view text);
 
+// Who sets the six parameters of Table 1 and the region mode.
+enum class ParamMode {
+  Manual,  // the values below, as given
+  Auto,    // chosen from measurements of the input (core/auto_params.h), except pinned fields
+};
+std::string_view to_string(ParamMode mode);
+std::optional<ParamMode> param_mode_from_string(std::string_view text);
+
+// The fields ParamMode::Auto chooses; a pinned one keeps the caller's value.
+enum class AutoField : std::uint8_t { Alpha, SigmaTheta, NAniso, SigmaGamma, NNormal, NVertex, RegionMode };
+inline constexpr int kAutoFieldCount = 7;
+std::string_view to_string(AutoField field);  // the JSON field name: "alpha", ..., "region_mode"
+std::optional<AutoField> auto_field_from_string(std::string_view name);
+
 struct DenoiseParams {
+  // --- Who chooses: Manual uses the values below; Auto replaces every non-pinned AutoField ---
+  ParamMode mode = ParamMode::Manual;
+  std::uint8_t pinned = 0;  // bit i set: AutoField i keeps the value below in Auto mode
+  void pin(AutoField f) { pinned = static_cast<std::uint8_t>(pinned | (1u << static_cast<int>(f))); }
+  bool is_pinned(AutoField f) const { return (pinned >> static_cast<int>(f)) & 1u; }
+
   // --- The six parameters of Table 1 (defaults: the Fandisk row) ---
   double alpha = 0.1;        // weight of the shaping term, Eq. 1 and Eq. 3; paper [0.05, 0.2]
   double sigma_theta = 30;   // degrees; angle scale of the edge weight w_e, Eq. 4; paper [20, 50]

@@ -18,31 +18,16 @@ double ms_since(Clock::time_point t0) {
 }
 }  // namespace
 
-DenoiseResult denoise(const TriMesh& input, const DenoiseParams& params, const RunOptions& options) {
-  const auto t_start = Clock::now();
-  params.validate();
-  validate_mesh(input);
-  ProgressObserver* progress = options.progress;
-  DenoiseResult result;
-  DenoiseReport& report = result.report;
+Vertices prefilter_stage(const Vertices& input, const Triangles& F, const Topology& topo, const DenoiseParams& params,
+                         Executor& executor, ProgressObserver* progress, DenoiseReport& report,
+                         const IterationHook& on_aniso_iteration) {
   StageTimings& times = report.timings;
-  Executor executor(options.threads);
-
-  // Sec. 3: work in the unit box (NOTES reading 1); undone at the end.
-  auto t0 = Clock::now();
-  const UnitBox box = UnitBox::of(input.V);
-  const Triangles& F = input.F;
-  Vertices P = box.apply(input.V);
-  const Topology topo = Topology::build(F, static_cast<std::int32_t>(P.rows()));
-  report.fold_ratio = fold_ratio(P, F, topo, params.fold_angle);  // on the noisy input (reading 5)
-  times.setup_ms = ms_since(t0);
-
   // Sec. 4.1, Eq. 1. One solver serves Eq. 1 and every Eq. 3 step (it keeps the edge
   // incidence for CG, the pattern and symbolic analysis for LDLT).
-  t0 = Clock::now();
+  auto t0 = Clock::now();
   checkpoint(progress, Stage::InitialPrefilter, 0);
   ShapingSolver solver(topo, params.solver, params.cg_tolerance, &executor);
-  P = solver.solve(P, params.alpha, {});
+  Vertices P = solver.solve(input, params.alpha, {});
   times.initial_ms = ms_since(t0);
 
   // Sec. 4.2: irregular-sampling detection and the region-based pre-filter (Eq. 2).
@@ -65,17 +50,56 @@ DenoiseResult denoise(const TriMesh& input, const DenoiseParams& params, const R
 
   // Sec. 4.3, Eq. 3-4, iterated.
   t0 = Clock::now();
-  P = anisotropic_prefilter(P, F, topo, params, &solver, progress);
+  P = anisotropic_prefilter(P, F, topo, params, &solver, progress, on_aniso_iteration);
   times.anisotropic_ms = ms_since(t0);
+  return P;
+}
 
-  // Sec. 5, Eq. 6-7.
-  t0 = Clock::now();
+NormalFilterSettings normal_filter_settings(const DenoiseParams& params) {
   NormalFilterSettings nfs;
   nfs.sigma_gamma_deg = params.sigma_gamma;
   nfs.iterations = params.n_normal;
   nfs.sigma_c_factor = params.sigma_c_factor;
   nfs.bilateral_switch = params.bilateral_switch;
-  const Vertices N = l1_median_normal_filter(P, F, topo, nfs, &executor, progress);
+  return nfs;
+}
+
+DenoiseResult denoise(const TriMesh& input, const DenoiseParams& requested, const RunOptions& options) {
+  const auto t_start = Clock::now();
+  requested.validate();
+  validate_mesh(input);
+  ProgressObserver* progress = options.progress;
+  DenoiseResult result;
+  DenoiseReport& report = result.report;
+  StageTimings& times = report.timings;
+  Executor executor(options.threads);
+
+  // Sec. 3: work in the unit box (NOTES reading 1); undone at the end.
+  auto t0 = Clock::now();
+  const UnitBox box = UnitBox::of(input.V);
+  const Triangles& F = input.F;
+  Vertices P = box.apply(input.V);
+  const Topology topo = Topology::build(F, static_cast<std::int32_t>(P.rows()));
+  report.fold_ratio = fold_ratio(P, F, topo, requested.fold_angle);  // on the noisy input (reading 5)
+  times.setup_ms = ms_since(t0);
+
+  // ParamMode::Auto: measure the input and let the fitted rule choose (core/auto_params.h).
+  report.mode = requested.mode;
+  report.params = requested;
+  if (requested.mode == ParamMode::Auto) {
+    t0 = Clock::now();
+    report.measures = measure_input(P, F, topo, requested, &executor);
+    report.params = choose_parameters(*report.measures, requested);
+    report.params.validate();
+    times.measure_ms = ms_since(t0);
+  }
+  const DenoiseParams& params = report.params;
+
+  P = prefilter_stage(P, F, topo, params, executor, progress, report);
+
+  // Sec. 5, Eq. 6-7.
+  t0 = Clock::now();
+  const Vertices N = l1_median_normal_filter(P, F, topo, normal_filter_settings(params), &executor, progress);
   times.normal_ms = ms_since(t0);
 
   // Sec. 6, Eq. 8, starting from the pre-filtered positions.

@@ -2,9 +2,14 @@
 // (Sec. 6). Re-entrant: concurrent calls on different meshes are safe.
 #pragma once
 
+#include <optional>
+
+#include "core/auto_params.h"
 #include "core/mesh.h"
+#include "core/normal_filter.h"
 #include "core/params.h"
 #include "core/progress.h"
+#include "core/topology.h"
 
 namespace mdn {
 
@@ -16,6 +21,7 @@ struct RunOptions {
 // Wall-clock milliseconds per step.
 struct StageTimings {
   double setup_ms = 0;        // validation, normalisation, topology
+  double measure_ms = 0;      // ParamMode::Auto: measure_input and the rule
   double initial_ms = 0;      // Eq. 1
   double region_ms = 0;       // Sec. 4.2 detection, K-means and Eq. 2
   double anisotropic_ms = 0;  // Eq. 3-4, all iterations
@@ -31,6 +37,9 @@ struct DenoiseReport {
   double cluster_area_ratio = 1;  // mean face area of the largest-area cluster / smallest (after Eq. 1); 1 if not measured
   bool region_prefilter_applied = false;
   std::int64_t region_vertices = 0;  // vertices smoothed by Eq. 2
+  ParamMode mode = ParamMode::Manual;     // as requested
+  DenoiseParams params;                   // what ran (Auto: the rule's choice, pinned fields kept)
+  std::optional<InputMeasures> measures;  // ParamMode::Auto only
   StageTimings timings;
 };
 
@@ -41,5 +50,18 @@ struct DenoiseResult {
 
 // Throws InvalidMeshError, InvalidParamsError, SolverError or CancelledError.
 DenoiseResult denoise(const TriMesh& input, const DenoiseParams& params, const RunOptions& options = {});
+
+// --- The stages of denoise(), for callers that run them one by one (core/tune.h). ---
+// Positions are in the unit-box frame; topo is Topology::build of F.
+
+// Sec. 4: Eq. 1, the region pre-filter by params.region_mode (Sec. 4.2; Auto reads
+// report.fold_ratio, which must be set), then Eq. 3-4. Fills report's region fields and
+// pre-filter timings. on_aniso_iteration sees every Eq. 3 iterate.
+Vertices prefilter_stage(const Vertices& P, const Triangles& F, const Topology& topo, const DenoiseParams& params,
+                         Executor& executor, ProgressObserver* progress, DenoiseReport& report,
+                         const IterationHook& on_aniso_iteration = {});
+
+// The settings of the normal filter (Sec. 5) that `params` asks for.
+NormalFilterSettings normal_filter_settings(const DenoiseParams& params);
 
 }  // namespace mdn

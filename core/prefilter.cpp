@@ -274,17 +274,20 @@ Eigen::VectorXd anisotropic_edge_weights(const Vertices& P, const Triangles& F, 
 
 // Eq. 3, iterated: each step anchored to the previous output, w_e recomputed from it.
 Vertices anisotropic_prefilter(const Vertices& P, const Triangles& F, const Topology& topo,
-                               const DenoiseParams& params, ShapingSolver* solver, ProgressObserver* progress) {
+                               const DenoiseParams& params, ShapingSolver* solver, ProgressObserver* progress,
+                               const IterationHook& on_iteration) {
   std::unique_ptr<ShapingSolver> own;
   if (!solver) {
     own = std::make_unique<ShapingSolver>(topo, params.solver, params.cg_tolerance);
     solver = own.get();
   }
   Vertices current = P;
+  if (on_iteration) on_iteration(0, current);
   for (int it = 0; it < params.n_aniso; ++it) {
     checkpoint(progress, Stage::AnisotropicPrefilter, static_cast<double>(it) / params.n_aniso);
     const Eigen::VectorXd w = anisotropic_edge_weights(current, F, topo, params.sigma_theta, params.b);
     current = solver->solve(current, params.alpha, w);
+    if (on_iteration) on_iteration(it + 1, current);
   }
   return current;
 }

@@ -48,7 +48,7 @@ Eigen::VectorXd anisotropic_edge_weights(const Vertices& P, const Triangles& F, 
 // cancellation before every iteration (throws CancelledError).
 Vertices anisotropic_prefilter(const Vertices& P, const Triangles& F, const Topology& topo,
                                const DenoiseParams& params, ShapingSolver* solver = nullptr,
-                               ProgressObserver* progress = nullptr);
+                               ProgressObserver* progress = nullptr, const IterationHook& on_iteration = {});
 
 // Sec. 4.2: fraction of interior manifold edges whose two face normals make an angle
 // greater than fold_angle_deg.

@@ -7,11 +7,13 @@
 namespace mdn {
 
 Vertices vertex_update(const Vertices& V, const Triangles& F, const Topology& topo, const Vertices& N,
-                       int iterations, Executor* executor, ProgressObserver* progress) {
+                       int iterations, Executor* executor, ProgressObserver* progress,
+                       const IterationHook& on_iteration) {
   Executor serial(1);
   Executor& ex = executor ? *executor : serial;
   const std::int64_t nf = F.rows(), nv = V.rows();
   Vertices current = V, next(nv, 3), centroid(nf, 3);
+  if (on_iteration) on_iteration(0, current);
   for (int it = 0; it < iterations; ++it) {
     checkpoint(progress, Stage::VertexUpdate, static_cast<double>(it) / iterations);
     ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
@@ -37,6 +39,7 @@ Vertices vertex_update(const Vertices& V, const Triangles& F, const Topology& to
       }
     });
     current.swap(next);
+    if (on_iteration) on_iteration(it + 1, current);
   }
   if (progress && iterations > 0) progress->on_progress(Stage::VertexUpdate, 1.0);
   return current;

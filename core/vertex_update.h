@@ -13,6 +13,7 @@ class ProgressObserver;
 // recomputed every iteration, `iterations` times. N: #F by 3 target face normals.
 // All vertices move, boundary ones included (see core/README.md).
 Vertices vertex_update(const Vertices& V, const Triangles& F, const Topology& topo, const Vertices& N,
-                       int iterations, Executor* executor = nullptr, ProgressObserver* progress = nullptr);
+                       int iterations, Executor* executor = nullptr, ProgressObserver* progress = nullptr,
+                       const IterationHook& on_iteration = {});
 
 }  // namespace mdn

@@ -1,0 +1,234 @@
+#include "core/tune.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <map>
+#include <tuple>
+
+#include "core/errors.h"
+#include "core/metrics.h"
+#include "core/normal_filter.h"
+#include "core/parallel.h"
+#include "core/pipeline.h"
+#include "core/prefilter.h"
+#include "core/topology.h"
+#include "core/vertex_update.h"
+
+namespace mdn {
+
+namespace {
+
+// A point of the outer search: indices into the grid lists.
+struct Point {
+  int region = 0, alpha = 0, theta = 0, aniso = 0, gamma = 0;
+  auto key() const { return std::make_tuple(region, alpha, theta, aniso, gamma); }
+};
+// The best iteration counts (indices) for one outer point.
+struct Inner {
+  double msae = std::numeric_limits<double>::infinity();
+  int normal = 0, vertex = 0;
+};
+
+template <class T>
+int nearest(const std::vector<T>& list, double value) {
+  int best = 0;
+  for (int i = 1; i < static_cast<int>(list.size()); ++i)
+    if (std::abs(static_cast<double>(list[static_cast<std::size_t>(i)]) - value) <
+        std::abs(static_cast<double>(list[static_cast<std::size_t>(best)]) - value))
+      best = i;
+  return best;
+}
+
+class Search {
+ public:
+  Search(const TriMesh& truth, const TriMesh& noisy, const DenoiseParams& base, const TuneOptions& options)
+      : grid_(options.grid),
+        base_(base),
+        options_(options),
+        executor_(options.threads),
+        F_(noisy.F),
+        P_(UnitBox::of(noisy.V).apply(noisy.V)),
+        topo_(Topology::build(F_, static_cast<std::int32_t>(P_.rows()))),
+        truth_normals_(face_normals(truth.V, truth.F)) {
+    report_.fold_ratio = fold_ratio(P_, F_, topo_, base.fold_angle);
+  }
+
+  DenoiseParams params_at(const Point& p, const Inner& inner) const {
+    DenoiseParams q = base_;
+    q.mode = ParamMode::Manual;
+    q.region_mode = grid_.region_mode[static_cast<std::size_t>(p.region)];
+    q.alpha = grid_.alpha[static_cast<std::size_t>(p.alpha)];
+    q.sigma_theta = grid_.sigma_theta[static_cast<std::size_t>(p.theta)];
+    q.n_aniso = grid_.n_aniso[static_cast<std::size_t>(p.aniso)];
+    q.sigma_gamma = grid_.sigma_gamma[static_cast<std::size_t>(p.gamma)];
+    q.n_normal = grid_.n_normal[static_cast<std::size_t>(inner.normal)];
+    q.n_vertex = grid_.n_vertex[static_cast<std::size_t>(inner.vertex)];
+    return q;
+  }
+
+  // Best MSAE over all (n_normal, n_vertex) of the grid at an outer point (cached).
+  const Inner& evaluate(const Point& p) {
+    if (auto it = inner_.find(p.key()); it != inner_.end()) return it->second;
+    if (options_.progress && options_.progress->cancel_requested()) throw CancelledError();
+    ++evaluations_;
+    const Vertices& P = prefiltered(p);
+    Inner best;
+    // Sec. 5: one run of the longest n_normal, keeping the normals at every listed count.
+    std::vector<Vertices> normals(grid_.n_normal.size());
+    NormalFilterSettings nfs = normal_filter_settings(params_at(p, {}));
+    nfs.iterations = grid_.n_normal.back();
+    nfs.on_iteration = [&](int done, const Vertices& N) {
+      for (std::size_t k = 0; k < grid_.n_normal.size(); ++k)
+        if (grid_.n_normal[k] == done) normals[k] = N;
+    };
+    l1_median_normal_filter(P, F_, topo_, nfs, &executor_);
+    // Sec. 6: for each, one run of the longest n_vertex, scoring every listed count.
+    for (std::size_t k = 0; k < normals.size(); ++k) {
+      vertex_update(P, F_, topo_, normals[k], grid_.n_vertex.back(), &executor_, nullptr,
+                    [&](int done, const Vertices& V) {
+                      for (std::size_t j = 0; j < grid_.n_vertex.size(); ++j)
+                        if (grid_.n_vertex[j] == done) {
+                          const double e = msae_of_normals(face_normals(V, F_), truth_normals_);
+                          if (e < best.msae) best = {e, static_cast<int>(k), static_cast<int>(j)};
+                        }
+                    });
+    }
+    return inner_.emplace(p.key(), best).first->second;
+  }
+
+  int evaluations() const { return evaluations_; }
+
+ private:
+  // Sec. 4 output at an outer point; one run of Eq. 3 serves every shorter n_aniso: a miss
+  // runs up to aniso_horizon (the end of the current n_aniso scan) and keeps every listed count.
+  const Vertices& prefiltered(const Point& p) {
+    const auto key = std::make_tuple(p.region, p.alpha, p.theta, p.aniso);
+    if (auto it = prefilter_.find(key); it != prefilter_.end()) return it->second;
+    while (prefilter_.size() > 48) {  // bounded memory: forget the oldest runs
+      prefilter_.erase(order_.front());
+      order_.pop_front();
+    }
+    DenoiseParams q = params_at(p, {});
+    q.n_aniso = std::max(q.n_aniso, aniso_horizon);
+    DenoiseReport report = report_;
+    prefilter_stage(P_, F_, topo_, q, executor_, nullptr, report, [&](int done, const Vertices& V) {
+      const auto at = std::find(grid_.n_aniso.begin(), grid_.n_aniso.end(), done);
+      if (at == grid_.n_aniso.end()) return;
+      const auto k = std::make_tuple(p.region, p.alpha, p.theta, static_cast<int>(at - grid_.n_aniso.begin()));
+      if (prefilter_.emplace(k, V).second) order_.push_back(k);
+    });
+    return prefilter_.at(key);
+  }
+
+ public:
+  int aniso_horizon = 0;
+
+ private:
+  const TuneGrid& grid_;
+  const DenoiseParams base_;
+  const TuneOptions& options_;
+  Executor executor_;
+  const Triangles F_;
+  const Vertices P_;
+  const Topology topo_;
+  const Vertices truth_normals_;
+  DenoiseReport report_;
+  std::map<std::tuple<int, int, int, int, int>, Inner> inner_;
+  std::map<std::tuple<int, int, int, int>, Vertices> prefilter_;
+  std::deque<std::tuple<int, int, int, int>> order_;
+  int evaluations_ = 0;
+};
+
+}  // namespace
+
+TuneResult tune_parameters(const TriMesh& truth, const TriMesh& noisy, const DenoiseParams& start,
+                           const TuneOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  validate_mesh(truth);
+  validate_mesh(noisy);
+  if (truth.V.rows() != noisy.V.rows() || truth.F != noisy.F)
+    throw InvalidMeshError("tune: the ground truth and the noisy mesh must have the same vertices count and faces");
+  start.validate();
+  const TuneGrid& g = options.grid;
+  const auto require = [](bool nonempty, const char* field) {
+    if (!nonempty) throw InvalidParamsError(field, std::string("tune: the search list of ") + field + " is empty");
+  };
+  require(!g.region_mode.empty(), "region_mode");
+  require(!g.alpha.empty(), "alpha");
+  require(!g.sigma_theta.empty(), "sigma_theta");
+  require(!g.n_aniso.empty(), "n_aniso");
+  require(!g.sigma_gamma.empty(), "sigma_gamma");
+  require(!g.n_normal.empty(), "n_normal");
+  require(!g.n_vertex.empty(), "n_vertex");
+  for (auto* list : {&g.n_aniso, &g.n_normal, &g.n_vertex})
+    require(std::is_sorted(list->begin(), list->end()) && list->front() >= 0, "iteration lists (sorted, >= 0)");
+
+  TuneResult result;
+  const RunOptions run{options.threads, nullptr};
+  const DenoiseResult start_run = denoise(noisy, start, run);
+  result.start_msae = msae(start_run.mesh, truth);
+  const DenoiseParams& ran = start_run.report.params;  // Auto mode: what the rule chose
+  result.start = ran;
+
+  Search search(truth, noisy, ran, options);
+  Point at;
+  const bool region_on = start_run.report.region_prefilter_applied;
+  at.region = 0;
+  for (int i = 0; i < static_cast<int>(g.region_mode.size()); ++i)
+    if ((g.region_mode[static_cast<std::size_t>(i)] == RegionMode::On) == region_on) at.region = i;
+  at.alpha = nearest(g.alpha, ran.alpha);
+  at.theta = nearest(g.sigma_theta, ran.sigma_theta);
+  at.aniso = nearest(g.n_aniso, ran.n_aniso);
+  at.gamma = nearest(g.sigma_gamma, ran.sigma_gamma);
+
+  // Coordinate descent, cheapest coordinates first (n_aniso and sigma_gamma reuse the
+  // pre-filter). Ties keep the current value, so the search is deterministic.
+  using Member = int Point::*;
+  const std::pair<Member, std::size_t> coordinates[] = {
+      {&Point::aniso, g.n_aniso.size()}, {&Point::gamma, g.sigma_gamma.size()}, {&Point::alpha, g.alpha.size()},
+      {&Point::theta, g.sigma_theta.size()}, {&Point::region, g.region_mode.size()}};
+  search.aniso_horizon = g.n_aniso[static_cast<std::size_t>(at.aniso)];
+  Inner current = search.evaluate(at);
+  for (int round = 0; round < options.max_rounds; ++round) {
+    bool improved = false;
+    for (const auto& [member, size] : coordinates) {
+      if (member == &Point::theta && g.n_aniso[static_cast<std::size_t>(at.aniso)] == 0) continue;  // unused
+      const int here = at.*member;
+      const int lo = round == 0 ? 0 : std::max(0, here - 1);
+      const int hi = round == 0 ? static_cast<int>(size) - 1 : std::min(static_cast<int>(size) - 1, here + 1);
+      search.aniso_horizon = g.n_aniso[static_cast<std::size_t>(member == &Point::aniso ? hi : at.aniso)];
+      for (int v = lo; v <= hi; ++v) {
+        if (v == here) continue;
+        Point p = at;
+        p.*member = v;
+        const Inner& e = search.evaluate(p);
+        if (e.msae < current.msae) {
+          current = e;
+          at = p;
+          improved = true;
+        }
+      }
+    }
+    if (!improved) break;
+  }
+
+  // The winner, run once more through denoise() exactly as a user would run it.
+  DenoiseParams best = search.params_at(at, current);
+  const double best_msae = msae(denoise(noisy, best, run).mesh, truth);
+  if (best_msae < result.start_msae) {
+    result.best = best;
+    result.best_msae = best_msae;
+  } else {  // the start was off the grid and better: keep it
+    result.best = ran;
+    result.best.mode = ParamMode::Manual;
+    result.best_msae = result.start_msae;
+  }
+  result.evaluations = search.evaluations();
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+}  // namespace mdn

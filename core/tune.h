@@ -1,0 +1,51 @@
+// Parameter search against a ground truth: for a clean mesh and a noisy copy with the same
+// faces, finds the parameters (Table 1's six and the region mode) with the lowest MSAE.
+// Serves `meshdenoise --tune GT NOISY` (users with a clean scan of a calibration object) and
+// the tuning harness that fits the ParamMode::Auto rule (tests/bench/tune_bench.cpp).
+#pragma once
+
+#include <vector>
+
+#include "core/mesh.h"
+#include "core/params.h"
+#include "core/progress.h"
+
+namespace mdn {
+
+// The searched values; the lists go beyond the paper's ranges because many optima sit at
+// their edges. Iteration counts cost nothing extra to search: one run of the longest count
+// observes every shorter one (IterationHook).
+struct TuneGrid {
+  std::vector<RegionMode> region_mode{RegionMode::Off, RegionMode::On};
+  std::vector<double> alpha{0.01, 0.03, 0.06, 0.1, 0.2, 0.4, 0.8};
+  std::vector<double> sigma_theta{15, 25, 40, 70};
+  std::vector<int> n_aniso{0, 1, 2, 4, 8, 16};
+  std::vector<double> sigma_gamma{15, 20, 25, 30, 40, 60, 90};
+  std::vector<int> n_normal{2, 3, 5, 10, 20, 30, 50, 70, 100};
+  std::vector<int> n_vertex{2, 3, 5, 10, 20, 30, 50, 80};
+};
+
+struct TuneOptions {
+  TuneGrid grid;
+  int max_rounds = 4;  // of coordinate descent over (n_aniso, sigma_gamma, alpha, sigma_theta, region)
+  int threads = 1;     // results do not depend on it
+  ProgressObserver* progress = nullptr;  // cancellation is honoured between evaluations
+};
+
+struct TuneResult {
+  DenoiseParams best;       // mode Manual, region_mode On or Off
+  double best_msae = 0;     // MSAE of denoise(noisy, best) against the truth (radians^2)
+  DenoiseParams start;      // where the search started: what the caller's parameters ran (Auto: the rule's choice)
+  double start_msae = 0;    // MSAE of denoise(noisy, start)
+  int evaluations = 0;      // (prefilter, sigma_gamma) settings evaluated, each over all iteration counts
+  double seconds = 0;
+};
+
+// Coordinate descent from `start` (snapped to the grid); the first round scans every value
+// of each coordinate, later rounds the neighbour each side of the current one, until a
+// round improves nothing. Deterministic. Throws InvalidMeshError if the meshes are invalid or
+// their faces differ, InvalidParamsError for an empty grid list or bad start parameters.
+TuneResult tune_parameters(const TriMesh& truth, const TriMesh& noisy, const DenoiseParams& start,
+                           const TuneOptions& options = {});
+
+}  // namespace mdn
