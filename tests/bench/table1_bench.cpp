@@ -24,6 +24,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "cgal_data.h"
 #include "core/io/document.h"
 #include "core/metrics.h"
 #include "core/noise.h"
@@ -89,35 +90,16 @@ Options parse(int argc, char** argv) {
     else if (a == "--help" || a == "-h") usage(argv[0], 0);
     else usage(argv[0], 2);
   }
-  if (o.data.empty()) o.data = fs::path(MDN_SOURCE_DIR) / "third_party_data" / "cgal";
+  if (o.data.empty()) o.data = bench::default_cgal_data();
   return o;
 }
 
-fs::path find_fandisk(const fs::path& dir) {
-  for (const fs::path& p : {dir / "data" / "meshes" / "fandisk.off", dir / "meshes" / "fandisk.off", dir / "fandisk.off"})
-    if (fs::exists(p)) return p;
-  return {};
-}
-
 TriMesh load_fandisk(const fs::path& dir) {
-  fs::path path = find_fandisk(dir);
-  if (path.empty()) {
-    const std::string cmd = "bash '" + (fs::path(MDN_SOURCE_DIR) / "scripts" / "fetch-cgal-data.sh").string() + "' '" +
-                            dir.string() + "'";
-    std::printf("fandisk.off not found under %s; running %s\n", dir.c_str(), cmd.c_str());
-    std::fflush(stdout);
-    if (std::system(cmd.c_str()) != 0) throw std::runtime_error("fetch-cgal-data.sh failed");
-    path = find_fandisk(dir);
-    if (path.empty()) throw std::runtime_error("fandisk.off still missing under " + dir.string());
-  }
-  std::ifstream in(path, std::ios::binary);
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  auto doc = io::decode(bytes, io::Format::Off);
-  if (doc->surfaces().size() != 1) throw std::runtime_error("expected one surface in " + path.string());
-  std::printf("mesh: %s (%lld vertices, %lld faces)\n", path.c_str(),
-              static_cast<long long>(doc->surfaces()[0].num_vertices()),
-              static_cast<long long>(doc->surfaces()[0].num_faces()));
-  return doc->surfaces()[0];
+  const fs::path path = bench::cgal_meshes(dir) / "fandisk.off";
+  TriMesh mesh = bench::load_off(path);
+  std::printf("mesh: %s (%lld vertices, %lld faces)\n", path.c_str(), static_cast<long long>(mesh.num_vertices()),
+              static_cast<long long>(mesh.num_faces()));
+  return mesh;
 }
 
 // Loop subdivision's connectivity with midpoint positions (the surface is unchanged):

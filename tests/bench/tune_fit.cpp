@@ -1,0 +1,181 @@
+// tune_bench fit: fits the ParamMode::Auto rule (core/auto_params.cpp) on the training cases
+// of a `tune_bench search` table and prints it as core/auto_rule.inc.
+//
+// The rule picks one of a few prototype parameter sets by the nearest training cases:
+//  1. Candidates: the best parameters the search found for each training case, plus the
+//     paper's Fandisk row. region_mode is not part of a candidate: it is on iff the input is
+//     irregularly sampled (cluster area ratio), as the rule decides it.
+//  2. Cost matrix: c(i, j) = ln(MSAE(case i with candidate j) / best MSAE of case i).
+//  3. Prototypes: greedily the candidates that most reduce sum_i min_{p in S} c(i, p).
+//  4. For an input: its k nearest training cases in standardised feature space
+//     (auto_features), and the prototype with the least summed cost over them.
+//  k and the number of prototypes are chosen by leave-one-mesh-out cross-validation on the
+//  training set (a case's own mesh never votes for it).
+#include "tune_fit.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <thread>
+
+namespace {
+
+using mdn::kAutoFeatures;
+constexpr int kFeatures = kAutoFeatures - 1;  // auto_features without the constant 1
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::string mesh_of(const std::string& name) { return name.substr(0, name.find('/')); }
+
+}  // namespace
+
+int fit(const std::vector<FitCase>& train, const FitScore& score, int jobs) {
+  const std::size_t n = train.size();
+  if (n < 8) {
+    std::fprintf(stderr, "fit: %zu training cases, need at least 8\n", n);
+    return 1;
+  }
+  // Candidates (deduplicated), the paper's row first.
+  std::vector<mdn::DenoiseParams> cand{mdn::DenoiseParams{}};
+  const auto same = [](const mdn::DenoiseParams& a, const mdn::DenoiseParams& b) {
+    return a.alpha == b.alpha && a.sigma_theta == b.sigma_theta && a.n_aniso == b.n_aniso &&
+           a.sigma_gamma == b.sigma_gamma && a.n_normal == b.n_normal && a.n_vertex == b.n_vertex;
+  };
+  for (const auto& c : train)
+    if (std::none_of(cand.begin(), cand.end(), [&](const auto& d) { return same(d, c.best); })) cand.push_back(c.best);
+  const std::size_t m = cand.size();
+  std::fprintf(stderr, "fit: %zu cases x %zu candidates\n", n, m);
+
+  // Cost matrix, in parallel over cases.
+  std::vector<std::vector<double>> cost(n, std::vector<double>(m));
+  std::atomic<std::size_t> next{0};
+  std::vector<std::thread> pool;
+  for (int t = 0; t < jobs; ++t)
+    pool.emplace_back([&] {
+      for (std::size_t i; (i = next++) < n;) {
+        for (std::size_t j = 0; j < m; ++j) {
+          mdn::DenoiseParams p = cand[j];
+          p.region_mode = mdn::auto_features(train[i].measures)[kAutoFeatures - 1] > 0.5 ? mdn::RegionMode::On
+                                                                                         : mdn::RegionMode::Off;
+          cost[i][j] = std::log(std::max(score(i, p), 1e-300) / train[i].best_msae);
+        }
+      }
+    });
+  for (auto& t : pool) t.join();
+
+  // Standardised features.
+  std::vector<std::array<double, kFeatures>> x(n);
+  std::array<double, kFeatures> mean{}, scale{};
+  for (std::size_t i = 0; i < n; ++i) {
+    const mdn::AutoFeatures f = mdn::auto_features(train[i].measures);
+    for (int k = 0; k < kFeatures; ++k) x[i][static_cast<std::size_t>(k)] = f[k + 1];
+  }
+  for (int k = 0; k < kFeatures; ++k) {
+    double s = 0, s2 = 0;
+    for (const auto& xi : x) s += xi[static_cast<std::size_t>(k)];
+    mean[static_cast<std::size_t>(k)] = s / static_cast<double>(n);
+    for (const auto& xi : x) s2 += std::pow(xi[static_cast<std::size_t>(k)] - mean[static_cast<std::size_t>(k)], 2);
+    scale[static_cast<std::size_t>(k)] = std::max(std::sqrt(s2 / static_cast<double>(n)), 1e-9);
+  }
+  for (auto& xi : x)
+    for (int k = 0; k < kFeatures; ++k)
+      xi[static_cast<std::size_t>(k)] = (xi[static_cast<std::size_t>(k)] - mean[static_cast<std::size_t>(k)]) / scale[static_cast<std::size_t>(k)];
+
+  // Greedy prototypes (order matters: the first ones matter most).
+  std::vector<std::size_t> order;
+  std::vector<double> cover(n, std::numeric_limits<double>::infinity());
+  for (std::size_t round = 0; round < std::min<std::size_t>(m, 16); ++round) {
+    std::size_t pick = 0;
+    double pick_total = std::numeric_limits<double>::infinity();
+    for (std::size_t j = 0; j < m; ++j) {
+      if (std::find(order.begin(), order.end(), j) != order.end()) continue;
+      double total = 0;
+      for (std::size_t i = 0; i < n; ++i) total += std::min(cover[i], cost[i][j]);
+      if (total < pick_total) {
+        pick_total = total;
+        pick = j;
+      }
+    }
+    order.push_back(pick);
+    for (std::size_t i = 0; i < n; ++i) cover[i] = std::min(cover[i], cost[i][pick]);
+  }
+
+  // The k-NN choice among the first `count` prototypes, leaving out the query's own mesh.
+  const auto choose = [&](const std::array<double, kFeatures>& q, std::size_t count, int k, const std::string& skip_mesh) {
+    std::vector<std::pair<double, std::size_t>> d;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (mesh_of(train[i].name) == skip_mesh) continue;
+      double s = 0;
+      for (int f = 0; f < kFeatures; ++f) s += std::pow(q[static_cast<std::size_t>(f)] - x[i][static_cast<std::size_t>(f)], 2);
+      d.emplace_back(s, i);
+    }
+    std::sort(d.begin(), d.end());
+    std::size_t best = 0;
+    double best_sum = std::numeric_limits<double>::infinity();
+    for (std::size_t p = 0; p < count; ++p) {
+      double s = 0;
+      for (int r = 0; r < k && r < static_cast<int>(d.size()); ++r) s += cost[d[static_cast<std::size_t>(r)].second][order[p]];
+      if (s < best_sum) {
+        best_sum = s;
+        best = p;
+      }
+    }
+    return best;
+  };
+  std::size_t best_count = 1;
+  int best_k = 1;
+  double best_score = std::numeric_limits<double>::infinity();
+  for (std::size_t count = 2; count <= order.size(); ++count)
+    for (const int k : {3, 5, 7, 9, 13}) {
+      std::vector<double> ratios;
+      for (std::size_t i = 0; i < n; ++i)
+        ratios.push_back(std::exp(cost[i][order[choose(x[i], count, k, mesh_of(train[i].name))]]));
+      const double worst = *std::max_element(ratios.begin(), ratios.end());
+      const double s = median(ratios) + 0.05 * std::log(worst);  // median first, a little weight on the worst
+      std::fprintf(stderr, "fit: %2zu prototypes, k %2d: leave-one-mesh-out median %.3f worst %.2f\n", count, k,
+                   median(ratios), worst);
+      if (s < best_score) {
+        best_score = s;
+        best_count = count;
+        best_k = k;
+      }
+    }
+
+  std::printf("// Generated by `tune_bench fit` (tests/bench/tune_fit.cpp) from %zu training cases and %zu\n", n, m);
+  std::printf("// candidate parameter sets; do not edit by hand. See core/README.md, \"Automatic parameters\".\n");
+  std::printf("constexpr int kRuleNeighbours = %d;\n", best_k);
+  std::printf("constexpr int kRulePrototypes = %zu;\n", best_count);
+  std::printf("constexpr int kRuleCases = %zu;\n", n);
+  std::printf("// alpha, sigma_theta, n_aniso, sigma_gamma, n_normal, n_vertex\n");
+  std::printf("constexpr double kPrototype[kRulePrototypes][6] = {\n");
+  for (std::size_t p = 0; p < best_count; ++p) {
+    const auto& c = cand[order[p]];
+    std::printf("    {%g, %g, %d, %g, %d, %d},\n", c.alpha, c.sigma_theta, c.n_aniso, c.sigma_gamma, c.n_normal, c.n_vertex);
+  }
+  std::printf("};\n// Feature standardisation: (auto_features[1..] - mean) / scale.\n");
+  std::printf("constexpr double kFeatureMean[%d] = {", kFeatures);
+  for (int k = 0; k < kFeatures; ++k) std::printf("%s%.6g", k ? ", " : "", mean[static_cast<std::size_t>(k)]);
+  std::printf("};\nconstexpr double kFeatureScale[%d] = {", kFeatures);
+  for (int k = 0; k < kFeatures; ++k) std::printf("%s%.6g", k ? ", " : "", scale[static_cast<std::size_t>(k)]);
+  std::printf("};\n// Per training case: standardised features, then ln(MSAE with prototype p / best MSAE).\n");
+  std::printf("constexpr double kCaseFeatures[kRuleCases][%d] = {\n", kFeatures);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::printf("    {");
+    for (int k = 0; k < kFeatures; ++k) std::printf("%s%.4f", k ? ", " : "", x[i][static_cast<std::size_t>(k)]);
+    std::printf("},  // %s\n", train[i].name.c_str());
+  }
+  std::printf("};\nconstexpr double kCaseCost[kRuleCases][kRulePrototypes] = {\n");
+  for (std::size_t i = 0; i < n; ++i) {
+    std::printf("    {");
+    for (std::size_t p = 0; p < best_count; ++p) std::printf("%s%.4f", p ? ", " : "", cost[i][order[p]]);
+    std::printf("},\n");
+  }
+  std::printf("};\n");
+  return 0;
+}

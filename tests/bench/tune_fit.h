@@ -1,0 +1,21 @@
+// tune_bench fit (tune_fit.cpp): fits the ParamMode::Auto rule on training cases.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/auto_params.h"
+
+struct FitCase {
+  std::string name;          // mesh/config
+  mdn::InputMeasures measures;
+  mdn::DenoiseParams best;   // found by the search
+  double best_msae = 0;
+};
+
+// MSAE of training case i denoised with the given parameters.
+using FitScore = std::function<double(std::size_t i, const mdn::DenoiseParams& params)>;
+
+// Prints the rule as the C++ data core/auto_rule.inc holds; returns a process exit code.
+int fit(const std::vector<FitCase>& cases, const FitScore& score, int jobs);
