@@ -17,6 +17,7 @@ double ms_since(Clock::time_point start) {
 
 void add_timings(StageTimings& sum, const StageTimings& t) {
   sum.setup_ms += t.setup_ms;
+  sum.measure_ms += t.measure_ms;
   sum.initial_ms += t.initial_ms;
   sum.region_ms += t.region_ms;
   sum.anisotropic_ms += t.anisotropic_ms;
@@ -66,12 +67,24 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
 }
 
 nlohmann::json report_to_json(const DenoiseReport& report) {
-  return {
+  nlohmann::json j = {
       {"fold_ratio", report.fold_ratio},
       {"cluster_area_ratio", report.cluster_area_ratio},
       {"region_prefilter_applied", report.region_prefilter_applied},
       {"region_vertices", report.region_vertices},
+      {"mode", std::string(to_string(report.mode))},
+      {"params", method_params_json(report.params)},
   };
+  if (report.measures) {
+    const InputMeasures& m = *report.measures;
+    j["measures"] = {{"noise", m.noise},
+                     {"tail", m.tail},
+                     {"feature_share", m.feature_share},
+                     {"smooth_residual", m.smooth_residual},
+                     {"smooth_tail", m.smooth_tail},
+                     {"cluster_area_ratio", m.cluster_area_ratio}};
+  }
+  return j;
 }
 
 nlohmann::json job_summary_json(const JobOutput& output) {
@@ -91,6 +104,7 @@ nlohmann::json job_summary_json(const JobOutput& output) {
            {"denoise", output.denoise_ms},
            {"encode", output.encode_ms},
            {"setup", s.setup_ms},
+           {"measure", s.measure_ms},
            {"initial", s.initial_ms},
            {"region", s.region_ms},
            {"anisotropic", s.anisotropic_ms},

@@ -42,11 +42,13 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
 // Added by the cli engineer (additive): the JSON summary of a finished job, the same shape the
 // CLI prints with --report and the HTTP server may echo:
 //   { "format": "off", "media_type": ..., "bytes": N, "vertices": N, "faces": N,
-//     "params": to_json(effective), "timings_ms": { "decode", "denoise", "encode", "setup",
+//     "params": to_json(effective), "timings_ms": { "decode", "denoise", "encode", "setup", "measure",
 //     "initial", "region", "anisotropic", "normal", "vertex", "prefilter", "total" },
 //     "surfaces": [ report_to_json(r) ... ], "notes": [ ... ] }
 // Timings are wall-clock and vary between runs; everything else is deterministic.
-nlohmann::json report_to_json(const DenoiseReport& report);  // fold_ratio, cluster_area_ratio, region_*
+// fold_ratio, cluster_area_ratio, region_*, "mode", "params" (what ran: the six parameters and
+// region_mode, as a manual-mode params object) and, in auto mode, "measures".
+nlohmann::json report_to_json(const DenoiseReport& report);
 nlohmann::json job_summary_json(const JobOutput& output);
 
 }  // namespace mdn::service

@@ -25,6 +25,7 @@
 #include "core/parallel.h"
 #include "core/params.h"
 #include "core/progress.h"
+#include "core/tune.h"
 #include "server/job_runner.h"
 #include "server/params_json.h"
 
@@ -116,6 +117,7 @@ struct CliOptions {
   std::optional<std::string> params;     // --params: inline JSON or a file name
   std::optional<std::string> add_noise;  // --add-noise: inline JSON or a file name
   std::optional<std::string> metrics;    // --metrics: ground-truth mesh file
+  std::optional<std::string> tune;       // --tune: ground-truth mesh file
   int threads = 0;                       // 0: hardware concurrency
   bool report = false;
   bool progress = true;
@@ -131,6 +133,8 @@ std::string usage() {
                                                write a noisy copy of the clean mesh IN to OUT
   meshdenoise --metrics GT IN                  only measure IN against the ground truth GT
   meshdenoise --metrics GT [options] IN OUT    denoise (or add noise), write OUT, measure OUT
+  meshdenoise --tune GT [options] IN           search the parameters that denoise IN closest
+                                               to the ground truth GT; print them as JSON
 
 Robust mesh denoising via vertex pre-filtering and L1-median normal filtering (Lu, Chen,
 Schaefer). Formats: off, obj, ply, drc, glb, gltf, chosen by file extension, else by content.
@@ -150,6 +154,13 @@ Options:
                        GT, which must have the same faces in the same order. With OUT it
                        measures the computed surface (any OUT format gives the same figures);
                        without OUT it measures the file IN as it is.
+  --tune GT            for users with a clean scan of a calibration object: searches the six
+                       parameters and region_mode (coordinate descent over a grid that goes
+                       beyond the paper's ranges) for the lowest MSAE of IN against GT (same
+                       faces in the same order). Prints {"params": {...}, "msae": ...,
+                       "start": {"params", "msae"}, "improvement": start/best, ...}; "params"
+                       can be passed to --params as it is. --params sets the starting point
+                       (default: what auto mode chooses). Minutes on large meshes.
   --report             print a JSON summary on stdout: effective parameters, per-stage timings
                        (ms), fold ratio and region pre-filter decision per surface; with
                        --metrics the metrics go into it under "metrics".
@@ -158,7 +169,12 @@ Options:
   --no-progress        no progress bar (it is drawn only when stderr is a terminal anyway).
   --help, --version
 
-Parameters (--params), [accepted range], default:
+Parameters (--params). By default ("mode": "auto") the six parameters of Table 1 (alpha ...
+n_vertex) and region_mode are chosen from measurements of each input surface by a rule fitted
+on data; a field given explicitly keeps its value. "mode": "manual" uses the values as given
+and the defaults below (Table 1's Fandisk row) for the others. --report shows what ran.
+  mode "auto"|"manual", default "auto"
+[accepted range], default:
 )";
   const mdn::DenoiseParams defaults;
   for (const auto& spec : mdn::param_specs()) {
@@ -240,6 +256,8 @@ CliOptions parse_command_line(int argc, char** argv) {
       options.add_noise = value();
     } else if (arg == "--metrics") {
       options.metrics = value();
+    } else if (arg == "--tune") {
+      options.tune = value();
     } else if (arg == "--threads") {
       options.threads = parse_threads(value());
     } else if (arg == "--report") {
@@ -409,6 +427,43 @@ json measure(const mdn::TriMesh& truth, const std::string& truth_path, const mdn
   return {{"msae", msae}, {"msae_deg2", msae * kDeg * kDeg}, {"ev", ev}};
 }
 
+// meshdenoise --tune GT [--params START] [--threads N] NOISY
+int run_tune(const CliOptions& options) {
+  if (options.positional.size() != 1)
+    throw UsageError("--tune GT takes exactly one file, the noisy mesh, got " + std::to_string(options.positional.size()));
+  if (options.add_noise || options.metrics) throw UsageError("--tune cannot be combined with --add-noise or --metrics");
+  service::JobParams start;
+  if (options.params) start = service::job_params_from_text(json_argument("--params", *options.params));
+  const int threads =
+      options.threads > 0 ? options.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const std::string& in_path = options.positional[0];
+  const std::string in_bytes = read_file(in_path);
+  const mdn::TriMesh truth = load_truth(*options.tune);
+  const LoadedMesh noisy = decode_mesh(in_path, in_bytes, input_format(in_path, in_bytes));
+  if (truth.num_vertices() != noisy.merged.num_vertices() || truth.F != noisy.merged.F) {
+    throw FileError(in_path + " and the ground truth " + *options.tune +
+                    " do not have the same vertices and faces in the same order (the search compares face by face)");
+  }
+  install_sigint_handler();
+  CliProgress cancel(false);
+  mdn::TuneOptions tune;
+  tune.threads = threads;
+  tune.progress = &cancel;
+  const mdn::TuneResult r = mdn::tune_parameters(truth, noisy.merged, start.denoise, tune);
+  constexpr double kDeg = 180.0 / std::numbers::pi;
+  const json out = {{"params", service::method_params_json(r.best)},
+                    {"msae", r.best_msae},
+                    {"msae_deg2", r.best_msae * kDeg * kDeg},
+                    {"start", {{"mode", std::string(mdn::to_string(start.denoise.mode))},
+                               {"params", service::method_params_json(r.start)},
+                               {"msae", r.start_msae}}},
+                    {"improvement", r.start_msae / r.best_msae},
+                    {"evaluations", r.evaluations},
+                    {"seconds", r.seconds}};
+  std::cout << out.dump(2) << "\n";
+  return kExitOk;
+}
+
 int run(int argc, char** argv) {
   const CliOptions options = parse_command_line(argc, argv);
   if (options.help) {
@@ -420,6 +475,7 @@ int run(int argc, char** argv) {
     return kExitOk;
   }
   const auto& pos = options.positional;
+  if (options.tune) return run_tune(options);
   const bool measure_only = pos.size() == 1 && options.metrics;
   if (!(pos.size() == 2 || measure_only)) {
     throw UsageError(pos.size() == 1 ? "missing OUT (or give --metrics GT to only measure IN)"

@@ -134,7 +134,7 @@ constexpr const char* kFormatChoices = "\"off\", \"obj\", \"ply\", \"drc\", \"gl
 std::vector<std::string> top_level_names() {
   std::vector<std::string> names;
   for (const auto& spec : param_specs()) names.emplace_back(spec.name);
-  names.insert(names.end(), {"region_mode", "kmeans_seed", "solver", "output"});
+  names.insert(names.end(), {"mode", "region_mode", "kmeans_seed", "solver", "output"});
   return names;
 }
 
@@ -215,7 +215,13 @@ JobParams job_params_from_json(const nlohmann::json& j) {
   }
   JobParams p;
   for (const auto& [key, value] : j.items()) {
-    if (key == "region_mode") {
+    if (const auto field = auto_field_from_string(key)) p.denoise.pin(*field);  // explicit: kept in auto mode
+    if (key == "mode") {
+      const auto& text = string_value(value, key, "\"auto\" or \"manual\"");
+      const auto mode = param_mode_from_string(text);
+      if (!mode) fail(key, "one of \"auto\" or \"manual\"", value);
+      p.denoise.mode = *mode;
+    } else if (key == "region_mode") {
       const auto& text = string_value(value, key, "\"auto\", \"on\" or \"off\"");
       const auto mode = region_mode_from_string(text);
       if (!mode) fail(key, "one of \"auto\", \"on\" or \"off\"", value);
@@ -256,14 +262,18 @@ JobParams job_params_from_text(std::string_view text) {
 
 nlohmann::json to_json(const JobParams& p) {
   json j = json::object();
+  const bool automatic = p.denoise.mode == ParamMode::Auto;
+  j["mode"] = std::string(to_string(p.denoise.mode));
   for (const auto& spec : param_specs()) {
+    if (const auto field = auto_field_from_string(spec.name); automatic && field && !p.denoise.is_pinned(*field)) continue;
     if (spec.int_field) {
       j[std::string(spec.name)] = p.denoise.*spec.int_field;
     } else {
       j[std::string(spec.name)] = p.denoise.*spec.real_field;
     }
   }
-  j["region_mode"] = std::string(to_string(p.denoise.region_mode));
+  if (!automatic || p.denoise.is_pinned(AutoField::RegionMode))
+    j["region_mode"] = std::string(to_string(p.denoise.region_mode));
   j["kmeans_seed"] = p.denoise.kmeans_seed;
   j["solver"] = std::string(to_string(p.denoise.solver));
   json out = json::object();
@@ -311,6 +321,12 @@ nlohmann::json to_json(const NoiseSpec& spec) {
           {"sigma", spec.sigma},
           {"seed", spec.seed},
           {"impulse_fraction", spec.impulse_fraction}};
+}
+
+nlohmann::json method_params_json(const DenoiseParams& p) {
+  return {{"mode", "manual"},          {"alpha", p.alpha},     {"sigma_theta", p.sigma_theta},
+          {"n_aniso", p.n_aniso},      {"sigma_gamma", p.sigma_gamma}, {"n_normal", p.n_normal},
+          {"n_vertex", p.n_vertex},    {"region_mode", std::string(to_string(p.region_mode))}};
 }
 
 }  // namespace mdn::service

@@ -14,8 +14,15 @@
 
 namespace mdn::service {
 
+// The service and the CLI default to ParamMode::Auto (issue 7): a field given explicitly in the
+// JSON (alpha ... n_vertex, region_mode) is pinned and keeps its value; "mode": "manual" uses
+// every value as given, missing ones from core's defaults (the paper's Fandisk row).
 struct JobParams {
-  DenoiseParams denoise;      // method parameters (defaults from core)
+  DenoiseParams denoise = [] {
+    DenoiseParams d;
+    d.mode = ParamMode::Auto;
+    return d;
+  }();                        // method parameters (defaults from core, mode auto)
   io::EncodeOptions output;   // output container and Draco settings
 };
 
@@ -26,8 +33,13 @@ JobParams job_params_from_json(const nlohmann::json& j);
 // Parses text (the body of --params, ?params= or X-Denoise-Params). Bad JSON gives
 // InvalidParamsError with field "params".
 JobParams job_params_from_text(std::string_view text);
-// Every field with its effective value (what the CLI prints and the server echoes).
+// Every field with its effective value (what the CLI prints and the server echoes). In auto
+// mode the fields the rule chooses are left out unless pinned, so the echo parses back to the
+// same request; what auto chose is in each surface's report (report_to_json).
 nlohmann::json to_json(const JobParams& p);
+// The six parameters of Table 1 and region_mode as JSON (a "params" object that --params and
+// the API accept in manual mode, with "mode": "manual").
+nlohmann::json method_params_json(const DenoiseParams& p);
 
 // Added by the cli engineer (additive; the HTTP server may call these for JobParams it builds
 // itself rather than parses): range checks of the "output" object (position_bits [8, 30],

@@ -32,7 +32,7 @@ using nlohmann::json;
 constexpr const char* kExposedHeaders =
     "Location, Retry-After, X-Request-Id, Server-Timing, Content-Disposition, Idempotent-Replayed, "
     "X-Denoise-Params, X-Denoise-Input-Bytes, X-Denoise-Output-Bytes, X-Denoise-Vertices, X-Denoise-Faces, "
-    "X-Denoise-Notes";
+    "X-Denoise-Notes, X-Denoise-Report";
 constexpr const char* kAllowedRequestHeaders =
     "Authorization, Content-Type, X-Request-Id, X-Denoise-Params, Idempotency-Key";
 
@@ -148,14 +148,15 @@ io::Format resolve_format(const std::string& content_type, std::string_view byte
       "the body is not recognisable as glTF, GLB, Draco, OFF, OBJ or PLY; declare its media type"));
 }
 
-json output_summary(const service::JobOutput& out) {
+// One report per surface: what ran (auto mode: the chosen parameters and the measurements).
+json reports_json(const service::JobOutput& out) {
   json reports = json::array();
-  for (const DenoiseReport& r : out.reports) {
-    reports.push_back({{"fold_ratio", r.fold_ratio},
-                       {"cluster_area_ratio", r.cluster_area_ratio},
-                       {"region_prefilter_applied", r.region_prefilter_applied},
-                       {"region_vertices", r.region_vertices}});
-  }
+  for (const DenoiseReport& r : out.reports) reports.push_back(service::report_to_json(r));
+  return reports;
+}
+
+json output_summary(const service::JobOutput& out) {
+  json reports = reports_json(out);
   return {{"media_type", out.media_type},
           {"format", std::string(io::to_string(out.format))},
           {"bytes", out.bytes.size()},
@@ -167,6 +168,7 @@ json output_summary(const service::JobOutput& out) {
           {"timings_ms",
            {{"decode", out.decode_ms},
             {"setup", out.stages.setup_ms},
+            {"measure", out.stages.measure_ms},
             {"initial_prefilter", out.stages.initial_ms},
             {"region_prefilter", out.stages.region_ms},
             {"anisotropic_prefilter", out.stages.anisotropic_ms},
@@ -614,6 +616,9 @@ struct HttpService::Impl {
     res.set_header("X-Denoise-Output-Bytes", std::to_string(out.bytes.size()));
     res.set_header("X-Denoise-Vertices", std::to_string(out.vertices));
     res.set_header("X-Denoise-Faces", std::to_string(out.faces));
+    // The job's JSON always has the reports; the header only when it stays small.
+    if (std::string report = reports_json(out).dump(); report.size() <= 8192)
+      res.set_header("X-Denoise-Report", report);
     if (!out.notes.empty()) {
       std::string notes;
       for (const auto& n : out.notes) notes += (notes.empty() ? "" : "; ") + n;

@@ -22,6 +22,7 @@
 
 #include "core/metrics.h"
 #include "core/noise.h"
+#include "core/params.h"
 #include "support/shapes.h"
 
 namespace mdn {
@@ -248,7 +249,9 @@ TEST_F(Cli, ParamsInlineAndFromFileAndReport) {
   EXPECT_EQ(report["params"]["n_normal"], 5);
   EXPECT_EQ(report["params"]["n_vertex"], 4);
   EXPECT_EQ(report["params"]["region_mode"], "off");
-  EXPECT_EQ(report["params"]["alpha"], 0.1);  // defaults filled in and echoed
+  EXPECT_FALSE(report["params"].contains("alpha"));  // auto mode: not pinned, so chosen per surface
+  EXPECT_EQ(report["surfaces"][0]["params"]["n_normal"], 5);  // pinned fields ran as given
+  EXPECT_TRUE(report["surfaces"][0]["params"]["alpha"].is_number());  // and what auto chose is reported
   EXPECT_EQ(report["params"]["output"]["format"], "off");
   EXPECT_EQ(report["vertices"], clean_.num_vertices());
   EXPECT_EQ(report["faces"], clean_.num_faces());
@@ -395,6 +398,74 @@ TEST_F(Cli, SigintCancelsWithExit130) {
   EXPECT_EQ(WEXITSTATUS(status), 130) << read_text(err);
   EXPECT_NE(read_text(err).find("cancelled"), std::string::npos) << read_text(err);
   EXPECT_FALSE(fs::exists(out));
+}
+
+}  // namespace
+}  // namespace mdn
+
+namespace mdn {
+namespace {
+
+TEST_F(Cli, AutoIsTheDefaultAndTheReportShowsWhatRan) {
+  write_sphere_pair(2);
+  const Result automatic = run("--report " + quote(path("noisy.off")) + " " + quote(path("auto.off")));
+  ASSERT_EQ(automatic.code, 0) << automatic.err;
+  const json a = parse_stdout(automatic);
+  EXPECT_EQ(a["params"]["mode"], "auto");
+  ASSERT_EQ(a["surfaces"].size(), 1u);
+  const json& s = a["surfaces"][0];
+  EXPECT_EQ(s["mode"], "auto");
+  ASSERT_TRUE(s.contains("measures")) << s;
+  EXPECT_GT(s["measures"]["noise"].get<double>(), 0);
+  EXPECT_EQ(s["params"]["mode"], "manual");
+  EXPECT_TRUE(a["timings_ms"].contains("measure"));
+
+  // What auto chose, given back in manual mode, gives the same bytes.
+  write_text(path("chosen.json"), s["params"].dump());
+  const Result again = run("--params " + quote(path("chosen.json")) + " " + quote(path("noisy.off")) + " " +
+                           quote(path("manual.off")));
+  ASSERT_EQ(again.code, 0) << again.err;
+  EXPECT_EQ(read_text(path("manual.off")), read_text(path("auto.off")));
+
+  const Result manual = run("--report --params '{\"mode\":\"manual\"}' " + quote(path("noisy.off")) + " " +
+                            quote(path("paper.off")));
+  ASSERT_EQ(manual.code, 0) << manual.err;
+  const json m = parse_stdout(manual);
+  EXPECT_EQ(m["surfaces"][0]["mode"], "manual");
+  EXPECT_FALSE(m["surfaces"][0].contains("measures"));
+  EXPECT_EQ(m["surfaces"][0]["params"]["n_normal"], DenoiseParams{}.n_normal);
+}
+
+TEST_F(Cli, TuneFindsParametersThatFeedBackIntoParams) {
+  write_sphere_pair(3);
+  const Result tuned = run("--threads 2 --tune " + quote(path("clean.off")) + " " + quote(path("noisy.off")));
+  ASSERT_EQ(tuned.code, 0) << tuned.err;
+  const json t = parse_stdout(tuned);
+  ASSERT_TRUE(t.contains("params") && t.contains("msae") && t.contains("start")) << t;
+  EXPECT_EQ(t["start"]["mode"], "auto");
+  EXPECT_LE(t["msae"].get<double>(), t["start"]["msae"].get<double>());
+  EXPECT_GE(t["improvement"].get<double>(), 1.0);
+  EXPECT_GT(t["evaluations"].get<int>(), 0);
+
+  // The printed params reproduce the printed MSAE through the normal command line.
+  write_text(path("best.json"), t["params"].dump());
+  const Result check = run("--params " + quote(path("best.json")) + " --metrics " + quote(path("clean.off")) + " " +
+                           quote(path("noisy.off")) + " " + quote(path("best.off")));
+  ASSERT_EQ(check.code, 0) << check.err;
+  EXPECT_NEAR(parse_stdout(check)["msae"].get<double>(), t["msae"].get<double>(), 1e-12);
+}
+
+TEST_F(Cli, TuneRefusesBadArguments) {
+  write_sphere_pair(2);
+  write_text(path("other.off"), test::off_text(test::sphere(1)));
+  EXPECT_EQ(run("--tune " + quote(path("clean.off"))).code, 2);  // no noisy mesh
+  EXPECT_EQ(run("--tune " + quote(path("clean.off")) + " " + quote(path("noisy.off")) + " " + quote(path("o.off"))).code, 2);
+  EXPECT_EQ(run("--tune " + quote(path("clean.off")) + " --metrics " + quote(path("clean.off")) + " " +
+                quote(path("noisy.off"))).code, 2);
+  const Result mismatch = run("--tune " + quote(path("other.off")) + " " + quote(path("noisy.off")));
+  EXPECT_EQ(mismatch.code, 3);
+  EXPECT_NE(mismatch.err.find("same vertices and faces"), std::string::npos) << mismatch.err;
+  EXPECT_EQ(run("--tune " + quote(path("missing.off")) + " " + quote(path("noisy.off"))).code, 3);
 }
 
 }  // namespace

@@ -58,6 +58,14 @@ TEST_F(HttpApi, SynchronousDenoiseEqualsCliOutputByteForByte) {
   expected_params["output"]["format"] = "off";
   EXPECT_EQ(effective, expected_params);
   EXPECT_EQ(effective["n_normal"], 12);
+  // What ran: auto mode (the default) chose the unpinned fields and says what it measured.
+  const json report = parse_json(r->get_header_value("X-Denoise-Report"));
+  ASSERT_TRUE(report.is_array() && report.size() == 1) << report;
+  EXPECT_EQ(report[0]["mode"], "auto");
+  EXPECT_EQ(report[0]["params"]["n_normal"], 12);
+  EXPECT_EQ(report[0]["params"]["sigma_gamma"], 35);
+  EXPECT_TRUE(report[0]["params"]["alpha"].is_number());
+  EXPECT_GT(report[0]["measures"]["noise"].get<double>(), 0);
   const std::string timing = r->get_header_value("Server-Timing");
   for (const char* stage : {"queue;dur=", "decode;dur=", "prefilter;dur=", "normal;dur=", "vertex;dur=", "encode;dur=",
                             "total;dur="})

@@ -48,8 +48,12 @@ TEST(Proto, ParamsSchemaAgreesWithCoreParamSpecs) {
     EXPECT_DOUBLE_EQ(p.at("maximum").get<double>(), spec.max);
     EXPECT_DOUBLE_EQ(p.at("default").get<double>(), spec.default_value());
   }
-  // Exactly the fields server/params_json reads and writes, with its defaults.
-  const json defaults = service::to_json(service::JobParams{});
+  // Exactly the fields server/params_json reads and writes, with its defaults (manual mode
+  // echoes every field; auto mode leaves out the ones the rule chooses).
+  service::JobParams manual;
+  manual.denoise.mode = ParamMode::Manual;
+  const json defaults = service::to_json(manual);
+  EXPECT_EQ(props.at("mode").at("default"), service::to_json(service::JobParams{}).at("mode"));
   std::set<std::string> schema_keys, code_keys, schema_out, code_out;
   for (const auto& [k, v] : props.items()) schema_keys.insert(k);
   for (const auto& [k, v] : defaults.items()) code_keys.insert(k);
@@ -64,7 +68,7 @@ TEST(Proto, ParamsSchemaAgreesWithCoreParamSpecs) {
   EXPECT_EQ(props.at("solver").at("default"), defaults.at("solver"));
   EXPECT_EQ(props.at("kmeans_seed").at("default"), defaults.at("kmeans_seed"));
   // Every enumeration value is accepted by the parser, and nothing else.
-  for (const char* key : {"region_mode", "solver"}) {
+  for (const char* key : {"mode", "region_mode", "solver"}) {
     for (const auto& value : props.at(key).at("enum"))
       EXPECT_NO_THROW(service::job_params_from_json({{key, value}})) << key << "=" << value;
     EXPECT_THROW(service::job_params_from_json({{key, "not-a-value"}}), InvalidParamsError);

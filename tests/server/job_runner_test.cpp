@@ -75,10 +75,20 @@ TEST(JobRunner, ParametersReachThePipeline) {
   input.params.denoise.n_normal = 0;
   input.params.denoise.n_vertex = 0;
   input.params.denoise.n_aniso = 0;
+  // Auto mode (the service's default) keeps only pinned fields: pin them, as the JSON parser does.
+  for (const AutoField f : {AutoField::NNormal, AutoField::NVertex, AutoField::NAniso}) input.params.denoise.pin(f);
   const JobOutput light = run_job(input, io::Limits{});
   EXPECT_NE(light.bytes, defaults.bytes);
   EXPECT_EQ(light.effective.denoise.n_normal, 0);
   EXPECT_EQ(job_summary_json(light)["params"]["n_normal"], 0);
+  EXPECT_EQ(light.reports.at(0).params.n_normal, 0);  // what ran
+  EXPECT_EQ(job_summary_json(light)["surfaces"][0]["params"]["n_vertex"], 0);
+  // Manual mode uses the values as set.
+  input.params.denoise.mode = ParamMode::Manual;
+  input.params.denoise.pinned = 0;
+  const JobOutput manual = run_job(input, io::Limits{});
+  EXPECT_EQ(manual.reports.at(0).params.n_normal, 0);
+  EXPECT_EQ(manual.reports.at(0).params.alpha, DenoiseParams{}.alpha);
 }
 
 TEST(JobRunner, OutputFormatCanDifferFromInput) {

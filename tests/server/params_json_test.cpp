@@ -64,7 +64,10 @@ TEST(ParamsJson, EmptyObjectGivesCoreDefaults) {
 }
 
 TEST(ParamsJson, ToJsonEmitsEveryFieldWithItsDefault) {
-  const json j = to_json(JobParams{});
+  JobParams manual;
+  manual.denoise.mode = ParamMode::Manual;
+  const json j = to_json(manual);
+  EXPECT_EQ(j["mode"], "manual");
   for (const auto& spec : param_specs()) {
     ASSERT_TRUE(j.contains(std::string(spec.name))) << spec.name;
     EXPECT_EQ(j[std::string(spec.name)].get<double>(), spec.default_value()) << spec.name;
@@ -109,8 +112,58 @@ TEST(ParamsJson, ParsesEveryKindOfField) {
   EXPECT_EQ(p.output.compression_level, 0);
 }
 
+TEST(ParamsJson, AutoIsTheDefaultAndExplicitFieldsArePinned) {
+  const JobParams empty = job_params_from_json(json::object());
+  EXPECT_EQ(empty.denoise.mode, ParamMode::Auto);
+  EXPECT_EQ(empty.denoise.pinned, 0);
+  // The echo leaves out what the rule chooses, so it parses back to the same request.
+  const json echo = to_json(empty);
+  EXPECT_EQ(echo["mode"], "auto");
+  for (const char* key : {"alpha", "sigma_theta", "n_aniso", "sigma_gamma", "n_normal", "n_vertex", "region_mode"})
+    EXPECT_FALSE(echo.contains(key)) << key;
+  EXPECT_TRUE(echo.contains("beta"));  // not chosen by the rule: always echoed
+
+  const JobParams some = job_params_from_text(R"({"n_normal": 40, "region_mode": "off", "beta": 3})");
+  EXPECT_EQ(some.denoise.mode, ParamMode::Auto);
+  EXPECT_TRUE(some.denoise.is_pinned(AutoField::NNormal));
+  EXPECT_TRUE(some.denoise.is_pinned(AutoField::RegionMode));
+  EXPECT_FALSE(some.denoise.is_pinned(AutoField::Alpha));
+  EXPECT_EQ(some.denoise.n_normal, 40);
+  const json some_echo = to_json(some);
+  EXPECT_EQ(some_echo["n_normal"], 40);
+  EXPECT_EQ(some_echo["region_mode"], "off");
+  EXPECT_FALSE(some_echo.contains("alpha"));
+  const JobParams again = job_params_from_text(some_echo.dump());
+  EXPECT_EQ(again.denoise.pinned, some.denoise.pinned);
+  EXPECT_EQ(to_json(again), some_echo);
+
+  const JobParams manual = job_params_from_text(R"({"mode": "manual", "alpha": 0.2})");
+  EXPECT_EQ(manual.denoise.mode, ParamMode::Manual);
+  EXPECT_EQ(manual.denoise.alpha, 0.2);
+  EXPECT_EQ(manual.denoise.n_normal, DenoiseParams{}.n_normal);
+
+  const auto e = parse_error({{"mode", "automatic"}});
+  EXPECT_EQ(e.field(), "mode");
+  EXPECT_NE(std::string(e.what()).find("\"auto\" or \"manual\""), std::string::npos) << e.what();
+  EXPECT_EQ(parse_error({{"mode", 1}}).field(), "mode");
+}
+
+TEST(ParamsJson, MethodParamsJsonIsAManualRequestForTheSameParameters) {
+  DenoiseParams d;
+  d.alpha = 0.4;
+  d.n_aniso = 16;
+  d.region_mode = RegionMode::On;
+  const JobParams q = job_params_from_json(method_params_json(d));
+  EXPECT_EQ(q.denoise.mode, ParamMode::Manual);
+  EXPECT_EQ(q.denoise.alpha, 0.4);
+  EXPECT_EQ(q.denoise.n_aniso, 16);
+  EXPECT_EQ(q.denoise.region_mode, RegionMode::On);
+  EXPECT_EQ(q.denoise.sigma_gamma, d.sigma_gamma);
+}
+
 TEST(ParamsJson, RoundTripThroughToJson) {
   JobParams p;
+  p.denoise.mode = ParamMode::Manual;
   p.denoise.alpha = 0.2;
   p.denoise.sigma_theta = 47.25;
   p.denoise.n_aniso = 12;
