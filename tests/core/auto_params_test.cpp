@@ -7,18 +7,13 @@
 #include "core/noise.h"
 #include "core/pipeline.h"
 #include "core/topology.h"
+#include "support/noisy.h"
 #include "support/shapes.h"
 
 namespace mdn {
 namespace {
 
-TriMesh noisy_copy(const TriMesh& clean, double sigma, NoiseKind kind = NoiseKind::AlongNormal, std::uint64_t seed = 3) {
-  NoiseSpec spec;
-  spec.kind = kind;
-  spec.sigma = sigma;
-  spec.seed = seed;
-  return TriMesh{add_noise(clean, spec), clean.F};
-}
+TriMesh noisy_copy(const TriMesh& clean, double sigma) { return test::with_noise(clean, sigma, NoiseKind::AlongNormal, 3); }
 
 InputMeasures measure(const TriMesh& m) {
   const Vertices P = UnitBox::of(m.V).apply(m.V);

@@ -10,20 +10,13 @@
 #include "core/metrics.h"
 #include "core/noise.h"
 #include "core/topology.h"
+#include "support/noisy.h"
 #include "support/shapes.h"
 
 namespace mdn {
 namespace {
 
-TriMesh with_noise(const TriMesh& clean, double sigma, NoiseKind kind = NoiseKind::AlongNormal, std::uint64_t seed = 7) {
-  NoiseSpec spec;
-  spec.kind = kind;
-  spec.sigma = sigma;
-  spec.seed = seed;
-  TriMesh noisy = clean;
-  noisy.V = add_noise(clean, spec);
-  return noisy;
-}
+using test::with_noise;
 
 TEST(Denoise, NoisyPlaneComesBackFlat) {
   const TriMesh clean = test::plane(20);

@@ -1,0 +1,20 @@
+// A noisy copy of a test mesh (same faces), for tests that denoise.
+#pragma once
+
+#include <cstdint>
+
+#include "core/mesh.h"
+#include "core/noise.h"
+
+namespace mdn::test {
+
+inline TriMesh with_noise(const TriMesh& clean, double sigma, NoiseKind kind = NoiseKind::AlongNormal,
+                          std::uint64_t seed = 7) {
+  NoiseSpec spec;
+  spec.kind = kind;
+  spec.sigma = sigma;
+  spec.seed = seed;
+  return TriMesh{add_noise(clean, spec), clean.F};
+}
+
+}  // namespace mdn::test
