@@ -85,6 +85,39 @@ const std::vector<Setting>& settings() {
       {"max-stored-jobs", "MDN_MAX_STORED_JOBS", "finished jobs kept at most (the oldest are evicted first)",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_stored_jobs = int(parse_int(n, v, 1, 1000000)); },
        [](const ServerConfig& c) { return std::to_string(c.max_stored_jobs); }},
+      {"queue", "MDN_QUEUE", "job store: memory (this process) or redis://[:password@]host[:port][/db] (shared by replicas)",
+       [](ServerConfig& c, const std::string& n, const std::string& v) {
+         if (v != "memory") {
+           try {
+             parse_redis_url(v);
+           } catch (const ConfigError& e) {
+             throw ConfigError(n + ": " + e.what());
+           }
+         }
+         c.queue = v;
+       },
+       [](const ServerConfig& c) {
+         // Never print a password.
+         const auto at = c.queue.rfind('@');
+         return at == std::string::npos ? c.queue : "redis://(credentials)" + c.queue.substr(at);
+       }},
+      {"queue-prefix", "MDN_QUEUE_PREFIX", "Redis key prefix of this service's jobs and stream",
+       [](ServerConfig& c, const std::string& n, const std::string& v) {
+         if (v.empty() || v.size() > 64 || v.find_first_of(" \t\r\n") != std::string::npos)
+           throw ConfigError(n + ": expected 1 to 64 characters without spaces, got '" + v + "'");
+         c.queue_prefix = v;
+       },
+       [](const ServerConfig& c) { return c.queue_prefix; }},
+      {"queue-reclaim-idle", "MDN_QUEUE_RECLAIM_IDLE",
+       "Redis: seconds without a heartbeat after which another replica takes over a running job",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.queue_reclaim_idle_s = parse_seconds(n, v, 0.5, 3600, false); },
+       [](const ServerConfig& c) { return show_double(c.queue_reclaim_idle_s); }},
+      {"queue-max-attempts", "MDN_QUEUE_MAX_ATTEMPTS", "Redis: runs of one job (first run and takeovers) before it fails",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.queue_max_attempts = int(parse_int(n, v, 1, 100)); },
+       [](const ServerConfig& c) { return std::to_string(c.queue_max_attempts); }},
+      {"queue-max-result", "MDN_QUEUE_MAX_RESULT", "Redis: largest result stored, in bytes (suffix K, M or G; at most 512M)",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.queue_max_result_bytes = parse_int(n, v, 1, std::int64_t{512} << 20); },
+       [](const ServerConfig& c) { return std::to_string(c.queue_max_result_bytes); }},
       {"max-body", "MDN_MAX_BODY", "largest request body in bytes (suffix K, M or G allowed)",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_body_bytes = parse_int(n, v, 1, std::int64_t{1} << 40); },
        [](const ServerConfig& c) { return std::to_string(c.max_body_bytes); }},
@@ -138,6 +171,48 @@ const std::vector<Setting>& settings() {
 }
 
 }  // namespace
+
+RedisAddress parse_redis_url(const std::string& url) {
+  const std::string scheme = "redis://";
+  if (url.rfind(scheme, 0) != 0) throw ConfigError("expected memory or redis://host[:port][/db], got '" + url + "'");
+  std::string rest = url.substr(scheme.size());
+  RedisAddress a;
+  if (const auto at = rest.rfind('@'); at != std::string::npos) {
+    const std::string userinfo = rest.substr(0, at);
+    const auto colon = userinfo.find(':');
+    // redis://:password@host (Redis < 6 style) or redis://user:password@host; only the
+    // password is used (AUTH password, the default user).
+    a.password = colon == std::string::npos ? userinfo : userinfo.substr(colon + 1);
+    rest = rest.substr(at + 1);
+  }
+  std::string hostport = rest, db;
+  if (const auto slash = rest.find('/'); slash != std::string::npos) {
+    hostport = rest.substr(0, slash);
+    db = rest.substr(slash + 1);
+  }
+  std::string port;
+  if (!hostport.empty() && hostport.front() == '[') {  // [::1]:6379
+    const auto close = hostport.find(']');
+    if (close == std::string::npos) throw ConfigError("unclosed '[' in the Redis URL '" + url + "'");
+    a.host = hostport.substr(1, close - 1);
+    if (close + 1 < hostport.size()) {
+      if (hostport[close + 1] != ':') throw ConfigError("bad Redis URL '" + url + "'");
+      port = hostport.substr(close + 2);
+    }
+  } else if (const auto colon = hostport.rfind(':'); colon != std::string::npos) {
+    a.host = hostport.substr(0, colon);
+    port = hostport.substr(colon + 1);
+  } else {
+    a.host = hostport;
+  }
+  if (a.host.empty()) throw ConfigError("the Redis URL '" + url + "' names no host");
+  for (char ch : a.host)
+    if (static_cast<unsigned char>(ch) <= 0x20 || ch == '/' || ch == '?' || ch == '#')
+      throw ConfigError("bad host in the Redis URL '" + url + "'");
+  if (!port.empty() || hostport.back() == ':') a.port = int(parse_int("Redis port", port, 1, 65535));
+  if (!db.empty()) a.db = int(parse_int("Redis database", db, 0, 15));
+  return a;
+}
 
 int ServerConfig::effective_workers() const {
   if (workers > 0) return workers;

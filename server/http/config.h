@@ -27,6 +27,15 @@ struct ServerConfig {
   double result_ttl_s = 600;       // --result-ttl; seconds a finished job and its result are kept
   int max_stored_jobs = 1024;      // --max-stored-jobs; finished jobs kept at most (oldest evicted)
 
+  // --- Job store (asynchronous jobs; see docker/README.md "Job store") ---
+  // --queue / MDN_QUEUE: "memory" (this process only, the default) or
+  // redis://[:password@]host[:port][/db] (shared by every replica; Redis Streams).
+  std::string queue = "memory";
+  std::string queue_prefix = "mdn:";    // --queue-prefix; Redis key prefix (several services per Redis)
+  double queue_reclaim_idle_s = 10;     // --queue-reclaim-idle; a job silent this long is taken over
+  int queue_max_attempts = 3;           // --queue-max-attempts; runs of one job before it fails
+  std::int64_t queue_max_result_bytes = std::int64_t{256} << 20;  // --queue-max-result; stored result bytes
+
   // --- Input limits ---
   std::int64_t max_body_bytes = std::int64_t{256} << 20;  // --max-body; request body bytes
   std::int64_t max_faces = 5'000'000;                     // --max-faces; per surface
@@ -48,6 +57,16 @@ struct ServerConfig {
 
   int effective_workers() const;
 };
+
+// Where a redis:// --queue points. Parsed at startup; a malformed URL is a ConfigError.
+struct RedisAddress {
+  std::string host = "127.0.0.1";
+  int port = 6379;
+  int db = 0;
+  std::string password;  // empty: no AUTH
+};
+// Parses redis://[[user]:password@]host[:port][/db] (db in [0, 15]). Throws ConfigError.
+RedisAddress parse_redis_url(const std::string& url);
 
 // A bad flag, environment variable or value; what() names it.
 class ConfigError : public std::runtime_error {

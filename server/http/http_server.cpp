@@ -19,8 +19,10 @@
 #include "core/params.h"
 #include "server/http/connection_probe.h"
 #include "server/http/embedded.h"
+#include "server/http/job_store.h"
 #include "server/http/metrics.h"
 #include "server/http/problem.h"
+#include "server/http/redis_queue.h"
 #include "server/params_json.h"
 
 namespace mdn::http {
@@ -155,11 +157,12 @@ json reports_json(const service::JobOutput& out) {
   return reports;
 }
 
-json output_summary(const service::JobOutput& out) {
+// `bytes`: the result's size (the shared store loads the bytes themselves only for /result).
+json output_summary(const service::JobOutput& out, std::int64_t bytes) {
   json reports = reports_json(out);
   return {{"media_type", out.media_type},
           {"format", std::string(io::to_string(out.format))},
-          {"bytes", out.bytes.size()},
+          {"bytes", bytes},
           {"vertices", out.vertices},
           {"faces", out.faces},
           {"params", service::to_json(out.effective)},
@@ -218,6 +221,10 @@ struct HttpService::Impl {
     id_prefix = buf;
     routes = make_routes();
     for (Route& r : routes) r.regex = std::regex(r.pattern);
+    if (config.queue == "memory")
+      store = std::make_unique<MemoryJobStore>(queue);
+    else
+      store = make_redis_job_store(config, queue, log);
     install();
   }
 
@@ -643,7 +650,8 @@ struct HttpService::Impl {
               {"timings_s", {{"queue_wait", s.queue_wait_s}, {"run", s.run_s}}},
               {"input_bytes", s.input_bytes},
               {"links", {{"self", self}, {"result", self + "/result"}}}};
-    if (s.output) j["result"] = output_summary(*s.output);
+    if (s.output) j["result"] = output_summary(*s.output, s.output_bytes);
+    if (s.attempts > 1) j["attempts"] = s.attempts;
     if (s.error) j["error"] = s.error->to_json(self, request_id);
     return j;
   }
@@ -653,13 +661,13 @@ struct HttpService::Impl {
     res.set_content(j.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
   }
 
-  std::shared_ptr<Job> find_job(Context& ctx) {
+  JobSnapshot find_job(Context& ctx, bool with_result) {
     const std::string id = ctx.req.matches[1];
-    auto job = queue.find(id);
+    auto job = store->find(id, with_result);
     if (!job)
       throw HttpError(make_problem(404, "job-not-found", "Job not found",
                                    "no job '" + header_safe(id) + "' (unknown, deleted or expired)"));
-    return job;
+    return std::move(*job);
   }
 
   // ---------------------------------------------------------------- handlers
@@ -676,7 +684,9 @@ struct HttpService::Impl {
       p.retry_after_s = queue.retry_after_s();
       throw HttpError(p);
     }
+    if (auto p = store->unavailable()) throw HttpError(*p);
     set_json(ctx.res, {{"status", "ready"},
+                       {"job_store", store->kind()},
                        {"queued", queue.queued()},
                        {"running", queue.running()},
                        {"capacity", queue.capacity()},
@@ -685,9 +695,10 @@ struct HttpService::Impl {
 
   void metrics_route(Context& ctx) {
     ctx.res.status = 200;
-    ctx.res.set_content(metrics.render({queue.queued(), queue.capacity(), queue.running(), queue.workers(),
-                                        queue.draining()}),
-                        "text/plain; version=0.0.4; charset=utf-8");
+    std::string text = metrics.render({queue.queued(), queue.capacity(), queue.running(), queue.workers(),
+                                       queue.draining()});
+    store->render_metrics(text);
+    ctx.res.set_content(text, "text/plain; version=0.0.4; charset=utf-8");
   }
 
   void openapi(Context& ctx) {
@@ -756,8 +767,8 @@ struct HttpService::Impl {
                     std::to_string(input.bytes.size()) + "|" +
                     std::to_string(std::hash<std::string_view>{}(input.bytes));
     }
-    auto submitted = queue.submit(std::move(input), true, key, fingerprint);
-    const JobSnapshot s = submitted.job->snapshot();
+    auto submitted = store->submit(std::move(input), key, fingerprint);
+    const JobSnapshot& s = submitted.job;
     if (submitted.replayed) ctx.res.set_header("Idempotent-Replayed", "true");
     ctx.res.set_header("Location", "/v1/jobs/" + s.id);
     ctx.res.set_header("Retry-After", "1");
@@ -765,17 +776,16 @@ struct HttpService::Impl {
   }
 
   void get_job(Context& ctx) {
-    const JobSnapshot s = find_job(ctx)->snapshot();
+    const JobSnapshot s = find_job(ctx, false);
     if (!is_terminal(s.state)) ctx.res.set_header("Retry-After", "1");
     set_json(ctx.res, job_json(s, ctx.request_id));
   }
 
   void get_result(Context& ctx) {
-    std::shared_ptr<Job> job = find_job(ctx);
-    const JobSnapshot s = job->snapshot();
+    const JobSnapshot s = find_job(ctx, true);
     if (s.state == JobState::Succeeded) {
       write_result(ctx, s);
-      job->mark_result_fetched();
+      store->result_fetched(s.id);
       return;
     }
     Problem p;
@@ -793,15 +803,15 @@ struct HttpService::Impl {
 
   void delete_job(Context& ctx) {
     const std::string id = ctx.req.matches[1];
-    auto job = queue.find(id);
-    switch (queue.cancel(id)) {
+    const JobStore::CancelResult r = store->cancel(id);
+    switch (r.outcome) {
       case JobQueue::CancelOutcome::NotFound:
         throw HttpError(make_problem(404, "job-not-found", "Job not found",
                                      "no job '" + header_safe(id) + "' (unknown, deleted or expired)"));
       case JobQueue::CancelOutcome::CancelledQueued:
-        return set_json(ctx.res, job_json(job->snapshot(), ctx.request_id), 200);
+        return set_json(ctx.res, job_json(r.job, ctx.request_id), 200);
       case JobQueue::CancelOutcome::CancelRequested:
-        return set_json(ctx.res, job_json(job->snapshot(), ctx.request_id), 202);
+        return set_json(ctx.res, job_json(r.job, ctx.request_id), 202);
       case JobQueue::CancelOutcome::Removed:
         ctx.res.status = 204;
         return;
@@ -813,6 +823,7 @@ struct HttpService::Impl {
   const std::shared_ptr<const EventLog> log;
   Metrics metrics;  // before queue: the queue's hook uses it until the queue is destroyed
   JobQueue queue;
+  std::unique_ptr<JobStore> store;  // after queue: the Redis store runs its jobs on it
   httplib::Server svr;
   std::vector<Route> routes;
   std::string id_prefix;
@@ -849,12 +860,16 @@ int HttpService::bind() {
 
 bool HttpService::serve() { return impl_->svr.listen_after_bind(); }
 
-void HttpService::begin_drain() { impl_->queue.begin_drain(); }
+void HttpService::begin_drain() {
+  impl_->queue.begin_drain();
+  impl_->store->begin_drain();
+}
 
-bool HttpService::wait_drained(Clock::time_point deadline) { return impl_->queue.wait_drained(deadline); }
+bool HttpService::wait_drained(Clock::time_point deadline) { return impl_->store->wait_drained(deadline); }
 
 void HttpService::stop() {
   impl_->queue.begin_drain();
+  impl_->store->stop();  // Redis: jobs it still runs go back to the shared queue
   impl_->queue.cancel_all();
   impl_->svr.stop();
 }

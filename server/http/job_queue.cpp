@@ -73,6 +73,8 @@ JobSnapshot Job::snapshot() const {
   s.run_s = started_ ? seconds_between(*started_, finished_.value_or(now)) : 0.0;
   s.error = error_;
   s.output = output_;
+  s.output_bytes = output_ ? std::int64_t(output_->bytes.size()) : 0;
+  s.attempts = started_ ? 1 : 0;
   return s;
 }
 
@@ -171,6 +173,18 @@ JobQueue::Submitted JobQueue::submit(service::JobInput input, bool asynchronous,
   return {job, false};
 }
 
+std::shared_ptr<Job> JobQueue::run_external(std::string id, service::JobInput input) {
+  input.threads = options_.threads_per_job;
+  auto job = std::make_shared<Job>(std::move(id), std::move(input), true);
+  job->external_ = true;
+  {
+    std::lock_guard lock(mutex_);
+    queue_.push_back(job);
+  }
+  work_cv_.notify_one();
+  return job;
+}
+
 std::shared_ptr<Job> JobQueue::find(const std::string& id) {
   std::lock_guard lock(mutex_);
   sweep_locked();
@@ -219,7 +233,7 @@ void JobQueue::cancel(const std::shared_ptr<Job>& job) {
     finish_locked(*job, JobState::Cancelled,
                   make_problem(409, "cancelled", "Job cancelled", "the client went away before the job started"), nullptr);
     job_lock.unlock();
-    finished_order_.push_back(job->id_);
+    if (!job->external_) finished_order_.push_back(job->id_);
     idle_cv_.notify_all();
   }
 }
@@ -307,7 +321,7 @@ void JobQueue::worker_loop() {
     {
       std::lock_guard lock(mutex_);
       --running_;
-      finished_order_.push_back(job->id_);
+      if (!job->external_) finished_order_.push_back(job->id_);
       sweep_locked();
     }
     idle_cv_.notify_all();

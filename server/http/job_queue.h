@@ -48,7 +48,11 @@ struct JobSnapshot {
   double queue_wait_s = 0;  // so far, or until it started
   double run_s = 0;         // so far, or until it finished
   std::optional<Problem> error;                          // Failed (and Cancelled: why)
-  std::shared_ptr<const service::JobOutput> output;      // Succeeded
+  // Succeeded. The shared job store (Redis) fills `output` without its bytes unless the result
+  // itself was asked for; output_bytes is the result's size either way.
+  std::shared_ptr<const service::JobOutput> output;
+  std::int64_t output_bytes = 0;
+  int attempts = 0;  // runs started (Redis: more than 1 after a takeover); 0 while queued
 };
 
 class Job {
@@ -69,6 +73,7 @@ class Job {
 
   const std::string id_;
   const bool asynchronous_;
+  bool external_ = false;  // run_external(): not in the job table
   const Clock::time_point created_ = Clock::now();
   const std::chrono::system_clock::time_point created_wall_ = std::chrono::system_clock::now();
   std::atomic<bool> cancel_{false};
@@ -118,6 +123,11 @@ class JobQueue {
                    const std::string& fingerprint = {});
 
   std::shared_ptr<Job> find(const std::string& id);
+
+  // Runs a job accepted elsewhere (the shared Redis queue): no capacity or drain check, not
+  // listed by find() nor kept after it finishes; `id` only names it in logs and metrics.
+  // The caller waits on the returned job and may cancel it with cancel(job).
+  std::shared_ptr<Job> run_external(std::string id, service::JobInput input);
 
   enum class CancelOutcome { NotFound, CancelledQueued, CancelRequested, Removed };
   // Queued: cancelled at once. Running: cancellation requested (the pipeline stops at its next

@@ -1,0 +1,102 @@
+// Where asynchronous jobs (POST /v1/jobs) live: the interface the HTTP layer talks to, with two
+// implementations chosen by --queue:
+//   memory   MemoryJobStore (this file): the process's own JobQueue; a single node needs
+//            nothing else. Jobs die with the process.
+//   redis:// RedisJobStore (redis_queue.h): input, parameters, state, progress and result in
+//            Redis, the queue a Redis Stream with a consumer group; any replica accepts, any
+//            replica's workers run, any replica answers.
+// Synchronous POST /v1/denoise never goes through a JobStore: it runs on the local JobQueue in
+// both modes (see docker/README.md, "Job store").
+//
+// Thread-safety contract: every method may be called from any thread at any time.
+// Errors: methods throw HttpError (503 queue-unavailable with Retry-After when the store cannot
+// be reached, 503 queue-full / draining, 422 idempotency-key-reused) and nothing else escapes
+// but std::bad_alloc.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "server/http/job_queue.h"
+
+namespace mdn::http {
+
+class JobStore {
+ public:
+  virtual ~JobStore() = default;
+
+  struct Submitted {
+    JobSnapshot job;
+    bool replayed = false;  // an earlier job with the same Idempotency-Key and body
+  };
+  // Accepts an asynchronous job. Once this returns, the job is stored: it runs even if this
+  // process dies (Redis) or until this process stops (memory). `fingerprint` identifies the
+  // body and parameters for idempotency and is ignored without a key.
+  virtual Submitted submit(service::JobInput input, const std::optional<std::string>& idempotency_key,
+                           const std::string& fingerprint) = 0;
+
+  // The job's state; nullopt when unknown, deleted or expired. With `with_result`, a succeeded
+  // job's output carries its bytes (GET /result); without, only their count (output_bytes).
+  virtual std::optional<JobSnapshot> find(const std::string& id, bool with_result) = 0;
+  // GET /result delivered the bytes once (the memory store's drain waits for this).
+  virtual void result_fetched(const std::string& id) = 0;
+
+  struct CancelResult {
+    JobQueue::CancelOutcome outcome = JobQueue::CancelOutcome::NotFound;
+    JobSnapshot job;  // after the cancellation (CancelledQueued, CancelRequested)
+  };
+  // Queued: cancelled at once. Running: cancellation requested; the worker running it, on
+  // whichever replica, stops at its next checkpoint. Finished: the job and its result removed.
+  virtual CancelResult cancel(const std::string& id) = 0;
+
+  // Why the store cannot take jobs now (Redis unreachable), for /readyz; nullopt when it can.
+  virtual std::optional<Problem> unavailable() const = 0;
+
+  // Drain (SIGTERM): stop taking new jobs; wait for what this process runs; stop.
+  virtual void begin_drain() = 0;
+  virtual bool wait_drained(Clock::time_point deadline) = 0;
+  virtual void stop() = 0;
+
+  // Extra Prometheus lines (HELP/TYPE included) for GET /metrics.
+  virtual void render_metrics(std::string& out) const = 0;
+  virtual std::string_view kind() const = 0;  // "memory" or "redis"
+};
+
+// The default: jobs in this process's JobQueue (unchanged behaviour of a single node).
+class MemoryJobStore final : public JobStore {
+ public:
+  explicit MemoryJobStore(JobQueue& queue) : queue_(queue) {}
+
+  Submitted submit(service::JobInput input, const std::optional<std::string>& idempotency_key,
+                   const std::string& fingerprint) override {
+    auto s = queue_.submit(std::move(input), true, idempotency_key, fingerprint);
+    return {s.job->snapshot(), s.replayed};
+  }
+  std::optional<JobSnapshot> find(const std::string& id, bool) override {
+    auto job = queue_.find(id);
+    if (!job) return std::nullopt;
+    return job->snapshot();
+  }
+  void result_fetched(const std::string& id) override {
+    if (auto job = queue_.find(id)) job->mark_result_fetched();
+  }
+  CancelResult cancel(const std::string& id) override {
+    auto job = queue_.find(id);
+    CancelResult r;
+    r.outcome = queue_.cancel(id);
+    if (job && r.outcome != JobQueue::CancelOutcome::NotFound) r.job = job->snapshot();
+    return r;
+  }
+  std::optional<Problem> unavailable() const override { return std::nullopt; }
+  void begin_drain() override { queue_.begin_drain(); }
+  bool wait_drained(Clock::time_point deadline) override { return queue_.wait_drained(deadline); }
+  void stop() override {}
+  void render_metrics(std::string&) const override {}
+  std::string_view kind() const override { return "memory"; }
+
+ private:
+  JobQueue& queue_;
+};
+
+}  // namespace mdn::http

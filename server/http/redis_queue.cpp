@@ -1,0 +1,1016 @@
+#include "server/http/redis_queue.h"
+
+#include <hiredis.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <map>
+#include <mutex>
+#include <random>
+#include <thread>
+#include <vector>
+
+#include "server/params_json.h"
+
+namespace mdn::http {
+namespace {
+
+using nlohmann::json;
+using namespace std::chrono_literals;
+
+// ------------------------------------------------------------------ hiredis, thinly wrapped
+
+struct ReplyDeleter {
+  void operator()(redisReply* r) const {
+    if (r) freeReplyObject(r);
+  }
+};
+using Reply = std::unique_ptr<redisReply, ReplyDeleter>;
+
+// The connection failed (refused, reset, timed out): the store is unreachable.
+class RedisDown : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+// Redis answered with an error reply ("-ERR ...", "-LOADING ...").
+class RedisReplyError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+std::string_view str(const redisReply* r) {
+  if (!r || (r->type != REDIS_REPLY_STRING && r->type != REDIS_REPLY_STATUS && r->type != REDIS_REPLY_ERROR))
+    return {};
+  return {r->str, r->len};
+}
+
+// One synchronous connection; used by one thread at a time.
+class Connection {
+ public:
+  Connection(const RedisAddress& a, std::chrono::milliseconds timeout) {
+    const timeval connect_tv{1, 0};
+    ctx_ = redisConnectWithTimeout(a.host.c_str(), a.port, connect_tv);
+    if (!ctx_) throw RedisDown("cannot allocate a Redis context");
+    if (ctx_->err) {
+      const std::string why = ctx_->errstr;
+      redisFree(ctx_);
+      ctx_ = nullptr;
+      throw RedisDown("cannot connect to Redis at " + a.host + ":" + std::to_string(a.port) + ": " + why);
+    }
+    const timeval tv{long(timeout.count() / 1000), long((timeout.count() % 1000) * 1000)};
+    redisSetTimeout(ctx_, tv);
+    if (!a.password.empty()) expect_ok(command({"AUTH", a.password}), "AUTH");
+    if (a.db != 0) expect_ok(command({"SELECT", std::to_string(a.db)}), "SELECT");
+  }
+  ~Connection() {
+    if (ctx_) redisFree(ctx_);
+  }
+  Connection(const Connection&) = delete;
+  Connection& operator=(const Connection&) = delete;
+
+  // Sends one command; an error reply is returned (callers decide), a broken connection throws
+  // RedisDown and leaves this connection unusable.
+  Reply command(const std::vector<std::string_view>& args) {
+    if (broken_) throw RedisDown("connection already failed");
+    std::vector<const char*> argv;
+    std::vector<std::size_t> lens;
+    argv.reserve(args.size());
+    lens.reserve(args.size());
+    for (auto a : args) {
+      argv.push_back(a.data());
+      lens.push_back(a.size());
+    }
+    Reply r(static_cast<redisReply*>(redisCommandArgv(ctx_, int(args.size()), argv.data(), lens.data())));
+    if (!r) {
+      broken_ = true;
+      throw RedisDown(std::string("Redis connection failed: ") + (ctx_->err ? ctx_->errstr : "no reply"));
+    }
+    return r;
+  }
+  // Like command(), but an error reply throws RedisReplyError.
+  Reply checked(const std::vector<std::string_view>& args) {
+    Reply r = command(args);
+    if (r->type == REDIS_REPLY_ERROR) throw RedisReplyError(std::string(str(r.get())));
+    return r;
+  }
+  bool broken() const { return broken_; }
+
+ private:
+  static void expect_ok(const Reply& r, const char* what) {
+    if (r->type == REDIS_REPLY_ERROR) throw RedisDown(std::string(what) + " refused: " + std::string(str(r.get())));
+  }
+  redisContext* ctx_ = nullptr;
+  bool broken_ = false;
+};
+
+// Connections for request threads: taken, used, given back (a broken one is dropped).
+class Pool {
+ public:
+  Pool(RedisAddress a, std::chrono::milliseconds timeout) : address_(std::move(a)), timeout_(timeout) {}
+  std::unique_ptr<Connection> take() {
+    {
+      std::lock_guard lock(mutex_);
+      if (!idle_.empty()) {
+        auto c = std::move(idle_.back());
+        idle_.pop_back();
+        return c;
+      }
+    }
+    return std::make_unique<Connection>(address_, timeout_);
+  }
+  void give(std::unique_ptr<Connection> c) {
+    if (!c || c->broken()) return;
+    std::lock_guard lock(mutex_);
+    if (idle_.size() < 16) idle_.push_back(std::move(c));
+  }
+  void clear() {
+    std::lock_guard lock(mutex_);
+    idle_.clear();
+  }
+  const RedisAddress& address() const { return address_; }
+  std::chrono::milliseconds timeout() const { return timeout_; }
+
+ private:
+  const RedisAddress address_;
+  const std::chrono::milliseconds timeout_;
+  std::mutex mutex_;
+  std::vector<std::unique_ptr<Connection>> idle_;
+};
+
+// ------------------------------------------------------------------ Lua scripts
+// Each is one atomic step of a job's life. Keys are passed in KEYS (single Redis, not Cluster:
+// the idempotency replay reads the earlier job's hash by name).
+
+// KEYS: hash, input, stream, idem.  ARGV: id, input, format, params, created_ms, capacity,
+// fingerprint, group, has_key, job key prefix.
+constexpr const char* kSubmit = R"lua(
+if ARGV[9] == '1' then
+  local prev = redis.call('GET', KEYS[4])
+  if prev then
+    local bar = string.find(prev, '|', 1, true)
+    local jid = string.sub(prev, 1, bar - 1)
+    if string.sub(prev, bar + 1) ~= ARGV[7] then return {'reused'} end
+    if redis.call('EXISTS', ARGV[10] .. jid) == 1 then return {'replay', jid} end
+  end
+end
+if redis.call('EXISTS', KEYS[3]) == 0 then
+  redis.call('XGROUP', 'CREATE', KEYS[3], ARGV[8], '0', 'MKSTREAM')
+end
+local waiting = redis.call('XLEN', KEYS[3]) - redis.call('XPENDING', KEYS[3], ARGV[8])[1]
+if waiting >= tonumber(ARGV[6]) then return {'full', waiting} end
+redis.call('HSET', KEYS[1], 'state', 'queued', 'stage', 'queued', 'fraction', '0', 'format', ARGV[3],
+           'params', ARGV[4], 'created_ms', ARGV[5], 'input_bytes', string.len(ARGV[2]), 'attempts', '0')
+redis.call('SET', KEYS[2], ARGV[2])
+if ARGV[9] == '1' then
+  redis.call('SET', KEYS[4], ARGV[1] .. '|' .. ARGV[7])
+  redis.call('HSET', KEYS[1], 'idem', KEYS[4])
+end
+redis.call('XADD', KEYS[3], '*', 'id', ARGV[1])
+return {'ok'}
+)lua";
+
+// Shared by the scripts that end a job: state, error, expiry, and the entry acknowledged.
+// KEYS: hash, input, stream.  ARGV (of the caller) give: now_ms, ttl_ms, entry id, group.
+constexpr const char* kFinishHelpers = R"lua(
+local function drop(stream, group, entry)
+  redis.call('XACK', stream, group, entry)
+  redis.call('XDEL', stream, entry)
+end
+local function expire_job(hash, ttl_ms)
+  redis.call('PEXPIRE', hash, ttl_ms)
+  local idem = redis.call('HGET', hash, 'idem')
+  if idem then redis.call('PEXPIRE', idem, ttl_ms) end
+end
+)lua";
+
+// KEYS: hash, input, stream.  ARGV: consumer, now_ms, max_attempts, entry id, group,
+// exhausted problem, cancelled problem, ttl_ms, lost-input problem.
+constexpr const char* kStart = R"lua(
+local function finish(state, problem)
+  redis.call('HSET', KEYS[1], 'state', state, 'error', problem, 'finished_ms', ARGV[2])
+  redis.call('DEL', KEYS[2])
+  expire_job(KEYS[1], ARGV[8])
+  drop(KEYS[3], ARGV[5], ARGV[4])
+end
+local st = redis.call('HGET', KEYS[1], 'state')
+if not st then drop(KEYS[3], ARGV[5], ARGV[4]) return {'gone'} end
+if st == 'succeeded' or st == 'failed' or st == 'cancelled' then drop(KEYS[3], ARGV[5], ARGV[4]) return {'done'} end
+if redis.call('HGET', KEYS[1], 'cancel') == '1' then finish('cancelled', ARGV[7]) return {'cancelled'} end
+local previous = redis.call('HGET', KEYS[1], 'owner') or ''
+local n = redis.call('HINCRBY', KEYS[1], 'attempts', 1)
+if n > tonumber(ARGV[3]) then
+  redis.call('HINCRBY', KEYS[1], 'attempts', -1)
+  finish('failed', ARGV[6])
+  return {'exhausted', n - 1, previous}
+end
+local input = redis.call('GET', KEYS[2])
+if not input then finish('failed', ARGV[9]) return {'lost'} end
+redis.call('HSET', KEYS[1], 'state', 'running', 'owner', ARGV[1], 'started_ms', ARGV[2], 'stage', 'decode',
+           'fraction', '0')
+return {'run', n, previous, input, redis.call('HGET', KEYS[1], 'format'), redis.call('HGET', KEYS[1], 'params')}
+)lua";
+
+// Heartbeat. KEYS: hash, stream.  ARGV: consumer, stage ('' = unchanged), fraction, entry id, group.
+constexpr const char* kBeat = R"lua(
+if redis.call('HGET', KEYS[1], 'owner') ~= ARGV[1] or redis.call('HGET', KEYS[1], 'state') ~= 'running' then
+  return 'lost'
+end
+if ARGV[2] ~= '' then redis.call('HSET', KEYS[1], 'stage', ARGV[2], 'fraction', ARGV[3]) end
+redis.call('XCLAIM', KEYS[2], ARGV[5], ARGV[1], 0, ARGV[4], 'JUSTID')
+if redis.call('HGET', KEYS[1], 'cancel') == '1' then return 'cancel' end
+return 'ok'
+)lua";
+
+// KEYS: hash, input, stream, result.  ARGV: consumer, state, problem, output summary, result
+// bytes, ttl_ms, now_ms, entry id, group, output_bytes.
+constexpr const char* kFinish = R"lua(
+if redis.call('HGET', KEYS[1], 'owner') ~= ARGV[1] or redis.call('HGET', KEYS[1], 'state') ~= 'running' then
+  return 'stale'
+end
+if ARGV[2] == 'succeeded' then
+  redis.call('SET', KEYS[4], ARGV[5], 'PX', ARGV[6])
+  redis.call('HSET', KEYS[1], 'output', ARGV[4], 'output_bytes', ARGV[10], 'stage', 'done', 'fraction', '1')
+else
+  redis.call('HSET', KEYS[1], 'error', ARGV[3])
+end
+redis.call('HSET', KEYS[1], 'state', ARGV[2], 'finished_ms', ARGV[7])
+redis.call('DEL', KEYS[2])
+expire_job(KEYS[1], ARGV[6])
+drop(KEYS[3], ARGV[9], ARGV[8])
+return 'ok'
+)lua";
+
+// A replica stopping with a job still running hands it back at once (not counted as an
+// attempt). KEYS: hash, stream.  ARGV: consumer, entry id, group, job id.
+constexpr const char* kRelease = R"lua(
+if redis.call('HGET', KEYS[1], 'owner') ~= ARGV[1] or redis.call('HGET', KEYS[1], 'state') ~= 'running' then
+  return 'stale'
+end
+redis.call('HINCRBY', KEYS[1], 'attempts', -1)
+redis.call('HSET', KEYS[1], 'state', 'queued', 'stage', 'queued', 'fraction', '0')
+redis.call('HDEL', KEYS[1], 'owner')
+drop(KEYS[2], ARGV[3], ARGV[2])
+redis.call('XADD', KEYS[2], '*', 'id', ARGV[4])
+return 'ok'
+)lua";
+
+// DELETE. KEYS: hash, input, result.  ARGV: cancelled problem, now_ms, ttl_ms.
+constexpr const char* kCancel = R"lua(
+local st = redis.call('HGET', KEYS[1], 'state')
+if not st then return 'none' end
+if st == 'queued' then
+  redis.call('HSET', KEYS[1], 'cancel', '1', 'state', 'cancelled', 'error', ARGV[1], 'finished_ms', ARGV[2])
+  redis.call('DEL', KEYS[2])
+  expire_job(KEYS[1], ARGV[3])
+  return 'cancelled'
+elseif st == 'running' then
+  redis.call('HSET', KEYS[1], 'cancel', '1')
+  return 'requested'
+end
+local idem = redis.call('HGET', KEYS[1], 'idem')
+redis.call('DEL', KEYS[1], KEYS[2], KEYS[3])
+if idem then redis.call('DEL', idem) end
+return 'removed'
+)lua";
+
+// KEYS: hash, result.  ARGV: with_result.
+constexpr const char* kGet = R"lua(
+local h = redis.call('HGETALL', KEYS[1])
+if #h == 0 then return {} end
+if ARGV[1] == '1' and redis.call('HGET', KEYS[1], 'state') == 'succeeded' then
+  local bytes = redis.call('GET', KEYS[2])
+  if not bytes then return {} end
+  return {h, bytes}
+end
+return {h}
+)lua";
+
+// ------------------------------------------------------------------ serialisation
+
+std::int64_t now_ms() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+std::string problem_text(const Problem& p) {
+  return json{{"status", p.status}, {"type", p.type}, {"title", p.title}, {"detail", p.detail},
+              {"extensions", p.extensions}}
+      .dump();
+}
+
+std::optional<Problem> problem_from_text(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  const json j = json::parse(text, nullptr, false);
+  if (!j.is_object()) return make_problem(500, "internal", "Internal server error", "unreadable stored error");
+  Problem p = make_problem(j.value("status", 500), j.value("type", "internal"), j.value("title", ""),
+                           j.value("detail", ""));
+  if (j.contains("extensions") && j["extensions"].is_object()) p.extensions = j["extensions"];
+  return p;
+}
+
+// The summary of a result that every replica needs to answer for it (all but the bytes).
+std::string output_text(const service::JobOutput& o) {
+  json reports = json::array();
+  for (const DenoiseReport& r : o.reports)
+    reports.push_back({{"fold_ratio", r.fold_ratio},
+                       {"cluster_area_ratio", r.cluster_area_ratio},
+                       {"region_prefilter_applied", r.region_prefilter_applied},
+                       {"region_vertices", r.region_vertices}});
+  return json{{"format", std::string(io::to_string(o.format))},
+              {"media_type", o.media_type},
+              {"effective", service::to_json(o.effective)},
+              {"reports", reports},
+              {"notes", o.notes},
+              {"vertices", o.vertices},
+              {"faces", o.faces},
+              {"decode_ms", o.decode_ms},
+              {"denoise_ms", o.denoise_ms},
+              {"encode_ms", o.encode_ms},
+              {"stages",
+               {{"setup", o.stages.setup_ms},
+                {"initial", o.stages.initial_ms},
+                {"region", o.stages.region_ms},
+                {"anisotropic", o.stages.anisotropic_ms},
+                {"normal", o.stages.normal_ms},
+                {"vertex", o.stages.vertex_ms},
+                {"total", o.stages.total_ms}}}}
+      .dump();
+}
+
+std::shared_ptr<service::JobOutput> output_from_text(const std::string& text) {
+  const json j = json::parse(text);
+  auto o = std::make_shared<service::JobOutput>();
+  o->format = io::format_from_string(j.at("format").get<std::string>()).value_or(io::Format::Off);
+  o->media_type = j.at("media_type").get<std::string>();
+  o->effective = service::job_params_from_json(j.at("effective"));
+  for (const json& r : j.at("reports")) {
+    DenoiseReport d;
+    d.fold_ratio = r.value("fold_ratio", 0.0);
+    d.cluster_area_ratio = r.value("cluster_area_ratio", 1.0);
+    d.region_prefilter_applied = r.value("region_prefilter_applied", false);
+    d.region_vertices = r.value("region_vertices", std::int64_t{0});
+    o->reports.push_back(d);
+  }
+  o->notes = j.at("notes").get<std::vector<std::string>>();
+  o->vertices = j.value("vertices", std::int64_t{0});
+  o->faces = j.value("faces", std::int64_t{0});
+  o->decode_ms = j.value("decode_ms", 0.0);
+  o->denoise_ms = j.value("denoise_ms", 0.0);
+  o->encode_ms = j.value("encode_ms", 0.0);
+  const json& s = j.at("stages");
+  o->stages.setup_ms = s.value("setup", 0.0);
+  o->stages.initial_ms = s.value("initial", 0.0);
+  o->stages.region_ms = s.value("region", 0.0);
+  o->stages.anisotropic_ms = s.value("anisotropic", 0.0);
+  o->stages.normal_ms = s.value("normal", 0.0);
+  o->stages.vertex_ms = s.value("vertex", 0.0);
+  o->stages.total_ms = s.value("total", 0.0);
+  return o;
+}
+
+std::optional<JobState> state_from_string(std::string_view s) {
+  for (JobState st : {JobState::Queued, JobState::Running, JobState::Succeeded, JobState::Failed, JobState::Cancelled})
+    if (to_string(st) == s) return st;
+  return std::nullopt;
+}
+
+std::int64_t to_int(const std::string& s, std::int64_t fallback = 0) {
+  try {
+    return s.empty() ? fallback : std::stoll(s);
+  } catch (...) {
+    return fallback;
+  }
+}
+
+double to_double(const std::string& s) {
+  try {
+    return s.empty() ? 0.0 : std::stod(s);
+  } catch (...) {
+    return 0.0;
+  }
+}
+
+JobSnapshot snapshot_from_hash(const std::string& id, std::map<std::string, std::string> h,
+                               const std::optional<std::string>& result) {
+  JobSnapshot s;
+  s.id = id;
+  s.asynchronous = true;
+  s.state = state_from_string(h["state"]).value_or(JobState::Failed);
+  s.stage = h["stage"].empty() ? "queued" : h["stage"];
+  s.fraction = std::clamp(to_double(h["fraction"]), 0.0, 1.0);
+  s.cancel_requested = h["cancel"] == "1";
+  s.input_bytes = to_int(h["input_bytes"]);
+  s.attempts = int(to_int(h["attempts"]));
+  const std::int64_t created = to_int(h["created_ms"]), now = now_ms();
+  const std::int64_t started = to_int(h["started_ms"], -1), finished = to_int(h["finished_ms"], -1);
+  s.created_wall = std::chrono::system_clock::time_point(std::chrono::milliseconds(created));
+  const std::int64_t end = finished >= 0 ? finished : now;
+  s.queue_wait_s = double(std::max<std::int64_t>(0, (started >= 0 ? started : end) - created)) / 1000;
+  s.run_s = started >= 0 ? double(std::max<std::int64_t>(0, end - started)) / 1000 : 0.0;
+  s.error = problem_from_text(h["error"]);
+  if (s.state == JobState::Succeeded && !h["output"].empty()) {
+    auto out = output_from_text(h["output"]);
+    if (result) out->bytes = *result;
+    s.output = std::move(out);
+    s.output_bytes = to_int(h["output_bytes"]);
+  }
+  return s;
+}
+
+std::string random_hex(std::mt19937_64& rng, int words) {
+  std::string out;
+  char buf[17];
+  for (int i = 0; i < words; ++i) {
+    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(rng()));
+    out += buf;
+  }
+  return out;
+}
+
+// Redis error replies that mean "not now" rather than "never".
+bool transient_reply(std::string_view e) {
+  for (std::string_view p : {"LOADING", "BUSY", "OOM", "READONLY", "MASTERDOWN", "TRYAGAIN", "CLUSTERDOWN", "NOREPLICAS"})
+    if (e.rfind(p, 0) == 0) return true;
+  return false;
+}
+
+// ------------------------------------------------------------------ the store
+
+class RedisJobStore final : public JobStore {
+ public:
+  RedisJobStore(const ServerConfig& c, JobQueue& queue, std::shared_ptr<const EventLog> log)
+      : config_(c),
+        queue_(queue),
+        log_(std::move(log)),
+        pool_(parse_redis_url(c.queue), 10s),
+        prefix_(c.queue_prefix),
+        stream_(prefix_ + "queue"),
+        ttl_ms_(std::to_string(std::max<std::int64_t>(1, std::int64_t(std::llround(c.result_ttl_s * 1000))))),
+        reclaim_idle_ms_(std::max<std::int64_t>(100, std::int64_t(std::llround(c.queue_reclaim_idle_s * 1000)))) {
+    if (c.max_body_bytes > (std::int64_t{512} << 20))
+      throw ConfigError("--max-body: Redis stores values of at most 512 MiB; lower it with --queue redis://");
+    std::random_device rd;
+    rng_.seed((std::uint64_t(rd()) << 32) ^ rd());
+    char host[256] = "host";
+    gethostname(host, sizeof host - 1);
+    consumer_ = std::string(host) + "-" + std::to_string(getpid()) + "-" + random_hex(rng_, 1).substr(0, 6);
+    const int slots = c.effective_workers();
+    monitor_ = std::thread([this] { monitor_loop(); });
+    for (int i = 0; i < slots; ++i) slots_.emplace_back([this] { slot_loop(); });
+    if (log_) {
+      const RedisAddress& a = pool_.address();
+      log_->info("job_store", {{"kind", "redis"}, {"host", a.host}, {"port", a.port}, {"db", a.db},
+                               {"prefix", prefix_}, {"consumer", consumer_}, {"slots", slots},
+                               {"reclaim_idle_s", c.queue_reclaim_idle_s}, {"max_attempts", c.queue_max_attempts}});
+    }
+  }
+
+  ~RedisJobStore() override { stop(); }
+
+  // ---------------------------------------------------------------- JobStore
+  Submitted submit(service::JobInput input, const std::optional<std::string>& key,
+                   const std::string& fingerprint) override {
+    if (queue_.draining() || draining_) {
+      Problem p = make_problem(503, "draining", "Server draining", "the server is shutting down and accepts no new jobs");
+      p.retry_after_s = 5;
+      throw HttpError(std::move(p));
+    }
+    std::string id;
+    {
+      std::lock_guard lock(rng_mutex_);
+      id = random_hex(rng_, 2);
+    }
+    const std::string created = std::to_string(now_ms());
+    const std::string format(io::to_string(input.format));
+    const std::string params = service::to_json(input.params).dump();
+    const std::string idem = key ? prefix_ + "idem:" + *key : prefix_ + "idem:";
+    const std::string capacity = std::to_string(config_.queue_capacity);
+    const std::string job_prefix = prefix_ + "job:";
+    auto reply = run([&](Connection& c) {
+      return c.checked({"EVAL", kSubmit, "4", job_key(id), input_key(id), stream_, idem, id, input.bytes, format,
+                        params, created, capacity, fingerprint, kGroup, key ? "1" : "0", job_prefix});
+    });
+    const std::string_view outcome = str(reply->element[0]);
+    if (outcome == "reused")
+      throw HttpError(make_problem(422, "idempotency-key-reused", "Idempotency-Key reused",
+                                   "this Idempotency-Key was already used with a different body or parameters"));
+    if (outcome == "full") {
+      Problem p = make_problem(503, "queue-full", "Job queue full",
+                               "all " + capacity + " slots of the shared queue are taken; retry later");
+      p.retry_after_s = 5;
+      throw HttpError(std::move(p));
+    }
+    if (outcome == "replay") {
+      const std::string earlier(str(reply->element[1]));
+      if (auto s = find(earlier, false)) return {std::move(*s), true};
+      // It expired between the two calls: the key is free again.
+      throw_unavailable("the job of this Idempotency-Key expired while being replayed; retry");
+    }
+    JobSnapshot s;
+    s.id = id;
+    s.asynchronous = true;
+    s.input_bytes = std::int64_t(input.bytes.size());
+    s.created_wall = std::chrono::system_clock::time_point(std::chrono::milliseconds(std::stoll(created)));
+    return {std::move(s), false};
+  }
+
+  std::optional<JobSnapshot> find(const std::string& id, bool with_result) override {
+    if (!valid_id(id)) return std::nullopt;
+    auto reply = run([&](Connection& c) {
+      return c.checked({"EVAL", kGet, "2", job_key(id), result_key(id), with_result ? "1" : "0"});
+    });
+    if (reply->type != REDIS_REPLY_ARRAY || reply->elements == 0) return std::nullopt;
+    std::map<std::string, std::string> h;
+    const redisReply* fields = reply->element[0];
+    for (std::size_t i = 0; i + 1 < fields->elements; i += 2)
+      h[std::string(str(fields->element[i]))] = std::string(str(fields->element[i + 1]));
+    std::optional<std::string> result;
+    if (reply->elements > 1) result = std::string(str(reply->element[1]));
+    try {
+      return snapshot_from_hash(id, std::move(h), result);
+    } catch (const std::exception& e) {
+      throw HttpError(make_problem(500, "queue-error", "Job store error",
+                                   std::string("the stored job could not be read: ") + e.what()));
+    }
+  }
+
+  void result_fetched(const std::string&) override {}  // results live in Redis: nothing waits for this
+
+  CancelResult cancel(const std::string& id) override {
+    CancelResult r;
+    if (!valid_id(id)) return r;
+    const std::string problem =
+        problem_text(make_problem(409, "cancelled", "Job cancelled", "cancelled by DELETE before it started"));
+    auto reply = run([&](Connection& c) {
+      return c.checked({"EVAL", kFinishHelpers + std::string(kCancel), "3", job_key(id), input_key(id), result_key(id),
+                        problem, std::to_string(now_ms()), ttl_ms_});
+    });
+    const std::string_view outcome = str(reply.get());
+    if (outcome == "none") return r;
+    if (outcome == "removed") {
+      r.outcome = JobQueue::CancelOutcome::Removed;
+      return r;
+    }
+    r.outcome = outcome == "cancelled" ? JobQueue::CancelOutcome::CancelledQueued : JobQueue::CancelOutcome::CancelRequested;
+    if (auto s = find(id, false)) r.job = std::move(*s);
+    else r.job.id = id;
+    return r;
+  }
+
+  std::optional<Problem> unavailable() const override {
+    if (up_) return std::nullopt;
+    Problem p = make_problem(503, "queue-unavailable", "Job store unavailable",
+                             "the shared job store (Redis) cannot be reached; the server reconnects by itself");
+    p.retry_after_s = kRetryAfterS;
+    return p;
+  }
+
+  void begin_drain() override { draining_ = true; }
+
+  bool wait_drained(Clock::time_point deadline) override {
+    // First the shared jobs this replica runs (their results go to Redis), then the local ones.
+    while (busy_ > 0) {
+      if (Clock::now() >= deadline || stopping_) return false;
+      std::this_thread::sleep_for(20ms);
+    }
+    return queue_.wait_drained(deadline);
+  }
+
+  void stop() override {
+    std::lock_guard lock(stop_mutex_);
+    if (stopped_) return;
+    draining_ = true;
+    stopping_ = true;
+    for (auto& t : slots_) t.join();
+    monitor_wake_.notify_all();
+    if (monitor_.joinable()) monitor_.join();
+    stopped_ = true;
+  }
+
+  void render_metrics(std::string& out) const override {
+    auto line = [&](const char* name, const char* type, const char* help, std::int64_t v) {
+      out += std::string("# HELP ") + name + " " + help + "\n# TYPE " + name + " " + type + "\n" + name + " " +
+             std::to_string(v) + "\n";
+    };
+    line("mdn_queue_redis_up", "gauge", "1 while the shared job store (Redis) answers.", up_ ? 1 : 0);
+    line("mdn_queue_shared_length", "gauge",
+         "Jobs waiting in the shared Redis queue for a worker of any replica (sampled every second).", length_);
+    line("mdn_queue_shared_pending", "gauge",
+         "Jobs taken by a worker of any replica and not yet finished (XPENDING, sampled every second).", pending_);
+    line("mdn_queue_reclaimed_total", "counter",
+         "Jobs this replica took over from a worker that stopped answering (XAUTOCLAIM).", reclaimed_);
+    line("mdn_queue_retries_total", "counter", "Runs this replica started of jobs that had run before.", retries_);
+    line("mdn_queue_attempts_exhausted_total", "counter",
+         "Jobs this replica failed because they reached --queue-max-attempts.", exhausted_);
+    line("mdn_queue_redis_reconnects_total", "counter", "Times Redis answered again after being unreachable.",
+         reconnects_);
+    line("mdn_queue_shared_running", "gauge", "Shared jobs this replica runs now.", busy_);
+  }
+
+  std::string_view kind() const override { return "redis"; }
+
+ private:
+  static constexpr const char* kGroup = "workers";
+  static constexpr int kRetryAfterS = 2;
+
+  std::string job_key(const std::string& id) const { return prefix_ + "job:" + id; }
+  std::string input_key(const std::string& id) const { return prefix_ + "job:" + id + ":input"; }
+  std::string result_key(const std::string& id) const { return prefix_ + "job:" + id + ":result"; }
+  static bool valid_id(const std::string& id) {
+    return id.size() == 32 && std::all_of(id.begin(), id.end(), [](char c) {
+             return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+           });
+  }
+
+  [[noreturn]] void throw_unavailable(const std::string& detail) const {
+    Problem p = make_problem(503, "queue-unavailable", "Job store unavailable", detail);
+    p.retry_after_s = kRetryAfterS;
+    throw HttpError(std::move(p));
+  }
+
+  // One request-thread operation on a pooled connection; Redis failures become problems.
+  template <class F>
+  Reply run(F&& f) {
+    std::unique_ptr<Connection> c;
+    try {
+      c = pool_.take();
+      Reply r = f(*c);
+      pool_.give(std::move(c));
+      return r;
+    } catch (const RedisDown& e) {
+      mark_down(e.what());
+      throw_unavailable(std::string("the shared job store (Redis) cannot be reached: ") + e.what());
+    } catch (const RedisReplyError& e) {
+      pool_.give(std::move(c));
+      if (transient_reply(e.what())) throw_unavailable(std::string("the shared job store (Redis) is busy: ") + e.what());
+      throw HttpError(make_problem(500, "queue-error", "Job store error",
+                                   std::string("the shared job store (Redis) refused: ") + e.what()));
+    }
+  }
+
+  void mark_down(const std::string& why) {
+    if (up_.exchange(false) && log_) log_->warn("redis_unavailable", {{"detail", why}});
+    pool_.clear();
+    monitor_wake_.notify_all();
+  }
+
+  void mark_up() {
+    if (up_.exchange(true)) return;
+    if (ever_up_.exchange(true)) {
+      ++reconnects_;
+      if (log_) log_->info("redis_reconnected", {{"consumer", consumer_}});
+    } else if (log_) {
+      log_->info("redis_connected", {{"consumer", consumer_}});
+    }
+  }
+
+  void ensure_group(Connection& c) {
+    Reply r = c.command({"XGROUP", "CREATE", stream_, kGroup, "0", "MKSTREAM"});
+    if (r->type == REDIS_REPLY_ERROR && str(r.get()).rfind("BUSYGROUP", 0) != 0)
+      throw RedisReplyError(std::string(str(r.get())));
+  }
+
+  // ---------------------------------------------------------------- monitor
+  // Every second: PING, the queue's length and pending count (for /metrics and /readyz).
+  void monitor_loop() {
+    std::unique_ptr<Connection> c;
+    bool warned = false;  // "unreachable at startup" is logged once
+    while (!stopping_) {
+      try {
+        if (!c || c->broken()) {
+          c.reset();
+          c = std::make_unique<Connection>(pool_.address(), pool_.timeout());
+          ensure_group(*c);
+        }
+        c->checked({"PING"});
+        const std::int64_t len = c->checked({"XLEN", stream_})->integer;
+        Reply p = c->command({"XPENDING", stream_, kGroup});
+        if (p->type == REDIS_REPLY_ERROR) {  // NOGROUP: the stream was lost (Redis without persistence)
+          ensure_group(*c);
+        } else if (p->type == REDIS_REPLY_ARRAY && p->elements > 0) {
+          pending_ = p->element[0]->integer;
+          length_ = std::max<std::int64_t>(0, len - pending_);
+        }
+        mark_up();
+      } catch (const std::exception& e) {
+        c.reset();
+        if (!ever_up_ && !warned && log_) log_->warn("redis_unavailable", {{"detail", e.what()}});
+        warned = true;
+        mark_down(e.what());
+      }
+      std::unique_lock lock(monitor_mutex_);
+      monitor_wake_.wait_for(lock, up_ ? 1000ms : 250ms, [&] { return stopping_.load(); });
+    }
+  }
+
+  // ---------------------------------------------------------------- worker slots
+  struct Entry {
+    std::string entry_id, job_id;
+    bool reclaimed = false;
+  };
+
+  // Parses [[id, [field, value, ...]], ...] (the entries of XREADGROUP and XAUTOCLAIM).
+  static std::optional<Entry> first_entry(const redisReply* entries) {
+    if (!entries || entries->type != REDIS_REPLY_ARRAY) return std::nullopt;
+    for (std::size_t i = 0; i < entries->elements; ++i) {
+      const redisReply* e = entries->element[i];
+      if (!e || e->type != REDIS_REPLY_ARRAY || e->elements < 2) continue;  // deleted entry (Redis 6.2)
+      Entry out;
+      out.entry_id = std::string(str(e->element[0]));
+      const redisReply* fields = e->element[1];
+      if (fields && fields->type == REDIS_REPLY_ARRAY)
+        for (std::size_t k = 0; k + 1 < fields->elements; k += 2)
+          if (str(fields->element[k]) == "id") out.job_id = std::string(str(fields->element[k + 1]));
+      return out;
+    }
+    return std::nullopt;
+  }
+
+  std::optional<Entry> next_entry(Connection& c) {
+    // Take over the entries of silent workers first (at most every half idle threshold).
+    const auto now = Clock::now();
+    bool reclaim = false;
+    {
+      std::lock_guard lock(reclaim_mutex_);
+      if (now >= next_reclaim_) {
+        next_reclaim_ = now + std::chrono::milliseconds(std::clamp<std::int64_t>(reclaim_idle_ms_ / 2, 100, 1000));
+        reclaim = true;
+      }
+    }
+    if (reclaim) {
+      Reply r = c.command({"XAUTOCLAIM", stream_, kGroup, consumer_, std::to_string(reclaim_idle_ms_), "0-0",
+                           "COUNT", "1"});
+      if (r->type == REDIS_REPLY_ERROR) {
+        if (str(r.get()).rfind("NOGROUP", 0) == 0) ensure_group(c);
+        else throw RedisReplyError(std::string(str(r.get())));
+      } else if (r->type == REDIS_REPLY_ARRAY && r->elements >= 2) {
+        if (auto e = first_entry(r->element[1])) {
+          e->reclaimed = true;
+          return e;
+        }
+      }
+    }
+    Reply r = c.command({"XREADGROUP", "GROUP", kGroup, consumer_, "COUNT", "1", "BLOCK", "1000", "STREAMS", stream_, ">"});
+    if (r->type == REDIS_REPLY_ERROR) {
+      if (str(r.get()).rfind("NOGROUP", 0) == 0) {
+        ensure_group(c);
+        return std::nullopt;
+      }
+      throw RedisReplyError(std::string(str(r.get())));
+    }
+    if (r->type != REDIS_REPLY_ARRAY || r->elements == 0) return std::nullopt;  // timed out
+    const redisReply* stream = r->element[0];
+    if (stream->type != REDIS_REPLY_ARRAY || stream->elements < 2) return std::nullopt;
+    return first_entry(stream->element[1]);
+  }
+
+  void slot_loop() {
+    std::unique_ptr<Connection> c;
+    auto backoff = 100ms;
+    while (!stopping_) {
+      if (draining_) {
+        std::this_thread::sleep_for(50ms);
+        continue;
+      }
+      try {
+        if (!c || c->broken()) {
+          c.reset();
+          c = std::make_unique<Connection>(pool_.address(), pool_.timeout());
+        }
+        std::optional<Entry> e = next_entry(*c);
+        backoff = 100ms;
+        if (!e) continue;
+        ++busy_;
+        try {
+          process(c, *e);
+        } catch (...) {
+          --busy_;
+          throw;
+        }
+        --busy_;
+      } catch (const RedisDown& e) {
+        c.reset();
+        mark_down(e.what());
+        sleep_unless_stopping(backoff);
+        backoff = std::min<std::chrono::milliseconds>(backoff * 2, 2000ms);
+      } catch (const std::exception& e) {
+        if (log_) log_->error("queue_worker_error", {{"detail", e.what()}});
+        sleep_unless_stopping(backoff);
+        backoff = std::min<std::chrono::milliseconds>(backoff * 2, 2000ms);
+      }
+    }
+  }
+
+  void sleep_unless_stopping(std::chrono::milliseconds d) {
+    const auto end = Clock::now() + d;
+    while (!stopping_ && Clock::now() < end) std::this_thread::sleep_for(20ms);
+  }
+
+  // Retries `f` on a fresh connection until it succeeds or the replica stops (results are
+  // kept in memory meanwhile: Redis being down must not lose a finished job).
+  template <class F>
+  bool retry(std::unique_ptr<Connection>& c, F&& f) {
+    auto backoff = 100ms;
+    while (true) {
+      try {
+        if (!c || c->broken()) {
+          c.reset();
+          c = std::make_unique<Connection>(pool_.address(), pool_.timeout());
+        }
+        f(*c);
+        return true;
+      } catch (const RedisDown& e) {
+        c.reset();
+        mark_down(e.what());
+      } catch (const RedisReplyError& e) {
+        if (!transient_reply(e.what())) throw;
+      }
+      if (stopping_) return false;
+      sleep_unless_stopping(backoff);
+      backoff = std::min<std::chrono::milliseconds>(backoff * 2, 2000ms);
+    }
+  }
+
+  // Runs one entry on the slot's connection `conn` (re-made when it breaks).
+  void process(std::unique_ptr<Connection>& conn, const Entry& e) {
+    if (!valid_id(e.job_id)) {  // not ours: acknowledge and forget
+      conn->command({"XACK", stream_, kGroup, e.entry_id});
+      conn->command({"XDEL", stream_, e.entry_id});
+      return;
+    }
+    const std::string exhausted = problem_text([&] {
+      Problem p = make_problem(500, "attempts-exhausted", "Job failed on every attempt",
+                               "the job was started " + std::to_string(config_.queue_max_attempts) +
+                                   " times and its worker stopped answering each time (crash, kill or lost "
+                                   "node); it is not run again");
+      p.extensions["attempts"] = config_.queue_max_attempts;
+      return p;
+    }());
+    const std::string cancelled =
+        problem_text(make_problem(409, "cancelled", "Job cancelled", "cancelled by DELETE before it started"));
+    const std::string lost = problem_text(
+        make_problem(500, "input-lost", "Job input lost", "the job's input is no longer in the job store"));
+    Reply r = conn->checked({"EVAL", kFinishHelpers + std::string(kStart), "3", job_key(e.job_id), input_key(e.job_id),
+                            stream_, consumer_, std::to_string(now_ms()), std::to_string(config_.queue_max_attempts),
+                            e.entry_id, kGroup, exhausted, cancelled, ttl_ms_, lost});
+    const std::string_view outcome = str(r->element[0]);
+    if (e.reclaimed && (outcome == "run" || outcome == "exhausted")) {
+      ++reclaimed_;
+      if (log_)
+        log_->warn("job_reclaimed", {{"job_id", e.job_id}, {"from", std::string(str(r->element[2]))},
+                                     {"idle_threshold_s", config_.queue_reclaim_idle_s}});
+    }
+    if (outcome == "exhausted") {
+      ++exhausted_;
+      if (log_) log_->warn("job_attempts_exhausted", {{"job_id", e.job_id}, {"attempts", r->element[1]->integer}});
+      return;
+    }
+    if (outcome != "run") return;
+    const int attempt = int(r->element[1]->integer);
+    if (attempt > 1) {
+      ++retries_;
+      if (log_) log_->info("job_retry", {{"job_id", e.job_id}, {"attempt", attempt}});
+    }
+    service::JobInput input;
+    input.bytes.assign(str(r->element[3]));
+    const std::string format(str(r->element[4])), params(str(r->element[5]));
+    r.reset();
+    std::unique_ptr<Connection>& beat = conn;
+    std::optional<Problem> error;
+    try {
+      input.format = io::format_from_string(format).value_or(io::Format::Off);
+      input.params = service::job_params_from_json(json::parse(params));
+    } catch (...) {
+      error = problem_from_exception(std::current_exception());
+    }
+    JobState state = JobState::Failed;
+    std::string result, summary;
+    std::int64_t result_bytes = 0;
+    enum class End { Finished, Lost, Released } end = End::Finished;
+    if (!error) {
+      auto job = queue_.run_external(e.job_id, std::move(input));
+      bool cancel_by_user = false;
+      std::string last_stage;
+      double last_fraction = -1;
+      while (!job->wait_for(200ms)) {
+        if (stopping_ && end == End::Finished) {
+          end = End::Released;
+          queue_.cancel(job);
+        }
+        if (end != End::Finished || cancel_by_user) continue;
+        const JobSnapshot s = job->snapshot();
+        const bool changed = s.stage != last_stage || std::abs(s.fraction - last_fraction) >= 0.01;
+        char fraction[32];
+        std::snprintf(fraction, sizeof fraction, "%.4f", s.fraction);
+        try {
+          if (!beat || beat->broken()) {
+            beat.reset();
+            beat = std::make_unique<Connection>(pool_.address(), pool_.timeout());
+          }
+          Reply b = beat->checked({"EVAL", kBeat, "2", job_key(e.job_id), stream_, consumer_,
+                                   changed ? s.stage : std::string(), fraction, e.entry_id, kGroup});
+          last_stage = s.stage;
+          last_fraction = s.fraction;
+          const std::string_view v = str(b.get());
+          if (v == "cancel") {
+            cancel_by_user = true;
+            queue_.cancel(job);
+          } else if (v == "lost") {
+            end = End::Lost;
+            queue_.cancel(job);
+          }
+        } catch (const RedisDown& ex) {
+          beat.reset();
+          mark_down(ex.what());  // the job goes on; its result waits for Redis below
+        } catch (const RedisReplyError& ex) {
+          if (log_) log_->warn("heartbeat_failed", {{"job_id", e.job_id}, {"detail", ex.what()}});
+        }
+      }
+      const JobSnapshot s = job->snapshot();
+      state = s.state;
+      error = s.error;
+      if (state == JobState::Cancelled && cancel_by_user)
+        error = make_problem(409, "cancelled", "Job cancelled", "cancelled by DELETE while running");
+      else if (state == JobState::Cancelled && end == End::Finished)  // cancelled by this replica's stop
+        end = End::Released;
+      if (state == JobState::Succeeded) {
+        result_bytes = std::int64_t(s.output->bytes.size());
+        if (result_bytes > config_.queue_max_result_bytes) {
+          state = JobState::Failed;
+          error = make_problem(422, "result-too-large", "Result too large",
+                               "the result has " + std::to_string(result_bytes) + " bytes; the job store keeps at most " +
+                                   std::to_string(config_.queue_max_result_bytes) + " (--queue-max-result)");
+          error->extensions["maximum"] = config_.queue_max_result_bytes;
+        } else {
+          result = s.output->bytes;
+          summary = output_text(*s.output);
+        }
+      }
+    }
+    if (end == End::Lost) {
+      if (log_) log_->warn("job_lost", {{"job_id", e.job_id}, {"detail", "another replica took the job over"}});
+      return;
+    }
+    std::unique_ptr<Connection>& fin = conn;
+    if (end == End::Released) {
+      retry(fin, [&](Connection& c) {
+        c.checked({"EVAL", kFinishHelpers + std::string(kRelease), "2", job_key(e.job_id), stream_, consumer_,
+                   e.entry_id, kGroup, e.job_id});
+      });
+      if (log_) log_->info("job_released", {{"job_id", e.job_id}, {"detail", "this replica stopped; back in the queue"}});
+      return;
+    }
+    std::string stored;
+    const bool done = retry(fin, [&](Connection& c) {
+      Reply f = c.checked({"EVAL", kFinishHelpers + std::string(kFinish), "4", job_key(e.job_id), input_key(e.job_id),
+                           stream_, result_key(e.job_id), consumer_, std::string(to_string(state)),
+                           error ? problem_text(*error) : std::string(), summary, result, ttl_ms_,
+                           std::to_string(now_ms()), e.entry_id, kGroup, std::to_string(result_bytes)});
+      stored = std::string(str(f.get()));
+    });
+    if (!done && log_)
+      log_->warn("job_unstored", {{"job_id", e.job_id}, {"detail", "stopped while Redis was unreachable; the job will run again"}});
+    else if (stored == "stale" && log_)
+      log_->warn("job_lost", {{"job_id", e.job_id}, {"detail", "another replica took the job over"}});
+  }
+
+  // ---------------------------------------------------------------- state
+  const ServerConfig config_;
+  JobQueue& queue_;
+  const std::shared_ptr<const EventLog> log_;
+  Pool pool_;
+  const std::string prefix_, stream_, ttl_ms_;
+  const std::int64_t reclaim_idle_ms_;
+  std::string consumer_;
+
+  std::mutex rng_mutex_;
+  std::mt19937_64 rng_;
+
+  std::atomic<bool> up_{false}, ever_up_{false}, draining_{false}, stopping_{false};
+  std::atomic<std::int64_t> length_{0}, pending_{0}, reclaimed_{0}, retries_{0}, exhausted_{0}, reconnects_{0};
+  std::atomic<int> busy_{0};
+
+  std::mutex reclaim_mutex_;
+  Clock::time_point next_reclaim_ = Clock::now();
+
+  std::mutex monitor_mutex_;
+  std::condition_variable monitor_wake_;
+  std::thread monitor_;
+  std::vector<std::thread> slots_;
+  std::mutex stop_mutex_;
+  bool stopped_ = false;
+};
+
+}  // namespace
+
+std::unique_ptr<JobStore> make_redis_job_store(const ServerConfig& config, JobQueue& queue,
+                                               std::shared_ptr<const EventLog> log) {
+  return std::make_unique<RedisJobStore>(config, queue, std::move(log));
+}
+
+}  // namespace mdn::http
