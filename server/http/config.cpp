@@ -73,7 +73,7 @@ const std::vector<Setting>& settings() {
       {"threads-per-job", "MDN_THREADS_PER_JOB", "threads inside one pipeline run, [1, 64]",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.threads_per_job = int(parse_int(n, v, 1, 64)); },
        [](const ServerConfig& c) { return std::to_string(c.threads_per_job); }},
-      {"queue-capacity", "MDN_QUEUE_CAPACITY", "jobs waiting for a worker; beyond it new jobs get 503",
+      {"queue-capacity", "MDN_QUEUE_CAPACITY", "jobs waiting for a worker (Redis: in the shared queue too); beyond it new jobs get 503",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.queue_capacity = int(parse_int(n, v, 1, 100000)); },
        [](const ServerConfig& c) { return std::to_string(c.queue_capacity); }},
       {"job-time-limit", "MDN_JOB_TIME_LIMIT", "seconds of running time after which a job fails",

@@ -6,7 +6,9 @@ Dockerfile, docker-compose.yml or the Kubernetes manifests must exist and hold a
 accepts (it exits 2 on a bad one), and docker/README.md must list every setting with the default
 --help prints. Then the numbers that must fit together: nginx's body limit equals the server's,
 its read timeout exceeds the job time limit, its keep-alive stays below the server's, stop and
-grace periods exceed the drain, workers equal CPU limits, ports, user and probes match.
+grace periods exceed the drain, workers equal CPU limits, ports, user and probes match. The
+shared job store: compose and Kubernetes run a Redis with an append-only file, the replicas'
+MDN_QUEUE points at it, and nginx passes /v1/jobs through.
 """
 
 import argparse
@@ -136,6 +138,51 @@ def nginx_directive(conf, name, context=None):
     return values[0].strip()
 
 
+def redis_url_host_port(url):
+    m = re.fullmatch(r"redis://(?:[^@]*@)?([^:/]+)(?::(\d+))?(?:/(\d+))?", url)
+    check(m is not None, "MDN_QUEUE %r is not a redis:// URL" % url)
+    return m.group(1), int(m.group(2) or 6379)
+
+
+def redis_args_durable(args, where):
+    """Accepted jobs must survive a Redis restart: appendonly yes (and not appendfsync no)."""
+    text = " ".join(args)
+    check(re.search(r"--appendonly\s+yes", text) is not None, "%s runs Redis without --appendonly yes" % where)
+    check(re.search(r"--appendfsync\s+no\b", text) is None, "%s runs Redis with --appendfsync no" % where)
+
+
+def check_compose_redis(compose, env):
+    """The replicas share their jobs through the compose file's redis service."""
+    check("MDN_QUEUE" in env, "docker-compose.yml runs several replicas without a shared MDN_QUEUE")
+    host, port = redis_url_host_port(env["MDN_QUEUE"])
+    check(host in compose["services"], "MDN_QUEUE names %s, which is not a compose service" % host)
+    redis = compose["services"][host]
+    check(str(port) in [str(p) for p in redis.get("expose", [])] or port == 6379,
+          "the redis service does not expose port %d" % port)
+    check("ports" not in redis, "compose publishes Redis; only the replicas need it")
+    redis_args_durable(redis.get("command", []), "docker-compose.yml")
+    check(any(str(v).endswith(":/data") for v in redis.get("volumes", [])), "compose keeps Redis's data on no volume")
+    depends = compose["services"]["meshdenoise"].get("depends_on", {})
+    check(depends.get(host, {}).get("condition") == "service_healthy", "the replicas start before Redis is healthy")
+
+
+def check_k8s_redis(docs, env):
+    """The pods' MDN_QUEUE names a Service that selects a Redis with an append-only file."""
+    check("MDN_QUEUE" in env, "the Deployment runs several pods without a shared MDN_QUEUE")
+    host, port = redis_url_host_port(env["MDN_QUEUE"])
+    services = [d for d in docs if d["kind"] == "Service" and d["metadata"]["name"] == host]
+    check(services, "MDN_QUEUE names %s, which is no Service in docker/k8s" % host)
+    svc = services[0]
+    check(any(p["port"] == port for p in svc["spec"]["ports"]), "Service %s has no port %d" % (host, port))
+    workloads = [d for d in docs if d["kind"] in ("StatefulSet", "Deployment")
+                 and all(d["spec"]["template"]["metadata"]["labels"].get(k) == v
+                         for k, v in svc["spec"]["selector"].items())]
+    check(len(workloads) == 1, "Service %s selects %d workloads" % (host, len(workloads)))
+    container = workloads[0]["spec"]["template"]["spec"]["containers"][0]
+    check("redis" in container["image"], "Service %s selects %s, not Redis" % (host, container["image"]))
+    redis_args_durable(container.get("command", []) + container.get("args", []), "docker/k8s")
+
+
 def main():
     args = parse_args()
     check(yaml is not None, "python3-yaml is not installed (scripts/install-deps.sh test)")
@@ -173,6 +220,7 @@ def main():
     check(mounts and mounts[0].split(":")[1] == "/etc/nginx/conf.d/default.conf",
           "compose does not mount nginx/meshdenoise.conf as the nginx site: %s" % lb["volumes"])
     check(lb["depends_on"]["meshdenoise"]["condition"] == "service_healthy", "nginx starts before the replicas are healthy")
+    check_compose_redis(compose, env)
 
     # --- nginx
     with open(os.path.join(d, "nginx", "meshdenoise.conf")) as f:
@@ -191,6 +239,8 @@ def main():
           "nginx's upstream keepalive_requests must not exceed MDN_KEEP_ALIVE_MAX")
     check(nginx_directive(conf, "max_ranges") == "1", "max_ranges is not 1")
     check(nginx_directive(conf, "proxy_request_buffering") == "on", "proxy_request_buffering is not on")
+    check(re.search(r"location\s+[=~^]*\s*/v1/jobs", re.sub(r"#[^\n]*", "", conf)) is None,
+          "nginx handles /v1/jobs itself; with the shared job store it must pass them to the replicas")
     retry = nginx_directive(conf, "proxy_next_upstream").split()
     check("error" in retry and "non_idempotent" in retry, "nginx does not resend a POST whose replica failed: %s" % retry)
     check(not any(s in retry for s in ("http_500", "http_400", "http_404", "http_429")),
@@ -202,9 +252,10 @@ def main():
         if name.endswith(".yaml") and name != "kustomization.yaml":
             with open(os.path.join(d, "k8s", name)) as f:
                 docs += [doc for doc in yaml.safe_load_all(f) if doc]
-    kinds = {doc["kind"]: doc for doc in docs}
+    # The service's own objects are named meshdenoise; others (its Redis) have other names.
+    kinds = {doc["kind"]: doc for doc in docs if doc["metadata"]["name"] == "meshdenoise"}
     for kind in ("Deployment", "Service", "HorizontalPodAutoscaler"):
-        check(kind in kinds, "docker/k8s has no %s" % kind)
+        check(kind in kinds, "docker/k8s has no %s named meshdenoise" % kind)
     dep, svc_k8s, hpa = kinds["Deployment"], kinds["Service"], kinds["HorizontalPodAutoscaler"]
     pod = dep["spec"]["template"]["spec"]
     c = pod["containers"][0]
@@ -236,6 +287,12 @@ def main():
     ref = hpa["spec"]["scaleTargetRef"]
     check(ref["kind"] == "Deployment" and ref["name"] == dep["metadata"]["name"], "the HPA scales %s" % ref)
     check([m["resource"]["name"] for m in hpa["spec"]["metrics"]] == ["cpu"], "the HPA does not scale on CPU")
+    check_k8s_redis(docs, env)
+    with open(os.path.join(d, "k8s", "kustomization.yaml")) as f:
+        kustomized = yaml.safe_load(f)["resources"]
+    for name in sorted(os.listdir(os.path.join(d, "k8s"))):
+        if name.endswith(".yaml") and name != "kustomization.yaml":
+            check(name in kustomized, "kustomization.yaml leaves out %s" % name)
 
     # --- docker/README.md lists every setting with --help's default.
     with open(os.path.join(d, "README.md")) as f:

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Scale-out: three meshdenoise-server replicas on loopback behind Debian's nginx, configured
 with docker/nginx/meshdenoise.conf itself (only its upstream addresses and listen port are
-rewritten to loopback).
+rewritten to loopback), sharing one redis-server as their job store (MDN_QUEUE, as in
+docker-compose.yml).
 
   1. Load: concurrent POST /v1/denoise through nginx all succeed with a denoised mesh, and every
      replica's own /metrics shows it served a share of them.
@@ -10,9 +11,10 @@ rewritten to loopback).
      survivors serve everything.
   3. Graceful stop: SIGTERM to a busy replica; it drains (503 to new work, which nginx resends)
      and exits 0 while every request still succeeds.
-  4. The balancer's own answers: /v1/jobs refused with a problem (jobs are per replica until the
-     queue is shared), an oversized body refused with 413 before any replica sees it, /metrics
-     not proxied, and a replica's own error passed through unchanged and not retried.
+  4. Asynchronous jobs through the balancer: created, polled, fetched and deleted through nginx,
+     whichever replica each request reaches. The balancer's own answers: an oversized body
+     refused with 413 before any replica sees it, /metrics not proxied, and a replica's own
+     error passed through unchanged and not retried.
 
 Every process started here is stopped at the end, also when a check fails.
 """
@@ -25,6 +27,7 @@ import os
 import re
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 import tempfile
@@ -43,6 +46,7 @@ def parse_args():
     p.add_argument("--server", required=True, help="the built meshdenoise-server")
     p.add_argument("--nginx-conf", required=True, help="docker/nginx/meshdenoise.conf")
     p.add_argument("--nginx", default="/usr/sbin/nginx")
+    p.add_argument("--redis-server", default="/usr/bin/redis-server")
     p.add_argument("--replicas", type=int, default=3)
     p.add_argument("--requests", type=int, default=60, help="requests of the load phase")
     p.add_argument("--concurrency", type=int, default=6)
@@ -135,6 +139,8 @@ def main():
     check(shutil.which(args.nginx) is not None or os.access(args.nginx, os.X_OK),
           "nginx is not installed (scripts/install-deps.sh test installs nginx-light)")
     check(os.access(args.server, os.X_OK), "not built: " + args.server)
+    check(os.access(args.redis_server, os.X_OK),
+          "redis-server is not installed (scripts/install-deps.sh test installs it)")
     with open(args.nginx_conf) as f:
         conf_text = f.read()
 
@@ -142,12 +148,30 @@ def main():
     os.chmod(tmp, 0o755)  # nginx workers (nobody) write the temp paths below
     procs = Processes()
     try:
+        # The shared job store, as the compose file runs it (append-only file).
+        redis_port = free_port()
+        redis = procs.start([args.redis_server, "--port", str(redis_port), "--bind", "127.0.0.1", "--dir", tmp,
+                             "--appendonly", "yes", "--save", ""], os.path.join(tmp, "redis.log"))
+        end = time.monotonic() + 30
+        while True:
+            check(redis.poll() is None, "redis-server exited: %s" % tail(redis.log_path))
+            try:
+                with socket.create_connection(("127.0.0.1", redis_port), timeout=2) as sock:
+                    sock.sendall(b"PING\r\n")
+                    if sock.recv(64).startswith(b"+PONG"):
+                        break
+            except OSError:
+                pass
+            check(time.monotonic() < end, "redis-server did not answer PING")
+            time.sleep(0.05)
+        queue_url = "redis://127.0.0.1:%d/0" % redis_port
+
         # Replicas: the defaults of docker-compose.yml, except one worker each (two shared cores).
         replicas, servers = [], []
         for i in range(args.replicas):
             port_file = os.path.join(tmp, "replica-%d.port" % i)
             p = procs.start([args.server, "--host", "127.0.0.1", "--port", "0", "--port-file", port_file,
-                             "--workers", "1", "--log-format", "json", "--log-level", "warn"],
+                             "--workers", "1", "--log-format", "json", "--log-level", "warn", "--queue", queue_url],
                             os.path.join(tmp, "replica-%d.log" % i))
             end = time.monotonic() + 30
             while not os.path.exists(port_file):
@@ -262,18 +286,30 @@ def main():
         log("graceful stop: %d requests all 200 while replica %d drained and exited 0 "
             "(%d answered 503 by it and resent)" % (len(drain_ids), replicas[draining], refused))
 
-        # 3. The balancer's own answers.
-        for method, path in (("POST", "/v1/jobs"), ("GET", "/v1/jobs/0123abcd"), ("GET", "/v1/jobs/0123abcd/result")):
-            r = request(lb, method, path, small if method == "POST" else None,
-                     {"Content-Type": "model/x-off", "X-Request-Id": "jobs-check"})
-            check(r.status == 501, "%s %s through the balancer: %d, expected 501" % (method, path, r.status))
-            check((r.header("Content-Type") or "").startswith("application/problem+json"),
-                  "%s %s: Content-Type %s" % (method, path, r.header("Content-Type")))
-            p = r.json()
-            check(p.get("type") == "urn:meshdenoise:problem:jobs-not-shared" and p.get("status") == 501
-                  and p.get("request_id") == "jobs-check" and p.get("instance") == path,
-                  "%s %s: problem %s" % (method, path, p))
-            check(r.header("X-Request-Id") == "jobs-check", "%s %s: no X-Request-Id" % (method, path))
+        # 3. Asynchronous jobs through the balancer: each request may reach another replica (the
+        # one stopped above refuses connections and nginx moves on); the shared queue answers.
+        job_ids = []
+        for i in range(2 * args.replicas):
+            r = request(lb, "POST", "/v1/jobs", small, {"Content-Type": "model/x-off", "X-Request-Id": "job-%d" % i})
+            check(r.status == 202, "POST /v1/jobs through the balancer: %d %r" % (r.status, r.body[:300]))
+            job_ids.append(r.json()["id"])
+        for jid in job_ids:
+            end = time.monotonic() + 120
+            while True:
+                r = request(lb, "GET", "/v1/jobs/" + jid)
+                check(r.status == 200, "GET /v1/jobs/%s through the balancer: %d %r" % (jid, r.status, r.body[:300]))
+                state = r.json()["state"]
+                if state not in ("queued", "running"):
+                    break
+                check(time.monotonic() < end, "job %s still %s after 120 s" % (jid, state))
+                time.sleep(0.05)
+            check(state == "succeeded", "job %s: %s" % (jid, r.body[:300]))
+            r = request(lb, "GET", "/v1/jobs/%s/result" % jid)
+            check(r.status == 200, "GET /v1/jobs/%s/result through the balancer: %d" % (jid, r.status))
+            check_denoised(r.body, small, "job " + jid)
+            r = request(lb, "DELETE", "/v1/jobs/" + jid)
+            check(r.status == 204, "DELETE /v1/jobs/%s through the balancer: %d" % (jid, r.status))
+        log("jobs: %d created, polled, fetched and deleted through the balancer (shared Redis queue)" % len(job_ids))
 
         conn = http.client.HTTPConnection("127.0.0.1", lb, timeout=30)
         try:
@@ -309,7 +345,7 @@ def main():
         statuses = [x.strip() for x in entries["bad-mesh"]["upstream_status"].split(",")]
         check(statuses[-1] == "400" and "400" not in statuses[:-1],
               "a 400 from a replica was retried on another: %s" % entries["bad-mesh"])
-        log("balancer: /v1/jobs 501 problem, 300 MiB body 413 problem, /metrics 404, a replica's 400 passed through once")
+        log("balancer: 300 MiB body 413 problem, /metrics 404, a replica's 400 passed through once")
 
         nginx.send_signal(signal.SIGQUIT)  # graceful stop; errors in its log would show below
         nginx.wait(30)

@@ -226,6 +226,27 @@ TEST(Proto, OpenApiDocumentsExactlyTheServersRoutesAndStatuses) {
     observe(seen, "POST", "/v1/denoise", c->Post("/v1/denoise", heavy_params, heavy, "model/x-off"));  // 504
   }
 
+  {
+    // The shared job store unreachable (nothing listens on that port): 503 on the job routes.
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t len = sizeof addr;
+    bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
+    getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
+    close(fd);
+    ServerProcess server({"--workers", "1", "--queue", "redis://127.0.0.1:" + std::to_string(ntohs(addr.sin_port))});
+    ASSERT_TRUE(server.started()) << server.log();
+    auto c = server.client();
+    const std::string job = "/v1/jobs/0123456789abcdef0123456789abcdef";
+    observe(seen, "POST", "/v1/jobs", c->Post("/v1/jobs", mesh, "model/x-off"));          // 503
+    observe(seen, "GET", "/v1/jobs/{id}", c->Get(job));                                   // 503
+    observe(seen, "GET", "/v1/jobs/{id}/result", c->Get(job + "/result"));                // 503
+    observe(seen, "DELETE", "/v1/jobs/{id}", c->Delete(job));                             // 503
+    observe(seen, "GET", "/readyz", c->Get("/readyz"));                                   // 503
+  }
+
   // Every observed status is documented; every documented status but 500 was observed.
   for (const auto& [route, statuses] : seen) {
     ASSERT_TRUE(documented.count(route)) << route.first << " " << route.second;
