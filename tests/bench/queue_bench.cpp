@@ -1,0 +1,243 @@
+// Benchmark of the shared job store (issue 6's targets). Prints figures, asserts nothing;
+// compare numbers only within one run on one machine.
+//
+//   queue_bench [--jobs N] [--runs N] [--level L]
+//
+// A redis-server (Debian's, /usr/bin/redis-server) is started on a free loopback port with the
+// compose file's settings (append-only file, fsync on every write) in a temporary directory.
+// Servers run in-process (mdn::http::HttpService, one per "replica", each with its own queue
+// and Redis consumer) and are reached over real HTTP on loopback.
+//
+// 1. Latency: asynchronous jobs one at a time (POST /v1/jobs, poll GET every 1 ms, GET
+//    /result), 1 replica with 1 worker, memory store vs Redis store; the median difference is
+//    what the Redis round trips add to a job (target: <= 10 ms).
+// 2. Throughput: 8 clients, N asynchronous jobs; 1 replica x 2 workers (memory) vs 3 replicas
+//    x 1 worker (Redis), each job posted to one replica and polled and fetched through another
+//    (target: 3 replicas >= 1 replica x 2 workers).
+// Input: a noisy icosphere (20 * 4^L faces, default L = 5), default parameters.
+#include <netinet/in.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/noise.h"
+#include "server/http/http_server.h"
+#include "support/shapes.h"
+
+// After Eigen: <httplib.h> pulls in <resolv.h>, whose `_res` macro breaks Eigen's headers.
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
+}
+
+int free_port() {
+  httplib::Server probe;
+  const int port = probe.bind_to_any_port("127.0.0.1");
+  probe.stop();
+  return port;
+}
+
+class Redis {
+ public:
+  Redis() : dir_(fs::temp_directory_path() / ("mdn_queue_bench_" + std::to_string(getpid()))), port_(free_port()) {
+    fs::create_directories(dir_);
+    pid_ = fork();
+    if (pid_ == 0) {
+      prctl(PR_SET_PDEATHSIG, SIGKILL);
+      const std::string port = std::to_string(port_), log = (dir_ / "redis.log").string();
+      execl("/usr/bin/redis-server", "redis-server", "--port", port.c_str(), "--bind", "127.0.0.1", "--dir",
+            dir_.c_str(), "--appendonly", "yes", "--appendfsync", "always", "--save", "", "--logfile", log.c_str(),
+            static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    // Ready once it accepts connections (the replicas then wait for /readyz).
+    for (int i = 0; i < 500; ++i) {
+      const int fd = socket(AF_INET, SOCK_STREAM, 0);
+      sockaddr_in addr{};
+      addr.sin_family = AF_INET;
+      addr.sin_port = htons(std::uint16_t(port_));
+      addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+      const bool ok = connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0;
+      close(fd);
+      if (ok) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  }
+  ~Redis() {
+    kill(pid_, SIGKILL);
+    waitpid(pid_, nullptr, 0);
+    fs::remove_all(dir_);
+  }
+  std::string url() const { return "redis://127.0.0.1:" + std::to_string(port_) + "/0"; }
+
+ private:
+  fs::path dir_;
+  int port_;
+  pid_t pid_ = -1;
+};
+
+struct Replica {
+  Replica(int workers, const std::string& queue, const std::string& prefix) {
+    mdn::http::ServerConfig config;
+    config.port = 0;
+    config.workers = workers;
+    config.queue_capacity = 1000;
+    config.log_level = "off";
+    config.queue = queue;
+    config.queue_prefix = prefix;
+    service = std::make_unique<mdn::http::HttpService>(config, std::make_shared<const mdn::http::EventLog>(config));
+    port = service->bind();
+    thread = std::thread([this] { service->serve(); });
+    // Wait until ready (the Redis store connects in the background).
+    httplib::Client c("127.0.0.1", port);
+    for (int i = 0; i < 500; ++i) {
+      auto r = c.Get("/readyz");
+      if (r && r->status == 200) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  }
+  ~Replica() {
+    service->stop();
+    thread.join();
+  }
+  std::unique_ptr<mdn::http::HttpService> service;
+  int port = 0;
+  std::thread thread;
+};
+
+// One asynchronous job: posted to `post`, polled (every `poll_ms`) and fetched through `poll`.
+// Returns the milliseconds from POST to the last byte of the result, or -1 on failure.
+double run_job(httplib::Client& post, httplib::Client& poll, const std::string& body, int poll_ms) {
+  const auto t = Clock::now();
+  auto r = post.Post("/v1/jobs", body, "model/x-off");
+  if (!r || r->status != 202) return -1;
+  const std::string id = nlohmann::json::parse(r->body).value("id", "");
+  for (;;) {
+    auto g = poll.Get(("/v1/jobs/" + id).c_str());
+    if (!g || g->status != 200) return -1;
+    const std::string state = nlohmann::json::parse(g->body).value("state", "");
+    if (state == "succeeded") break;
+    if (state != "queued" && state != "running") return -1;
+    std::this_thread::sleep_for(std::chrono::milliseconds(poll_ms));
+  }
+  auto res = poll.Get(("/v1/jobs/" + id + "/result").c_str());
+  if (!res || res->status != 200) return -1;
+  const double ms = ms_since(t);
+  poll.Delete(("/v1/jobs/" + id).c_str());
+  return ms;
+}
+
+std::vector<double> latencies(Replica& replica, const std::string& body, int runs) {
+  httplib::Client c("127.0.0.1", replica.port);
+  c.set_read_timeout(600, 0);
+  run_job(c, c, body, 1);  // warm-up
+  std::vector<double> out;
+  for (int i = 0; i < runs; ++i) out.push_back(run_job(c, c, body, 1));
+  return out;
+}
+
+// Jobs per second: 8 clients, `jobs` in all, job k posted to replica k % n, polled and
+// fetched through replica (k + 1) % n.
+double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::string& body, int jobs) {
+  std::atomic<int> next{0}, failed{0};
+  const auto start = Clock::now();
+  std::vector<std::thread> clients;
+  const std::size_t n = replicas.size();
+  for (int k = 0; k < 8; ++k) {
+    clients.emplace_back([&] {
+      std::vector<std::unique_ptr<httplib::Client>> cs;
+      for (auto& r : replicas) {
+        cs.push_back(std::make_unique<httplib::Client>("127.0.0.1", r->port));
+        cs.back()->set_read_timeout(600, 0);
+      }
+      for (int j; (j = next.fetch_add(1)) < jobs;)
+        if (run_job(*cs[std::size_t(j) % n], *cs[std::size_t(j + 1) % n], body, 10) < 0) ++failed;
+    });
+  }
+  for (auto& t : clients) t.join();
+  if (failed) std::printf("  (%d jobs failed)\n", failed.load());
+  return jobs / (ms_since(start) / 1000);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int jobs = 24, runs = 15, level = 5;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--jobs" && i + 1 < argc) jobs = std::atoi(argv[++i]);
+    else if (a == "--runs" && i + 1 < argc) runs = std::atoi(argv[++i]);
+    else if (a == "--level" && i + 1 < argc) level = std::atoi(argv[++i]);
+    else {
+      std::fprintf(stderr, "usage: %s [--jobs N] [--runs N] [--level L]\n", argv[0]);
+      return 2;
+    }
+  }
+  if (!fs::exists("/usr/bin/redis-server")) {
+    std::fprintf(stderr, "redis-server is not installed (scripts/deps/apt-test.txt)\n");
+    return 1;
+  }
+  mdn::TriMesh mesh = mdn::test::sphere(level);
+  mdn::NoiseSpec noise;
+  noise.seed = 1;
+  mesh.V = mdn::add_noise(mesh, noise);
+  const std::string body = mdn::test::off_text(mesh);
+  std::printf("input: noisy icosphere, %lld faces, OFF %zu bytes; %u hardware threads\n",
+              static_cast<long long>(mesh.F.rows()), body.size(), std::thread::hardware_concurrency());
+  Redis redis;
+
+  // 1. Latency, one job at a time, one worker.
+  std::vector<double> memory, shared;
+  {
+    Replica r(1, "memory", "mdn:");
+    memory = latencies(r, body, runs);
+  }
+  {
+    Replica r(1, redis.url(), "lat:");
+    shared = latencies(r, body, runs);
+  }
+  const double m = median(memory), s = median(shared);
+  std::printf("latency (1 worker, POST -> poll every 1 ms -> result): memory median %.1f ms, redis median %.1f ms, "
+              "added %.1f ms (target <= 10 ms)\n",
+              m, s, s - m);
+
+  // 2. Throughput.
+  double one = 0, three = 0;
+  {
+    std::vector<std::unique_ptr<Replica>> replicas;
+    replicas.push_back(std::make_unique<Replica>(2, "memory", "mdn:"));
+    one = throughput(replicas, body, jobs);
+  }
+  {
+    std::vector<std::unique_ptr<Replica>> replicas;
+    for (int i = 0; i < 3; ++i) replicas.push_back(std::make_unique<Replica>(1, redis.url(), "tp:"));
+    three = throughput(replicas, body, jobs);
+  }
+  std::printf("throughput (%d jobs, 8 clients): 1 replica x 2 workers (memory) %.2f jobs/s, 3 replicas x 1 worker "
+              "(redis) %.2f jobs/s, ratio %.2f (target >= 1)\n",
+              jobs, one, three, three / one);
+  return 0;
+}
