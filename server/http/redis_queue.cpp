@@ -290,6 +290,23 @@ end
 return {h}
 )lua";
 
+// Every replica that ever ran is a consumer of the group; a restarted one comes back under a new
+// name. Consumers with nothing pending and idle for ARGV[2] ms are deleted, atomically (a
+// consumer deleted with an entry pending would strand it). A live one idle that long is simply
+// re-created by its next XREADGROUP. KEYS: stream.  ARGV: group, idle_ms.
+constexpr const char* kForgetConsumers = R"lua(
+local n = 0
+for _, c in ipairs(redis.call('XINFO', 'CONSUMERS', KEYS[1], ARGV[1])) do
+  local f = {}
+  for i = 1, #c, 2 do f[c[i]] = c[i + 1] end
+  if f['pending'] == 0 and f['idle'] > tonumber(ARGV[2]) then
+    redis.call('XGROUP', 'DELCONSUMER', KEYS[1], ARGV[1], f['name'])
+    n = n + 1
+  end
+end
+return n
+)lua";
+
 // ------------------------------------------------------------------ serialisation
 
 std::int64_t now_ms() {
@@ -676,10 +693,12 @@ class RedisJobStore final : public JobStore {
   }
 
   // ---------------------------------------------------------------- monitor
-  // Every second: PING, the queue's length and pending count (for /metrics and /readyz).
+  // Every second: PING, the queue's length and pending count (for /metrics and /readyz); every
+  // minute, forget consumers gone for an hour with nothing pending.
   void monitor_loop() {
     std::unique_ptr<Connection> c;
     bool warned = false;  // "unreachable at startup" is logged once
+    auto next_forget = Clock::now() + 60s;
     while (!stopping_) {
       try {
         if (!c || c->broken()) {
@@ -697,6 +716,12 @@ class RedisJobStore final : public JobStore {
           length_ = std::max<std::int64_t>(0, len - pending_);
         }
         mark_up();
+        if (Clock::now() >= next_forget) {
+          next_forget = Clock::now() + 60s;
+          Reply f = c->command({"EVAL", kForgetConsumers, "1", stream_, kGroup, "3600000"});
+          if (f->type == REDIS_REPLY_INTEGER && f->integer > 0 && log_)
+            log_->info("redis_consumers_forgotten", {{"count", f->integer}});
+        }
       } catch (const std::exception& e) {
         c.reset();
         if (!ever_up_ && !warned && log_) log_->warn("redis_unavailable", {{"detail", e.what()}});

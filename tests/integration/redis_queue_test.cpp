@@ -16,6 +16,8 @@
 
 #include <map>
 
+#include "server/http/config.h"
+
 namespace mdn::test {
 namespace {
 
@@ -448,6 +450,75 @@ TEST_F(RedisQueue, UnreachableAtStartupThenConnects) {
   EXPECT_TRUE(wait_status(s, "/readyz", 200)) << s.log();
   const std::string id = post_job(s, noisy_sphere_off(1), kSmallParams);
   EXPECT_EQ(wait_state(s, id, {"succeeded", "failed"}).value("state", ""), "succeeded");
+}
+
+TEST_F(RedisQueue, AStoppingReplicaHandsItsJobBack) {
+  RedisServer redis;
+  auto a = replica(redis, {"--drain-grace", "0.2"});
+  const std::string medium = noisy_sphere_off(5, 12);
+  const std::string id = post_job(*a, medium, kMediumParams);
+  ASSERT_EQ(wait_state(*a, id, {"running", "succeeded"}).value("state", ""), "running");
+  a->signal(SIGTERM);  // the grace ends before the job does: it goes back to the queue
+  EXPECT_EQ(a->wait_exit(Seconds(60)), 0) << a->log();
+  EXPECT_NE(a->log().find("job_released"), std::string::npos) << a->log();
+  // Another replica takes it at once (no idle threshold to wait for) and it is no retry.
+  auto b = replica(redis, {"--queue-reclaim-idle", "3600"});
+  const json job = wait_state(*b, id, {"succeeded", "failed", "cancelled"}, Seconds(120));
+  ASSERT_EQ(job.value("state", ""), "succeeded") << job.dump();
+  EXPECT_FALSE(job.contains("attempts")) << job.dump();
+  auto r = b->client()->Get("/v1/jobs/" + id + "/result");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->body, cli_output(medium, kMediumParams));
+  EXPECT_EQ(metric(*b, "mdn_queue_reclaimed_total"), 0);
+}
+
+TEST_F(RedisQueue, ADrainingReplicaFinishesItsJobAndExits) {
+  RedisServer redis;
+  auto a = replica(redis);
+  const std::string body = noisy_sphere_off(5, 13);
+  const char* params = R"({"n_normal":200,"n_vertex":200,"n_aniso":10})";
+  const std::string id = post_job(*a, body, params);
+  ASSERT_EQ(wait_state(*a, id, {"running", "succeeded"}).value("state", ""), "running");
+  a->signal(SIGTERM);
+  EXPECT_EQ(a->wait_exit(Seconds(60)), 0) << a->log();
+  // Stored before the replica exited: readable through any other replica.
+  auto b = replica(redis);
+  const json job = wait_state(*b, id, {"succeeded", "failed", "cancelled"}, Seconds(10));
+  EXPECT_EQ(job.value("state", ""), "succeeded") << job.dump();
+  EXPECT_FALSE(job.contains("attempts")) << job.dump();
+}
+
+TEST(RedisUrl, ParsesWhatOperatorsWrite) {
+  using http::parse_redis_url;
+  const auto a = parse_redis_url("redis://cache.internal");
+  EXPECT_EQ(a.host, "cache.internal");
+  EXPECT_EQ(a.port, 6379);
+  EXPECT_EQ(a.db, 0);
+  EXPECT_EQ(a.password, "");
+  const auto b = parse_redis_url("redis://:s3cret@10.0.0.5:6380/3");
+  EXPECT_EQ(b.host, "10.0.0.5");
+  EXPECT_EQ(b.port, 6380);
+  EXPECT_EQ(b.db, 3);
+  EXPECT_EQ(b.password, "s3cret");
+  const auto c = parse_redis_url("redis://default:p@ss@[::1]:7000");
+  EXPECT_EQ(c.host, "::1");
+  EXPECT_EQ(c.port, 7000);
+  EXPECT_EQ(c.password, "p@ss");
+  for (const char* bad : {"redis://", "redis://:pw@", "redis://h:", "redis://h:0", "redis://h/16", "redis://h/x",
+                          "rediss://h", "memory2", "redis://h h"})
+    EXPECT_THROW(parse_redis_url(bad), http::ConfigError) << bad;
+  // Neither --help nor the log shows a password.
+  const auto [code, text] = run_command("MDN_QUEUE=redis://:hunter2@h:1/0 " + shell_quote(server_binary()) + " --help");
+  EXPECT_EQ(code, 0);
+  EXPECT_EQ(text.find("hunter2"), std::string::npos) << text;
+  ServerProcess s({"--queue", "redis://:hunter2@127.0.0.1:" + std::to_string(free_port()) + "/2"});
+  ASSERT_TRUE(s.started()) << s.log();
+  const auto deadline = std::chrono::steady_clock::now() + Seconds(10);
+  while (s.log().find("redis_unavailable") == std::string::npos && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_NE(s.log().find("job_store"), std::string::npos) << s.log();
+  EXPECT_NE(s.log().find("db=2"), std::string::npos) << s.log();
+  EXPECT_EQ(s.log().find("hunter2"), std::string::npos) << s.log();
 }
 
 TEST_F(RedisQueue, MalformedQueueUrlStopsAtStartup) {
