@@ -249,6 +249,10 @@ ParsedCommandLine parse_command_line(const std::vector<std::string>& args,
     }
     found->set(out.config, "--" + name, value);
   }
+  // Redis keeps a value of at most 512 MiB (proto-max-bulk-len): a request body is one.
+  if (out.config.queue != "memory" && out.config.max_body_bytes > (std::int64_t{512} << 20))
+    throw ConfigError("--max-body: at most 536870912 (512M) with --queue redis://, got " +
+                      std::to_string(out.config.max_body_bytes));
   return out;
 }
 

@@ -43,6 +43,13 @@ class RedisReplyError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Element i of an array reply; anything else is a reply this code does not understand.
+const redisReply* element(const redisReply* r, std::size_t i) {
+  if (!r || r->type != REDIS_REPLY_ARRAY || i >= r->elements || !r->element[i])
+    throw std::runtime_error("unexpected reply from Redis (expected an array of at least " + std::to_string(i + 1) + ")");
+  return r->element[i];
+}
+
 std::string_view str(const redisReply* r) {
   if (!r || (r->type != REDIS_REPLY_STRING && r->type != REDIS_REPLY_STATUS && r->type != REDIS_REPLY_ERROR))
     return {};
@@ -512,7 +519,12 @@ class RedisJobStore final : public JobStore {
       return c.checked({"EVAL", kSubmit, "4", job_key(id), input_key(id), stream_, idem, id, input.bytes, format,
                         params, created, capacity, fingerprint, kGroup, key ? "1" : "0", job_prefix});
     });
-    const std::string_view outcome = str(reply->element[0]);
+    std::string_view outcome;
+    try {
+      outcome = str(element(reply.get(), 0));
+    } catch (const std::exception& e) {
+      throw HttpError(make_problem(500, "queue-error", "Job store error", e.what()));
+    }
     if (outcome == "reused")
       throw HttpError(make_problem(422, "idempotency-key-reused", "Idempotency-Key reused",
                                    "this Idempotency-Key was already used with a different body or parameters"));
@@ -523,7 +535,7 @@ class RedisJobStore final : public JobStore {
       throw HttpError(std::move(p));
     }
     if (outcome == "replay") {
-      const std::string earlier(str(reply->element[1]));
+      const std::string earlier(str(element(reply.get(), 1)));
       if (auto s = find(earlier, false)) return {std::move(*s), true};
       // It expired between the two calls: the key is free again.
       throw_unavailable("the job of this Idempotency-Key expired while being replayed; retry");
@@ -543,11 +555,11 @@ class RedisJobStore final : public JobStore {
     });
     if (reply->type != REDIS_REPLY_ARRAY || reply->elements == 0) return std::nullopt;
     std::map<std::string, std::string> h;
-    const redisReply* fields = reply->element[0];
+    const redisReply* fields = element(reply.get(), 0);
     for (std::size_t i = 0; i + 1 < fields->elements; i += 2)
       h[std::string(str(fields->element[i]))] = std::string(str(fields->element[i + 1]));
     std::optional<std::string> result;
-    if (reply->elements > 1) result = std::string(str(reply->element[1]));
+    if (reply->elements > 1) result = std::string(str(element(reply.get(), 1)));
     try {
       return snapshot_from_hash(id, std::move(h), result);
     } catch (const std::exception& e) {
@@ -883,27 +895,27 @@ class RedisJobStore final : public JobStore {
     Reply r = conn->checked({"EVAL", kFinishHelpers + std::string(kStart), "3", job_key(e.job_id), input_key(e.job_id),
                             stream_, consumer_, std::to_string(now_ms()), std::to_string(config_.queue_max_attempts),
                             e.entry_id, kGroup, exhausted, cancelled, ttl_ms_, lost});
-    const std::string_view outcome = str(r->element[0]);
+    const std::string_view outcome = str(element(r.get(), 0));
     if (e.reclaimed && (outcome == "run" || outcome == "exhausted")) {
       ++reclaimed_;
       if (log_)
-        log_->warn("job_reclaimed", {{"job_id", e.job_id}, {"from", std::string(str(r->element[2]))},
+        log_->warn("job_reclaimed", {{"job_id", e.job_id}, {"from", std::string(str(element(r.get(), 2)))},
                                      {"idle_threshold_s", config_.queue_reclaim_idle_s}});
     }
     if (outcome == "exhausted") {
       ++exhausted_;
-      if (log_) log_->warn("job_attempts_exhausted", {{"job_id", e.job_id}, {"attempts", r->element[1]->integer}});
+      if (log_) log_->warn("job_attempts_exhausted", {{"job_id", e.job_id}, {"attempts", element(r.get(), 1)->integer}});
       return;
     }
     if (outcome != "run") return;
-    const int attempt = int(r->element[1]->integer);
+    const int attempt = int(element(r.get(), 1)->integer);
     if (attempt > 1) {
       ++retries_;
       if (log_) log_->info("job_retry", {{"job_id", e.job_id}, {"attempt", attempt}});
     }
     service::JobInput input;
-    input.bytes.assign(str(r->element[3]));
-    const std::string format(str(r->element[4])), params(str(r->element[5]));
+    input.bytes.assign(str(element(r.get(), 3)));
+    const std::string format(str(element(r.get(), 4))), params(str(element(r.get(), 5)));
     r.reset();
     std::unique_ptr<Connection>& beat = conn;
     std::optional<Problem> error;
