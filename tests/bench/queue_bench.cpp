@@ -1,10 +1,11 @@
 // Benchmark of the shared job store (issue 6's targets). Prints figures, asserts nothing;
 // compare numbers only within one run on one machine.
 //
-//   queue_bench [--jobs N] [--runs N] [--level L]
+//   queue_bench [--jobs N] [--runs N] [--level L] [--fsync always|everysec]
 //
 // A redis-server (Debian's, /usr/bin/redis-server) is started on a free loopback port with the
-// compose file's settings (append-only file, fsync on every write) in a temporary directory.
+// compose file's settings (append-only file, --fsync everysec; "always" fsyncs every write) in
+// a temporary directory.
 // Servers run in-process (mdn::http::HttpService, one per "replica", each with its own queue
 // and Redis consumer) and are reached over real HTTP on loopback.
 //
@@ -54,22 +55,28 @@ double median(std::vector<double> v) {
 }
 
 int free_port() {
-  httplib::Server probe;
-  const int port = probe.bind_to_any_port("127.0.0.1");
-  probe.stop();
-  return port;
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t len = sizeof addr;
+  bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
+  getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
+  close(fd);
+  return ntohs(addr.sin_port);
 }
 
 class Redis {
  public:
-  Redis() : dir_(fs::temp_directory_path() / ("mdn_queue_bench_" + std::to_string(getpid()))), port_(free_port()) {
+  explicit Redis(const std::string& fsync)
+      : dir_(fs::temp_directory_path() / ("mdn_queue_bench_" + std::to_string(getpid()))), port_(free_port()) {
     fs::create_directories(dir_);
     pid_ = fork();
     if (pid_ == 0) {
       prctl(PR_SET_PDEATHSIG, SIGKILL);
       const std::string port = std::to_string(port_), log = (dir_ / "redis.log").string();
       execl("/usr/bin/redis-server", "redis-server", "--port", port.c_str(), "--bind", "127.0.0.1", "--dir",
-            dir_.c_str(), "--appendonly", "yes", "--appendfsync", "always", "--save", "", "--logfile", log.c_str(),
+            dir_.c_str(), "--appendonly", "yes", "--appendfsync", fsync.c_str(), "--save", "", "--logfile", log.c_str(),
             static_cast<char*>(nullptr));
       _exit(127);
     }
@@ -133,18 +140,30 @@ struct Replica {
 double run_job(httplib::Client& post, httplib::Client& poll, const std::string& body, int poll_ms) {
   const auto t = Clock::now();
   auto r = post.Post("/v1/jobs", body, "model/x-off");
-  if (!r || r->status != 202) return -1;
+  if (!r || r->status != 202) {
+    std::fprintf(stderr, "  POST /v1/jobs: %d %s\n", r ? r->status : -1, r ? r->body.c_str() : "");
+    return -1;
+  }
   const std::string id = nlohmann::json::parse(r->body).value("id", "");
   for (;;) {
     auto g = poll.Get(("/v1/jobs/" + id).c_str());
-    if (!g || g->status != 200) return -1;
+    if (!g || g->status != 200) {
+      std::fprintf(stderr, "  GET /v1/jobs/%s: %d %s\n", id.c_str(), g ? g->status : -1, g ? g->body.c_str() : "");
+      return -1;
+    }
     const std::string state = nlohmann::json::parse(g->body).value("state", "");
     if (state == "succeeded") break;
-    if (state != "queued" && state != "running") return -1;
+    if (state != "queued" && state != "running") {
+      std::fprintf(stderr, "  job %s: %s\n", id.c_str(), g->body.c_str());
+      return -1;
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(poll_ms));
   }
   auto res = poll.Get(("/v1/jobs/" + id + "/result").c_str());
-  if (!res || res->status != 200) return -1;
+  if (!res || res->status != 200) {
+    std::fprintf(stderr, "  GET /v1/jobs/%s/result: %d\n", id.c_str(), res ? res->status : -1);
+    return -1;
+  }
   const double ms = ms_since(t);
   poll.Delete(("/v1/jobs/" + id).c_str());
   return ms;
@@ -186,13 +205,15 @@ double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::st
 
 int main(int argc, char** argv) {
   int jobs = 24, runs = 15, level = 5;
+  std::string fsync = "everysec";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--jobs" && i + 1 < argc) jobs = std::atoi(argv[++i]);
     else if (a == "--runs" && i + 1 < argc) runs = std::atoi(argv[++i]);
     else if (a == "--level" && i + 1 < argc) level = std::atoi(argv[++i]);
+    else if (a == "--fsync" && i + 1 < argc) fsync = argv[++i];
     else {
-      std::fprintf(stderr, "usage: %s [--jobs N] [--runs N] [--level L]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--jobs N] [--runs N] [--level L] [--fsync always|everysec]\n", argv[0]);
       return 2;
     }
   }
@@ -207,7 +228,8 @@ int main(int argc, char** argv) {
   const std::string body = mdn::test::off_text(mesh);
   std::printf("input: noisy icosphere, %lld faces, OFF %zu bytes; %u hardware threads\n",
               static_cast<long long>(mesh.F.rows()), body.size(), std::thread::hardware_concurrency());
-  Redis redis;
+  Redis redis(fsync);
+  std::printf("redis-server: appendonly yes, appendfsync %s\n", fsync.c_str());
 
   // 1. Latency, one job at a time, one worker.
   std::vector<double> memory, shared;
