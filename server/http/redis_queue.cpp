@@ -195,31 +195,61 @@ local function expire_job(hash, ttl_ms)
 end
 )lua";
 
-// KEYS: hash, input, stream.  ARGV: consumer, now_ms, max_attempts, entry id, group,
-// exhausted problem, cancelled problem, ttl_ms, lost-input problem.
+// Starting a job, shared by kTake and kStart. KEYS: stream.  ARGV: consumer, now_ms,
+// max_attempts, (unused), group, exhausted problem, cancelled problem, ttl_ms, lost-input
+// problem, job key prefix, (kStart: entry id, job id).
+// Returns {outcome, attempt, previous owner, input, format, params, entry id, job id}.
+constexpr const char* kStartJob = R"lua(
+local function start_job(entry, jid)
+  local hash = ARGV[10] .. jid
+  local input_key = hash .. ':input'
+  local function finish(state, problem)
+    redis.call('HSET', hash, 'state', state, 'error', problem, 'finished_ms', ARGV[2])
+    redis.call('DEL', input_key)
+    expire_job(hash, ARGV[8])
+    drop(KEYS[1], ARGV[5], entry)
+  end
+  local function result(outcome, n, previous)
+    return {outcome, n or 0, previous or '', '', '', '', entry, jid}
+  end
+  local st = redis.call('HGET', hash, 'state')
+  if not st then drop(KEYS[1], ARGV[5], entry) return result('gone') end
+  if st == 'succeeded' or st == 'failed' or st == 'cancelled' then drop(KEYS[1], ARGV[5], entry) return result('done') end
+  if redis.call('HGET', hash, 'cancel') == '1' then finish('cancelled', ARGV[7]) return result('cancelled') end
+  local previous = redis.call('HGET', hash, 'owner') or ''
+  local n = redis.call('HINCRBY', hash, 'attempts', 1)
+  if n > tonumber(ARGV[3]) then
+    redis.call('HINCRBY', hash, 'attempts', -1)
+    finish('failed', ARGV[6])
+    return result('exhausted', n - 1, previous)
+  end
+  local input = redis.call('GET', input_key)
+  if not input then finish('failed', ARGV[9]) return result('lost') end
+  redis.call('HSET', hash, 'state', 'running', 'owner', ARGV[1], 'started_ms', ARGV[2], 'stage', 'decode',
+             'fraction', '0')
+  return {'run', n, previous, input, redis.call('HGET', hash, 'format'), redis.call('HGET', hash, 'params'), entry, jid}
+end
+)lua";
+
+// Takes the next new entry for this consumer and starts its job, in one step (one write, one
+// round trip). Nothing new: {'none', ..., last entry id}, for XREAD BLOCK to wait after it.
+constexpr const char* kTake = R"lua(
+local r = redis.call('XREADGROUP', 'GROUP', ARGV[5], ARGV[1], 'COUNT', '1', 'STREAMS', KEYS[1], '>')
+if not r then
+  local last = redis.call('XREVRANGE', KEYS[1], '+', '-', 'COUNT', '1')
+  return {'none', 0, '', '', '', '', #last == 0 and '0-0' or last[1][1], ''}
+end
+local e = r[1][2][1]
+local jid = ''
+for i = 1, #e[2], 2 do
+  if e[2][i] == 'id' then jid = e[2][i + 1] end
+end
+return start_job(e[1], jid)
+)lua";
+
+// An entry taken over with XAUTOCLAIM (already in this consumer's pending list).
 constexpr const char* kStart = R"lua(
-local function finish(state, problem)
-  redis.call('HSET', KEYS[1], 'state', state, 'error', problem, 'finished_ms', ARGV[2])
-  redis.call('DEL', KEYS[2])
-  expire_job(KEYS[1], ARGV[8])
-  drop(KEYS[3], ARGV[5], ARGV[4])
-end
-local st = redis.call('HGET', KEYS[1], 'state')
-if not st then drop(KEYS[3], ARGV[5], ARGV[4]) return {'gone'} end
-if st == 'succeeded' or st == 'failed' or st == 'cancelled' then drop(KEYS[3], ARGV[5], ARGV[4]) return {'done'} end
-if redis.call('HGET', KEYS[1], 'cancel') == '1' then finish('cancelled', ARGV[7]) return {'cancelled'} end
-local previous = redis.call('HGET', KEYS[1], 'owner') or ''
-local n = redis.call('HINCRBY', KEYS[1], 'attempts', 1)
-if n > tonumber(ARGV[3]) then
-  redis.call('HINCRBY', KEYS[1], 'attempts', -1)
-  finish('failed', ARGV[6])
-  return {'exhausted', n - 1, previous}
-end
-local input = redis.call('GET', KEYS[2])
-if not input then finish('failed', ARGV[9]) return {'lost'} end
-redis.call('HSET', KEYS[1], 'state', 'running', 'owner', ARGV[1], 'started_ms', ARGV[2], 'stage', 'decode',
-           'fraction', '0')
-return {'run', n, previous, input, redis.call('HGET', KEYS[1], 'format'), redis.call('HGET', KEYS[1], 'params')}
+return start_job(ARGV[11], ARGV[12])
 )lua";
 
 // Heartbeat. KEYS: hash, stream.  ARGV: consumer, stage ('' = unchanged), fraction, entry id, group.
@@ -483,6 +513,18 @@ class RedisJobStore final : public JobStore {
     char host[256] = "host";
     gethostname(host, sizeof host - 1);
     consumer_ = std::string(host) + "-" + std::to_string(getpid()) + "-" + random_hex(rng_, 1).substr(0, 6);
+    exhausted_problem_ = problem_text([&] {
+      Problem p = make_problem(500, "attempts-exhausted", "Job failed on every attempt",
+                               "the job was started " + std::to_string(c.queue_max_attempts) +
+                                   " times and its worker stopped answering each time (crash, kill or lost "
+                                   "node); it is not run again");
+      p.extensions["attempts"] = c.queue_max_attempts;
+      return p;
+    }());
+    cancelled_problem_ =
+        problem_text(make_problem(409, "cancelled", "Job cancelled", "cancelled by DELETE before it started"));
+    lost_problem_ = problem_text(
+        make_problem(500, "input-lost", "Job input lost", "the job's input is no longer in the job store"));
     const int slots = c.effective_workers();
     monitor_ = std::thread([this] { monitor_loop(); });
     for (int i = 0; i < slots; ++i) slots_.emplace_back([this] { slot_loop(); });
@@ -746,30 +788,41 @@ class RedisJobStore final : public JobStore {
   }
 
   // ---------------------------------------------------------------- worker slots
-  struct Entry {
-    std::string entry_id, job_id;
+  // What kTake or kStart answered.
+  struct Taken {
+    std::string outcome;  // run, none, gone, done, cancelled, exhausted, lost
+    int attempt = 0;
+    std::string previous, input, format, params, entry_id, job_id;
     bool reclaimed = false;
   };
 
-  // Parses [[id, [field, value, ...]], ...] (the entries of XREADGROUP and XAUTOCLAIM).
-  static std::optional<Entry> first_entry(const redisReply* entries) {
-    if (!entries || entries->type != REDIS_REPLY_ARRAY) return std::nullopt;
-    for (std::size_t i = 0; i < entries->elements; ++i) {
-      const redisReply* e = entries->element[i];
-      if (!e || e->type != REDIS_REPLY_ARRAY || e->elements < 2) continue;  // deleted entry (Redis 6.2)
-      Entry out;
-      out.entry_id = std::string(str(e->element[0]));
-      const redisReply* fields = e->element[1];
-      if (fields && fields->type == REDIS_REPLY_ARRAY)
-        for (std::size_t k = 0; k + 1 < fields->elements; k += 2)
-          if (str(fields->element[k]) == "id") out.job_id = std::string(str(fields->element[k + 1]));
-      return out;
-    }
-    return std::nullopt;
+  static Taken parse_taken(const Reply& r) {
+    Taken t;
+    t.outcome = std::string(str(element(r.get(), 0)));
+    t.attempt = int(element(r.get(), 1)->integer);
+    t.previous = std::string(str(element(r.get(), 2)));
+    t.input = std::string(str(element(r.get(), 3)));
+    t.format = std::string(str(element(r.get(), 4)));
+    t.params = std::string(str(element(r.get(), 5)));
+    t.entry_id = std::string(str(element(r.get(), 6)));
+    t.job_id = std::string(str(element(r.get(), 7)));
+    return t;
   }
 
-  std::optional<Entry> next_entry(Connection& c) {
-    // Take over the entries of silent workers first (at most every half idle threshold).
+  std::vector<std::string> start_args(const char* script) const {
+    return {"EVAL", kFinishHelpers + std::string(kStartJob) + script, "1", stream_, consumer_, std::to_string(now_ms()),
+            std::to_string(config_.queue_max_attempts), "", kGroup, exhausted_problem_, cancelled_problem_, ttl_ms_,
+            lost_problem_, prefix_ + "job:"};
+  }
+
+  static Reply eval(Connection& c, const std::vector<std::string>& args) {
+    std::vector<std::string_view> views(args.begin(), args.end());
+    return c.checked(views);
+  }
+
+  // The next job for this slot: one taken over from a silent worker (XAUTOCLAIM, at most every
+  // half idle threshold), else the next new one (kTake). `last_id`: where XREAD should wait.
+  Taken next_job(Connection& c, std::string& last_id) {
     const auto now = Clock::now();
     bool reclaim = false;
     {
@@ -780,35 +833,34 @@ class RedisJobStore final : public JobStore {
       }
     }
     if (reclaim) {
-      Reply r = c.command({"XAUTOCLAIM", stream_, kGroup, consumer_, std::to_string(reclaim_idle_ms_), "0-0",
-                           "COUNT", "1"});
-      if (r->type == REDIS_REPLY_ERROR) {
-        if (str(r.get()).rfind("NOGROUP", 0) == 0) ensure_group(c);
-        else throw RedisReplyError(std::string(str(r.get())));
-      } else if (r->type == REDIS_REPLY_ARRAY && r->elements >= 2) {
-        if (auto e = first_entry(r->element[1])) {
-          e->reclaimed = true;
-          return e;
-        }
+      Reply r = c.checked({"XAUTOCLAIM", stream_, kGroup, consumer_, std::to_string(reclaim_idle_ms_), "0-0", "COUNT", "1"});
+      // [next cursor, [[entry id, [field, value, ...]], ...], deleted ids]
+      const redisReply* entries = element(r.get(), 1);
+      for (std::size_t i = 0; i < entries->elements; ++i) {
+        const redisReply* e = entries->element[i];
+        if (!e || e->type != REDIS_REPLY_ARRAY || e->elements < 2) continue;  // deleted meanwhile
+        std::string entry_id(str(e->element[0])), job_id;
+        const redisReply* fields = e->element[1];
+        if (fields && fields->type == REDIS_REPLY_ARRAY)
+          for (std::size_t k = 0; k + 1 < fields->elements; k += 2)
+            if (str(fields->element[k]) == "id") job_id = std::string(str(fields->element[k + 1]));
+        auto args = start_args(kStart);
+        args.push_back(entry_id);
+        args.push_back(job_id);
+        Taken t = parse_taken(eval(c, args));
+        t.reclaimed = true;
+        return t;
       }
     }
-    Reply r = c.command({"XREADGROUP", "GROUP", kGroup, consumer_, "COUNT", "1", "BLOCK", "1000", "STREAMS", stream_, ">"});
-    if (r->type == REDIS_REPLY_ERROR) {
-      if (str(r.get()).rfind("NOGROUP", 0) == 0) {
-        ensure_group(c);
-        return std::nullopt;
-      }
-      throw RedisReplyError(std::string(str(r.get())));
-    }
-    if (r->type != REDIS_REPLY_ARRAY || r->elements == 0) return std::nullopt;  // timed out
-    const redisReply* stream = r->element[0];
-    if (stream->type != REDIS_REPLY_ARRAY || stream->elements < 2) return std::nullopt;
-    return first_entry(stream->element[1]);
+    Taken t = parse_taken(eval(c, start_args(kTake)));
+    if (t.outcome == "none") last_id = t.entry_id;
+    return t;
   }
 
   void slot_loop() {
     std::unique_ptr<Connection> c;
     auto backoff = 100ms;
+    std::string last_id = "0-0";
     while (!stopping_) {
       if (draining_) {
         std::this_thread::sleep_for(50ms);
@@ -819,12 +871,16 @@ class RedisJobStore final : public JobStore {
           c.reset();
           c = std::make_unique<Connection>(pool_.address(), pool_.timeout());
         }
-        std::optional<Entry> e = next_entry(*c);
+        Taken t = next_job(*c, last_id);
         backoff = 100ms;
-        if (!e) continue;
+        if (t.outcome == "none") {
+          // Wait for an entry newer than the last one (read-only: no write, no fsync).
+          c->checked({"XREAD", "COUNT", "1", "BLOCK", "1000", "STREAMS", stream_, last_id});
+          continue;
+        }
         ++busy_;
         try {
-          process(c, *e);
+          process(c, std::move(t));
         } catch (...) {
           --busy_;
           throw;
@@ -833,6 +889,17 @@ class RedisJobStore final : public JobStore {
       } catch (const RedisDown& e) {
         c.reset();
         mark_down(e.what());
+        sleep_unless_stopping(backoff);
+        backoff = std::min<std::chrono::milliseconds>(backoff * 2, 2000ms);
+      } catch (const RedisReplyError& e) {
+        if (std::string_view(e.what()).find("NOGROUP") != std::string_view::npos) {
+          try {
+            ensure_group(*c);
+            continue;
+          } catch (const std::exception&) {
+          }
+        }
+        if (log_) log_->error("queue_worker_error", {{"detail", e.what()}});
         sleep_unless_stopping(backoff);
         backoff = std::min<std::chrono::milliseconds>(backoff * 2, 2000ms);
       } catch (const std::exception& e) {
@@ -873,50 +940,29 @@ class RedisJobStore final : public JobStore {
     }
   }
 
-  // Runs one entry on the slot's connection `conn` (re-made when it breaks).
-  void process(std::unique_ptr<Connection>& conn, const Entry& e) {
-    if (!valid_id(e.job_id)) {  // not ours: acknowledge and forget
-      conn->command({"XACK", stream_, kGroup, e.entry_id});
-      conn->command({"XDEL", stream_, e.entry_id});
-      return;
-    }
-    const std::string exhausted = problem_text([&] {
-      Problem p = make_problem(500, "attempts-exhausted", "Job failed on every attempt",
-                               "the job was started " + std::to_string(config_.queue_max_attempts) +
-                                   " times and its worker stopped answering each time (crash, kill or lost "
-                                   "node); it is not run again");
-      p.extensions["attempts"] = config_.queue_max_attempts;
-      return p;
-    }());
-    const std::string cancelled =
-        problem_text(make_problem(409, "cancelled", "Job cancelled", "cancelled by DELETE before it started"));
-    const std::string lost = problem_text(
-        make_problem(500, "input-lost", "Job input lost", "the job's input is no longer in the job store"));
-    Reply r = conn->checked({"EVAL", kFinishHelpers + std::string(kStart), "3", job_key(e.job_id), input_key(e.job_id),
-                            stream_, consumer_, std::to_string(now_ms()), std::to_string(config_.queue_max_attempts),
-                            e.entry_id, kGroup, exhausted, cancelled, ttl_ms_, lost});
-    const std::string_view outcome = str(element(r.get(), 0));
-    if (e.reclaimed && (outcome == "run" || outcome == "exhausted")) {
+  // Runs a started job on the slot's connection `conn` (re-made when it breaks).
+  void process(std::unique_ptr<Connection>& conn, Taken t) {
+    const Taken& e = t;
+    if (e.reclaimed && (e.outcome == "run" || e.outcome == "exhausted")) {
       ++reclaimed_;
       if (log_)
-        log_->warn("job_reclaimed", {{"job_id", e.job_id}, {"from", std::string(str(element(r.get(), 2)))},
+        log_->warn("job_reclaimed", {{"job_id", e.job_id}, {"from", e.previous},
                                      {"idle_threshold_s", config_.queue_reclaim_idle_s}});
     }
-    if (outcome == "exhausted") {
+    if (e.outcome == "exhausted") {
       ++exhausted_;
-      if (log_) log_->warn("job_attempts_exhausted", {{"job_id", e.job_id}, {"attempts", element(r.get(), 1)->integer}});
+      if (log_) log_->warn("job_attempts_exhausted", {{"job_id", e.job_id}, {"attempts", e.attempt}});
       return;
     }
-    if (outcome != "run") return;
-    const int attempt = int(element(r.get(), 1)->integer);
-    if (attempt > 1) {
+    if (e.outcome != "run") return;
+    if (e.attempt > 1) {
       ++retries_;
-      if (log_) log_->info("job_retry", {{"job_id", e.job_id}, {"attempt", attempt}});
+      if (log_) log_->info("job_retry", {{"job_id", e.job_id}, {"attempt", e.attempt}});
     }
     service::JobInput input;
-    input.bytes.assign(str(element(r.get(), 3)));
-    const std::string format(str(element(r.get(), 4))), params(str(element(r.get(), 5)));
-    r.reset();
+    input.bytes = std::move(t.input);
+    const std::string& format = e.format;
+    const std::string& params = e.params;
     std::unique_ptr<Connection>& beat = conn;
     std::optional<Problem> error;
     try {
@@ -1022,6 +1068,7 @@ class RedisJobStore final : public JobStore {
   const std::shared_ptr<const EventLog> log_;
   Pool pool_;
   const std::string prefix_, stream_, ttl_ms_;
+  std::string exhausted_problem_, cancelled_problem_, lost_problem_;  // stored as a job's error
   const std::int64_t reclaim_idle_ms_;
   std::string consumer_;
 

@@ -15,8 +15,9 @@
 //
 // Life of a job. POST: one Lua script checks the idempotency key and the capacity, writes the
 // hash and input and XADDs the id, so a job is either wholly accepted or not at all. A worker
-// slot (one per --workers) XREADGROUPs an id, a script marks it running under this replica's
-// consumer name and counts the attempt, and the local JobQueue runs it. Every 200 ms the slot
+// slot (one per --workers) waits with XREAD BLOCK (read-only) for a new entry, then one script
+// XREADGROUPs it, marks the job running under this replica's consumer name and counts the
+// attempt (one write, hence one fsync with appendfsync always), and the local JobQueue runs it. Every 200 ms the slot
 // reports progress, refreshes the entry's idle time (XCLAIM ... JUSTID: a heartbeat) and reads
 // the cancel flag. A final script stores result and state, XACKs and XDELs the entry, guarded
 // by "still running and still mine", so a job overtaken by another replica is never stored

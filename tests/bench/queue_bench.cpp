@@ -4,8 +4,8 @@
 //   queue_bench [--jobs N] [--runs N] [--level L] [--fsync always|everysec]
 //
 // A redis-server (Debian's, /usr/bin/redis-server) is started on a free loopback port with the
-// compose file's settings (append-only file, --fsync everysec; "always" fsyncs every write) in
-// a temporary directory.
+// compose file's settings (append-only file, fsync on every write: --fsync always; everysec for
+// comparison) in a temporary directory.
 // Servers run in-process (mdn::http::HttpService, one per "replica", each with its own queue
 // and Redis consumer) and are reached over real HTTP on loopback.
 //
@@ -205,7 +205,7 @@ double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::st
 
 int main(int argc, char** argv) {
   int jobs = 24, runs = 15, level = 5;
-  std::string fsync = "everysec";
+  std::string fsync = "always";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--jobs" && i + 1 < argc) jobs = std::atoi(argv[++i]);

@@ -151,7 +151,7 @@ def main():
         # The shared job store, as the compose file runs it (append-only file).
         redis_port = free_port()
         redis = procs.start([args.redis_server, "--port", str(redis_port), "--bind", "127.0.0.1", "--dir", tmp,
-                             "--appendonly", "yes", "--appendfsync", "everysec", "--save", ""], os.path.join(tmp, "redis.log"))
+                             "--appendonly", "yes", "--appendfsync", "always", "--save", ""], os.path.join(tmp, "redis.log"))
         end = time.monotonic() + 30
         while True:
             check(redis.poll() is None, "redis-server exited: %s" % tail(redis.log_path))

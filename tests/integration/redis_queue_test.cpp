@@ -1,6 +1,6 @@
 // The shared job store (--queue redis://...) end to end: a real redis-server from Debian's
-// packages on a free loopback port (append-only file, fsync every second as in the compose file,
-// in a temporary directory) and real meshdenoise-server replicas speaking real HTTP.
+// packages on a free loopback port (append-only file, fsync on every write as in the compose
+// file, in a temporary directory) and real meshdenoise-server replicas speaking real HTTP.
 //
 //   - 3 replicas, jobs posted round-robin and each polled and fetched through other replicas:
 //     all succeed, byte-identical to the CLI.
@@ -82,7 +82,7 @@ class RedisServer {
       prctl(PR_SET_PDEATHSIG, SIGKILL);
       const std::string port = std::to_string(port_), log = dir_ + "/redis.log";
       execl(binary().c_str(), binary().c_str(), "--port", port.c_str(), "--bind", "127.0.0.1", "--dir", dir_.c_str(),
-            "--appendonly", "yes", "--appendfsync", "everysec", "--save", "", "--daemonize", "no", "--logfile",
+            "--appendonly", "yes", "--appendfsync", "always", "--save", "", "--daemonize", "no", "--logfile",
             log.c_str(), static_cast<char*>(nullptr));
       _exit(127);
     }
