@@ -263,6 +263,16 @@ if redis.call('HGET', KEYS[1], 'cancel') == '1' then return 'cancel' end
 return 'ok'
 )lua";
 
+// Between heartbeats, a read-only look (no write, so no fsync): still ours? cancelled?
+// KEYS: hash.  ARGV: consumer.
+constexpr const char* kCheck = R"lua(
+if redis.call('HGET', KEYS[1], 'owner') ~= ARGV[1] or redis.call('HGET', KEYS[1], 'state') ~= 'running' then
+  return 'lost'
+end
+if redis.call('HGET', KEYS[1], 'cancel') == '1' then return 'cancel' end
+return 'ok'
+)lua";
+
 // KEYS: hash, input, stream, result.  ARGV: consumer, state, problem, output summary, result
 // bytes, ttl_ms, now_ms, entry id, group, output_bytes.
 constexpr const char* kFinish = R"lua(
@@ -980,6 +990,11 @@ class RedisJobStore final : public JobStore {
       bool cancel_by_user = false;
       std::string last_stage;
       double last_fraction = -1;
+      // Every 200 ms a read-only check (cancel flag, still ours); a heartbeat with the progress
+      // (a write: it resets the entry's idle time) when the stage changes and at least every
+      // quarter of the idle threshold (at most every second).
+      const auto beat_every = std::chrono::milliseconds(std::clamp<std::int64_t>(reclaim_idle_ms_ / 4, 100, 1000));
+      auto last_beat = Clock::now();
       while (!job->wait_for(200ms)) {
         if (stopping_ && end == End::Finished) {
           end = End::Released;
@@ -988,6 +1003,7 @@ class RedisJobStore final : public JobStore {
         if (end != End::Finished || cancel_by_user) continue;
         const JobSnapshot s = job->snapshot();
         const bool changed = s.stage != last_stage || std::abs(s.fraction - last_fraction) >= 0.01;
+        const bool due = s.stage != last_stage || Clock::now() - last_beat >= beat_every;
         char fraction[32];
         std::snprintf(fraction, sizeof fraction, "%.4f", s.fraction);
         try {
@@ -995,10 +1011,14 @@ class RedisJobStore final : public JobStore {
             beat.reset();
             beat = std::make_unique<Connection>(pool_.address(), pool_.timeout());
           }
-          Reply b = beat->checked({"EVAL", kBeat, "2", job_key(e.job_id), stream_, consumer_,
-                                   changed ? s.stage : std::string(), fraction, e.entry_id, kGroup});
-          last_stage = s.stage;
-          last_fraction = s.fraction;
+          Reply b = due ? beat->checked({"EVAL", kBeat, "2", job_key(e.job_id), stream_, consumer_,
+                                         changed ? s.stage : std::string(), fraction, e.entry_id, kGroup})
+                        : beat->checked({"EVAL", kCheck, "1", job_key(e.job_id), consumer_});
+          if (due) {
+            last_beat = Clock::now();
+            last_stage = s.stage;
+            last_fraction = s.fraction;
+          }
           const std::string_view v = str(b.get());
           if (v == "cancel") {
             cancel_by_user = true;

@@ -17,9 +17,11 @@
 // hash and input and XADDs the id, so a job is either wholly accepted or not at all. A worker
 // slot (one per --workers) waits with XREAD BLOCK (read-only) for a new entry, then one script
 // XREADGROUPs it, marks the job running under this replica's consumer name and counts the
-// attempt (one write, hence one fsync with appendfsync always), and the local JobQueue runs it. Every 200 ms the slot
-// reports progress, refreshes the entry's idle time (XCLAIM ... JUSTID: a heartbeat) and reads
-// the cancel flag. A final script stores result and state, XACKs and XDELs the entry, guarded
+// attempt (one write, hence one fsync with appendfsync always), and the local JobQueue runs it.
+// Every 200 ms the slot reads the cancel flag and checks that the job is still its own (a
+// read-only script); on each stage change and at least every quarter of the idle threshold it
+// sends a heartbeat: the progress, and XCLAIM ... JUSTID, which resets the entry's idle time.
+// A final script stores result and state, XACKs and XDELs the entry, guarded
 // by "still running and still mine", so a job overtaken by another replica is never stored
 // twice. Entries idle longer than --queue-reclaim-idle (their worker died) are taken over with
 // XAUTOCLAIM and run again, at most --queue-max-attempts runs in all; then the job fails.
