@@ -1,6 +1,7 @@
 // The HTTP service: route table, handlers, CORS, auth, request ids, access logs and metrics,
-// over cpp-httplib and the JobQueue. Built from a ServerConfig; main() only parses the
-// configuration, handles signals and calls these methods.
+// over cpp-httplib, the JobQueue (this process's workers; synchronous jobs) and a JobStore
+// (asynchronous jobs: in memory, or shared through Redis with --queue; job_store.h). Built from
+// a ServerConfig; main() only parses the configuration, handles signals and calls these methods.
 //
 // Lifecycle: bind() -> serve() (blocks, on its own thread) ... begin_drain() -> wait_drained()
 // -> stop(). Every method except serve() may be called from any thread.

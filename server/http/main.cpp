@@ -90,6 +90,7 @@ int main(int argc, char** argv) {
                             {"workers", config.effective_workers()},
                             {"threads_per_job", config.threads_per_job},
                             {"queue_capacity", config.queue_capacity},
+                            {"job_store", config.queue == "memory" ? "memory" : "redis"},
                             {"io_threads", config.io_threads},
                             {"max_body", config.max_body_bytes},
                             {"auth", !config.auth_token.empty()}});
