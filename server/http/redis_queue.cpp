@@ -496,9 +496,12 @@ std::string random_hex(std::mt19937_64& rng, int words) {
   return out;
 }
 
-// Redis error replies that mean "not now" rather than "never".
+// Redis error replies that mean "not now" rather than "never": loading, out of memory, a
+// replica, a failed snapshot, or a password missing or wrong (the operator's to fix; 503 with
+// Retry-After, as /readyz says).
 bool transient_reply(std::string_view e) {
-  for (std::string_view p : {"LOADING", "BUSY", "OOM", "READONLY", "MASTERDOWN", "TRYAGAIN", "CLUSTERDOWN", "NOREPLICAS"})
+  for (std::string_view p : {"LOADING", "BUSY", "OOM", "READONLY", "MASTERDOWN", "TRYAGAIN", "CLUSTERDOWN",
+                             "NOREPLICAS", "MISCONF", "NOAUTH", "WRONGPASS", "NOPERM"})
     if (e.rfind(p, 0) == 0) return true;
   return false;
 }
@@ -536,6 +539,15 @@ class RedisJobStore final : public JobStore {
     lost_problem_ = problem_text(
         make_problem(500, "input-lost", "Job input lost", "the job's input is no longer in the job store"));
     const int slots = c.effective_workers();
+    // One attempt now, so that a server whose Redis answers is ready as soon as it listens
+    // (at most the 1 s connect timeout when it does not; the monitor keeps trying).
+    try {
+      Connection first(pool_.address(), pool_.timeout());
+      ensure_group(first);
+      first.checked({"PING"});
+      mark_up();
+    } catch (const std::exception&) {
+    }
     monitor_ = std::thread([this] { monitor_loop(); });
     for (int i = 0; i < slots; ++i) slots_.emplace_back([this] { slot_loop(); });
     if (log_) {
@@ -717,6 +729,8 @@ class RedisJobStore final : public JobStore {
   // One request-thread operation on a pooled connection; Redis failures become problems.
   template <class F>
   Reply run(F&& f) {
+    // The monitor found Redis unusable (down, or refusing us): answer at once, as /readyz does.
+    if (auto p = unavailable()) throw HttpError(*p);
     std::unique_ptr<Connection> c;
     try {
       c = pool_.take();
