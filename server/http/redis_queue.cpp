@@ -99,6 +99,32 @@ class Connection {
     }
     return r;
   }
+  // Several commands in one round trip; replies in order (error replies included).
+  std::vector<Reply> pipeline(const std::vector<std::vector<std::string_view>>& commands) {
+    if (broken_) throw RedisDown("connection already failed");
+    for (const auto& args : commands) {
+      std::vector<const char*> argv;
+      std::vector<std::size_t> lens;
+      for (auto a : args) {
+        argv.push_back(a.data());
+        lens.push_back(a.size());
+      }
+      if (redisAppendCommandArgv(ctx_, int(args.size()), argv.data(), lens.data()) != REDIS_OK) {
+        broken_ = true;
+        throw RedisDown(std::string("Redis connection failed: ") + ctx_->errstr);
+      }
+    }
+    std::vector<Reply> out;
+    for (std::size_t i = 0; i < commands.size(); ++i) {
+      void* r = nullptr;
+      if (redisGetReply(ctx_, &r) != REDIS_OK || !r) {
+        broken_ = true;
+        throw RedisDown(std::string("Redis connection failed: ") + (ctx_->err ? ctx_->errstr : "no reply"));
+      }
+      out.emplace_back(static_cast<redisReply*>(r));
+    }
+    return out;
+  }
   // Like command(), but an error reply throws RedisReplyError.
   Reply checked(const std::vector<std::string_view>& args) {
     Reply r = command(args);
@@ -325,17 +351,6 @@ if idem then redis.call('DEL', idem) end
 return 'removed'
 )lua";
 
-// KEYS: hash, result.  ARGV: with_result.
-constexpr const char* kGet = R"lua(
-local h = redis.call('HGETALL', KEYS[1])
-if #h == 0 then return {} end
-if ARGV[1] == '1' and redis.call('HGET', KEYS[1], 'state') == 'succeeded' then
-  local bytes = redis.call('GET', KEYS[2])
-  if not bytes then return {} end
-  return {h, bytes}
-end
-return {h}
-)lua";
 
 // Every replica that ever ran is a consumer of the group; a restarted one comes back under a new
 // name. Consumers with nothing pending and idle for ARGV[2] ms are deleted, atomically (a
@@ -614,16 +629,27 @@ class RedisJobStore final : public JobStore {
 
   std::optional<JobSnapshot> find(const std::string& id, bool with_result) override {
     if (!valid_id(id)) return std::nullopt;
-    auto reply = run([&](Connection& c) {
-      return c.checked({"EVAL", kGet, "2", job_key(id), result_key(id), with_result ? "1" : "0"});
+    // Plain reads, no script: polls are the most frequent request. The hash and the result
+    // expire together; a result missing next to a succeeded hash means it just expired.
+    const std::string hash = job_key(id), result_name = result_key(id);
+    std::vector<Reply> replies;
+    run([&](Connection& c) {
+      if (with_result) replies = c.pipeline({{"HGETALL", hash}, {"GET", result_name}});
+      else replies = c.pipeline({{"HGETALL", hash}});
+      for (const Reply& r : replies)
+        if (r->type == REDIS_REPLY_ERROR) throw RedisReplyError(std::string(str(r.get())));
+      return Reply();
     });
-    if (reply->type != REDIS_REPLY_ARRAY || reply->elements == 0) return std::nullopt;
+    const redisReply* fields = replies.at(0).get();
+    if (fields->type != REDIS_REPLY_ARRAY || fields->elements == 0) return std::nullopt;
     std::map<std::string, std::string> h;
-    const redisReply* fields = element(reply.get(), 0);
     for (std::size_t i = 0; i + 1 < fields->elements; i += 2)
       h[std::string(str(fields->element[i]))] = std::string(str(fields->element[i + 1]));
     std::optional<std::string> result;
-    if (reply->elements > 1) result = std::string(str(element(reply.get(), 1)));
+    if (with_result && h["state"] == "succeeded") {
+      if (replies.at(1)->type != REDIS_REPLY_STRING) return std::nullopt;
+      result = std::string(str(replies.at(1).get()));
+    }
     try {
       return snapshot_from_hash(id, std::move(h), result);
     } catch (const std::exception& e) {
