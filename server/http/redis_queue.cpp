@@ -9,6 +9,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <deque>
 #include <map>
 #include <mutex>
 #include <random>
@@ -564,6 +565,7 @@ class RedisJobStore final : public JobStore {
     } catch (const std::exception&) {
     }
     monitor_ = std::thread([this] { monitor_loop(); });
+    finisher_ = std::thread([this] { finisher_loop(); });
     for (int i = 0; i < slots; ++i) slots_.emplace_back([this] { slot_loop(); });
     if (log_) {
       const RedisAddress& a = pool_.address();
@@ -706,6 +708,12 @@ class RedisJobStore final : public JobStore {
     draining_ = true;
     stopping_ = true;
     for (auto& t : slots_) t.join();
+    {
+      std::lock_guard finish_lock(finish_mutex_);
+      finisher_stop_ = true;
+    }
+    finish_cv_.notify_all();
+    if (finisher_.joinable()) finisher_.join();
     monitor_wake_.notify_all();
     if (monitor_.joinable()) monitor_.join();
     stopped_ = true;
@@ -728,7 +736,7 @@ class RedisJobStore final : public JobStore {
          "Jobs this replica failed because they reached --queue-max-attempts.", exhausted_);
     line("mdn_queue_redis_reconnects_total", "counter", "Times Redis answered again after being unreachable.",
          reconnects_);
-    line("mdn_queue_shared_running", "gauge", "Shared jobs this replica runs now.", busy_);
+    line("mdn_queue_shared_running", "gauge", "Shared jobs this replica took and has not stored yet (running or storing).", busy_);
   }
 
   std::string_view kind() const override { return "redis"; }
@@ -838,6 +846,10 @@ class RedisJobStore final : public JobStore {
   }
 
   // ---------------------------------------------------------------- worker slots
+  struct Finish {
+    std::string job_id, entry_id, state, error, summary, result, finished_ms, result_bytes;
+  };
+
   // What kTake or kStart answered.
   struct Taken {
     std::string outcome;  // run, none, gone, done, cancelled, exhausted, lost
@@ -1108,18 +1120,49 @@ class RedisJobStore final : public JobStore {
       if (log_) log_->info("job_released", {{"job_id", e.job_id}, {"detail", "this replica stopped; back in the queue"}});
       return;
     }
-    std::string stored;
-    const bool done = retry(fin, [&](Connection& c) {
-      Reply f = c.checked({"EVAL", kFinishHelpers + std::string(kFinish), "4", job_key(e.job_id), input_key(e.job_id),
-                           stream_, result_key(e.job_id), consumer_, std::string(to_string(state)),
-                           error ? problem_text(*error) : std::string(), summary, result, ttl_ms_,
-                           std::to_string(now_ms()), e.entry_id, kGroup, std::to_string(result_bytes)});
-      stored = std::string(str(f.get()));
-    });
-    if (!done && log_)
-      log_->warn("job_unstored", {{"job_id", e.job_id}, {"detail", "stopped while Redis was unreachable; the job will run again"}});
-    else if (stored == "stale" && log_)
-      log_->warn("job_lost", {{"job_id", e.job_id}, {"detail", "another replica took the job over"}});
+    // Stored by the finisher thread, so that this slot takes its next job meanwhile (the
+    // worker does not wait for the result's transfer and fsync). Counted as busy until stored.
+    Finish f{e.job_id, e.entry_id, std::string(to_string(state)), error ? problem_text(*error) : std::string(),
+             std::move(summary), std::move(result), std::to_string(now_ms()), std::to_string(result_bytes)};
+    ++busy_;
+    {
+      std::lock_guard lock(finish_mutex_);
+      finishes_.push_back(std::move(f));
+    }
+    finish_cv_.notify_one();
+  }
+
+  // Stores finished jobs' results and states in order; on stop, stores what is left while
+  // Redis answers (a result not stored means the job runs again elsewhere).
+  void finisher_loop() {
+    std::unique_ptr<Connection> c;
+    for (;;) {
+      Finish f;
+      {
+        std::unique_lock lock(finish_mutex_);
+        finish_cv_.wait(lock, [&] { return !finishes_.empty() || finisher_stop_; });
+        if (finishes_.empty()) return;
+        f = std::move(finishes_.front());
+        finishes_.pop_front();
+      }
+      std::string stored;
+      bool done = false;
+      try {
+        done = retry(c, [&](Connection& conn) {
+          Reply r = conn.checked({"EVAL", kFinishHelpers + std::string(kFinish), "4", job_key(f.job_id),
+                                  input_key(f.job_id), stream_, result_key(f.job_id), consumer_, f.state, f.error,
+                                  f.summary, f.result, ttl_ms_, f.finished_ms, f.entry_id, kGroup, f.result_bytes});
+          stored = std::string(str(r.get()));
+        });
+      } catch (const std::exception& ex) {
+        if (log_) log_->error("job_unstored", {{"job_id", f.job_id}, {"detail", ex.what()}});
+      }
+      --busy_;
+      if (!done && log_)
+        log_->warn("job_unstored", {{"job_id", f.job_id}, {"detail", "stopped while Redis was unreachable; the job will run again"}});
+      else if (stored == "stale" && log_)
+        log_->warn("job_lost", {{"job_id", f.job_id}, {"detail", "another replica took the job over"}});
+    }
   }
 
   // ---------------------------------------------------------------- state
@@ -1137,7 +1180,13 @@ class RedisJobStore final : public JobStore {
 
   std::atomic<bool> up_{false}, ever_up_{false}, draining_{false}, stopping_{false};
   std::atomic<std::int64_t> length_{0}, pending_{0}, reclaimed_{0}, retries_{0}, exhausted_{0}, reconnects_{0};
-  std::atomic<int> busy_{0};
+  std::atomic<int> busy_{0};  // jobs taken and not yet stored (running, or waiting for the finisher)
+
+  std::mutex finish_mutex_;
+  std::condition_variable finish_cv_;
+  std::deque<Finish> finishes_;
+  bool finisher_stop_ = false;
+  std::thread finisher_;
 
   std::mutex reclaim_mutex_;
   Clock::time_point next_reclaim_ = Clock::now();

@@ -21,7 +21,8 @@
 // Every 200 ms the slot reads the cancel flag and checks that the job is still its own (a
 // read-only script); on each stage change and at least every quarter of the idle threshold it
 // sends a heartbeat: the progress, and XCLAIM ... JUSTID, which resets the entry's idle time.
-// A final script stores result and state, XACKs and XDELs the entry, guarded
+// A final script (run by a finisher thread, so the slot takes its next job meanwhile) stores
+// result and state, XACKs and XDELs the entry, guarded
 // by "still running and still mine", so a job overtaken by another replica is never stored
 // twice. Entries idle longer than --queue-reclaim-idle (their worker died) are taken over with
 // XAUTOCLAIM and run again, at most --queue-max-attempts runs in all; then the job fails.
