@@ -1,7 +1,7 @@
 // Benchmark of the shared job store (issue 6's targets). Prints figures, asserts nothing;
 // compare numbers only within one run on one machine.
 //
-//   queue_bench [--jobs N] [--runs N] [--level L] [--fsync always|everysec] [--rounds R]
+//   queue_bench [--jobs N] [--runs N] [--level L] [--fsync always|everysec] [--rounds R] [--poll-ms P]
 //
 // A redis-server (Debian's, /usr/bin/redis-server) is started on a free loopback port with the
 // compose file's settings (append-only file, fsync on every write: --fsync always; everysec for
@@ -14,8 +14,8 @@
 //    so that both see the same background load; the median difference is what the Redis
 //    round trips add to a job (target: <= 10 ms).
 // 2. Throughput: 8 clients, N asynchronous jobs; 1 replica x 2 workers (memory) vs 3 replicas
-//    x 1 worker (Redis), each job posted to one replica and polled and fetched through another
-//    (target: 3 replicas >= 1 replica x 2 workers). --rounds R alternates the two R times and
+//    x 1 worker (Redis), each job posted to one replica and polled (every --poll-ms, 10) and
+//    fetched through another (target: 3 replicas >= 1 replica x 2 workers). --rounds R alternates the two R times and
 //    reports the median of each.
 // Input: a noisy icosphere (20 * 4^L faces, default L = 5), default parameters.
 #include <netinet/in.h>
@@ -187,7 +187,7 @@ void latencies(Replica& a, Replica& b, const std::string& body, int runs, std::v
 
 // Jobs per second: 8 clients, `jobs` in all, job k posted to replica k % n, polled and
 // fetched through replica (k + 1) % n.
-double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::string& body, int jobs) {
+double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::string& body, int jobs, int poll_ms) {
   std::atomic<int> next{0}, failed{0};
   const auto start = Clock::now();
   std::vector<std::thread> clients;
@@ -200,7 +200,7 @@ double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::st
         cs.back()->set_read_timeout(600, 0);
       }
       for (int j; (j = next.fetch_add(1)) < jobs;)
-        if (run_job(*cs[std::size_t(j) % n], *cs[std::size_t(j + 1) % n], body, 10) < 0) ++failed;
+        if (run_job(*cs[std::size_t(j) % n], *cs[std::size_t(j + 1) % n], body, poll_ms) < 0) ++failed;
     });
   }
   for (auto& t : clients) t.join();
@@ -211,7 +211,7 @@ double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::st
 }  // namespace
 
 int main(int argc, char** argv) {
-  int jobs = 24, runs = 15, level = 5, rounds = 1;
+  int jobs = 24, runs = 15, level = 5, rounds = 1, poll_ms = 10;
   std::string fsync = "always";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -220,8 +220,9 @@ int main(int argc, char** argv) {
     else if (a == "--level" && i + 1 < argc) level = std::atoi(argv[++i]);
     else if (a == "--fsync" && i + 1 < argc) fsync = argv[++i];
     else if (a == "--rounds" && i + 1 < argc) rounds = std::atoi(argv[++i]);
+    else if (a == "--poll-ms" && i + 1 < argc) poll_ms = std::atoi(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: %s [--jobs N] [--runs N] [--level L] [--fsync always|everysec] [--rounds R]\n",
+      std::fprintf(stderr, "usage: %s [--jobs N] [--runs N] [--level L] [--fsync always|everysec] [--rounds R] [--poll-ms P]\n",
                    argv[0]);
       return 2;
     }
@@ -258,17 +259,17 @@ int main(int argc, char** argv) {
     {
       std::vector<std::unique_ptr<Replica>> replicas;
       replicas.push_back(std::make_unique<Replica>(2, "memory", "mdn:"));
-      one.push_back(throughput(replicas, body, jobs));
+      one.push_back(throughput(replicas, body, jobs, poll_ms));
     }
     {
       std::vector<std::unique_ptr<Replica>> replicas;
       for (int i = 0; i < 3; ++i) replicas.push_back(std::make_unique<Replica>(1, redis.url(), "tp:"));
-      three.push_back(throughput(replicas, body, jobs));
+      three.push_back(throughput(replicas, body, jobs, poll_ms));
     }
     if (rounds > 1) std::printf("  round %d: %.2f vs %.2f jobs/s\n", round + 1, one.back(), three.back());
   }
-  std::printf("throughput (%d jobs, 8 clients, median of %d): 1 replica x 2 workers (memory) %.2f jobs/s, 3 replicas x 1 "
+  std::printf("throughput (%d jobs, 8 clients polling every %d ms, median of %d): 1 replica x 2 workers (memory) %.2f jobs/s, 3 replicas x 1 "
               "worker (redis) %.2f jobs/s, ratio %.2f (target >= 1)\n",
-              jobs, rounds, median(one), median(three), median(three) / median(one));
+              jobs, poll_ms, rounds, median(one), median(three), median(three) / median(one));
   return 0;
 }
