@@ -325,7 +325,6 @@ void JobQueue::worker_loop() {
       sweep_locked();
     }
     idle_cv_.notify_all();
-    if (on_finished_) on_finished_(job->snapshot());
   }
 }
 
@@ -359,6 +358,17 @@ void JobQueue::run(const std::shared_ptr<Job>& job) {
     error = problem_from_exception(std::current_exception());
   }
   input = {};  // free the request bytes before publishing
+  if (on_finished_) {
+    // Before the final state is published: a client that sees the job finished (the waiting
+    // request, a poll) also sees it counted in the metrics.
+    JobSnapshot s = job->snapshot();
+    s.state = state;
+    s.error = error;
+    s.output = output;
+    s.output_bytes = output ? std::int64_t(output->bytes.size()) : 0;
+    if (state == JobState::Succeeded) s.stage = "done", s.fraction = 1;
+    on_finished_(s);
+  }
   std::lock_guard lock(job->mutex_);
   finish_locked(*job, state, std::move(error), std::move(output));
 }

@@ -101,7 +101,9 @@ struct JobQueueOptions {
   io::Limits limits;               // decoder limits
 };
 
-// Called on a worker thread when a job finishes (for metrics); must not call back into the queue.
+// Called on a worker thread when a job has run, just before its final state is published (so a
+// client that sees the job finished also sees it in the metrics); must not call back into the
+// queue.
 using JobFinishedHook = std::function<void(const JobSnapshot&)>;
 
 class JobQueue {
