@@ -151,15 +151,19 @@ io::Format resolve_format(const std::string& content_type, std::string_view byte
 }
 
 // One report per surface: what ran (auto mode: the chosen parameters and the measurements).
-json reports_json(const service::JobOutput& out) {
+json reports_json(const JobSnapshot& s) {
+  if (s.reports) return *s.reports;
+  const service::JobOutput& out = *s.output;
   json reports = json::array();
   for (const DenoiseReport& r : out.reports) reports.push_back(service::report_to_json(r));
   return reports;
 }
 
 // `bytes`: the result's size (the shared store loads the bytes themselves only for /result).
-json output_summary(const service::JobOutput& out, std::int64_t bytes) {
-  json reports = reports_json(out);
+json output_summary(const JobSnapshot& s) {
+  const service::JobOutput& out = *s.output;
+  const std::int64_t bytes = s.output_bytes;
+  json reports = reports_json(s);
   return {{"media_type", out.media_type},
           {"format", std::string(io::to_string(out.format))},
           {"bytes", bytes},
@@ -624,7 +628,7 @@ struct HttpService::Impl {
     res.set_header("X-Denoise-Vertices", std::to_string(out.vertices));
     res.set_header("X-Denoise-Faces", std::to_string(out.faces));
     // The job's JSON always has the reports; the header only when it stays small.
-    if (std::string report = reports_json(out).dump(); report.size() <= 8192)
+    if (std::string report = reports_json(s).dump(); report.size() <= 8192)
       res.set_header("X-Denoise-Report", report);
     if (!out.notes.empty()) {
       std::string notes;
@@ -650,7 +654,7 @@ struct HttpService::Impl {
               {"timings_s", {{"queue_wait", s.queue_wait_s}, {"run", s.run_s}}},
               {"input_bytes", s.input_bytes},
               {"links", {{"self", self}, {"result", self + "/result"}}}};
-    if (s.output) j["result"] = output_summary(*s.output, s.output_bytes);
+    if (s.output) j["result"] = output_summary(s);
     if (s.attempts > 1) j["attempts"] = s.attempts;
     if (s.error) j["error"] = s.error->to_json(self, request_id);
     return j;

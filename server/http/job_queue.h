@@ -52,6 +52,9 @@ struct JobSnapshot {
   // itself was asked for; output_bytes is the result's size either way.
   std::shared_ptr<const service::JobOutput> output;
   std::int64_t output_bytes = 0;
+  // The shared store: each surface's report as the worker rendered it (service::report_to_json);
+  // `output` then has no reports of its own. Unset: render output->reports.
+  std::optional<nlohmann::json> reports;
   int attempts = 0;  // runs started (Redis: more than 1 after a takeover); 0 while queued
 };
 

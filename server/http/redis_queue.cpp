@@ -393,14 +393,11 @@ std::optional<Problem> problem_from_text(const std::string& text) {
   return p;
 }
 
-// The summary of a result that every replica needs to answer for it (all but the bytes).
+// The summary of a result that every replica needs to answer for it (all but the bytes). The
+// reports are stored as rendered (service::report_to_json), exactly what the memory store shows.
 std::string output_text(const service::JobOutput& o) {
   json reports = json::array();
-  for (const DenoiseReport& r : o.reports)
-    reports.push_back({{"fold_ratio", r.fold_ratio},
-                       {"cluster_area_ratio", r.cluster_area_ratio},
-                       {"region_prefilter_applied", r.region_prefilter_applied},
-                       {"region_vertices", r.region_vertices}});
+  for (const DenoiseReport& r : o.reports) reports.push_back(service::report_to_json(r));
   return json{{"format", std::string(io::to_string(o.format))},
               {"media_type", o.media_type},
               {"effective", service::to_json(o.effective)},
@@ -413,6 +410,7 @@ std::string output_text(const service::JobOutput& o) {
               {"encode_ms", o.encode_ms},
               {"stages",
                {{"setup", o.stages.setup_ms},
+                {"measure", o.stages.measure_ms},
                 {"initial", o.stages.initial_ms},
                 {"region", o.stages.region_ms},
                 {"anisotropic", o.stages.anisotropic_ms},
@@ -422,20 +420,14 @@ std::string output_text(const service::JobOutput& o) {
       .dump();
 }
 
-std::shared_ptr<service::JobOutput> output_from_text(const std::string& text) {
+// The output (without bytes) and the rendered reports of a stored summary.
+std::shared_ptr<service::JobOutput> output_from_text(const std::string& text, json& reports) {
   const json j = json::parse(text);
   auto o = std::make_shared<service::JobOutput>();
   o->format = io::format_from_string(j.at("format").get<std::string>()).value_or(io::Format::Off);
   o->media_type = j.at("media_type").get<std::string>();
   o->effective = service::job_params_from_json(j.at("effective"));
-  for (const json& r : j.at("reports")) {
-    DenoiseReport d;
-    d.fold_ratio = r.value("fold_ratio", 0.0);
-    d.cluster_area_ratio = r.value("cluster_area_ratio", 1.0);
-    d.region_prefilter_applied = r.value("region_prefilter_applied", false);
-    d.region_vertices = r.value("region_vertices", std::int64_t{0});
-    o->reports.push_back(d);
-  }
+  reports = j.at("reports");
   o->notes = j.at("notes").get<std::vector<std::string>>();
   o->vertices = j.value("vertices", std::int64_t{0});
   o->faces = j.value("faces", std::int64_t{0});
@@ -444,6 +436,7 @@ std::shared_ptr<service::JobOutput> output_from_text(const std::string& text) {
   o->encode_ms = j.value("encode_ms", 0.0);
   const json& s = j.at("stages");
   o->stages.setup_ms = s.value("setup", 0.0);
+  o->stages.measure_ms = s.value("measure", 0.0);
   o->stages.initial_ms = s.value("initial", 0.0);
   o->stages.region_ms = s.value("region", 0.0);
   o->stages.anisotropic_ms = s.value("anisotropic", 0.0);
@@ -494,9 +487,11 @@ JobSnapshot snapshot_from_hash(const std::string& id, std::map<std::string, std:
   s.run_s = started >= 0 ? double(std::max<std::int64_t>(0, end - started)) / 1000 : 0.0;
   s.error = problem_from_text(h["error"]);
   if (s.state == JobState::Succeeded && !h["output"].empty()) {
-    auto out = output_from_text(h["output"]);
+    json reports;
+    auto out = output_from_text(h["output"], reports);
     if (result) out->bytes = *result;
     s.output = std::move(out);
+    s.reports = std::move(reports);
     s.output_bytes = to_int(h["output_bytes"]);
   }
   return s;

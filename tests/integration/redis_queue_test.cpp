@@ -216,6 +216,25 @@ TEST_F(RedisQueue, ThreeReplicasRoundRobinResultsEqualTheCli) {
     EXPECT_EQ(r->body, cli_output(inputs[std::size_t(i)], kSmallParams)) << "job " << i;
     EXPECT_EQ(r->get_header_value("X-Denoise-Output-Bytes"), std::to_string(r->body.size()));
   }
+  // What the job says about its result (parameters, reports, counts) is what the memory store
+  // says for the same job: only timings differ.
+  {
+    ServerProcess memory({"--workers", "1"});
+    ASSERT_TRUE(memory.started()) << memory.log();
+    const std::string local = post_job(memory, inputs[0], kSmallParams);
+    json expected = wait_state(memory, local, {"succeeded", "failed"});
+    json shared = wait_state(*replicas[2], ids[0], {"succeeded", "failed"});
+    ASSERT_TRUE(expected.contains("result") && shared.contains("result")) << expected.dump() << shared.dump();
+    expected["result"].erase("timings_ms");
+    shared["result"].erase("timings_ms");
+    EXPECT_EQ(shared["result"], expected["result"]);
+    auto a = memory.client()->Get("/v1/jobs/" + local + "/result");
+    auto b = replicas[0]->client()->Get("/v1/jobs/" + ids[0] + "/result");
+    ASSERT_TRUE(a && b);
+    for (const char* h : {"X-Denoise-Params", "X-Denoise-Report", "X-Denoise-Vertices", "X-Denoise-Faces",
+                          "X-Denoise-Output-Bytes", "Content-Type", "Content-Disposition"})
+      EXPECT_EQ(b->get_header_value(h), a->get_header_value(h)) << h;
+  }
   // The work was shared: every replica's workers ran some of it, or at least the queue drained.
   for (auto& r : replicas) {
     auto ready = r->client()->Get("/readyz");
