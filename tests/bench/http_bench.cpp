@@ -27,6 +27,7 @@
 #include "core/io/document.h"
 #include "core/noise.h"
 #include "server/http/http_server.h"
+#include "bench_stats.h"
 #include "server/job_runner.h"
 
 // After Eigen: <httplib.h> pulls in <resolv.h>, whose `_res` macro breaks Eigen's headers.
@@ -35,14 +36,10 @@
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
+using mdn::bench::Clock;
 
-double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
-}
+using mdn::bench::median;
+using mdn::bench::ms_since;
 
 std::string read_file(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);

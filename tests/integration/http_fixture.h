@@ -14,6 +14,7 @@
 
 // Eigen first: <httplib.h> pulls in <resolv.h>, whose `_res` macro breaks Eigen's headers.
 #include "core/noise.h"
+#include "support/ports.h"
 #include "support/shapes.h"
 
 #include <gtest/gtest.h>

@@ -228,15 +228,7 @@ TEST(Proto, OpenApiDocumentsExactlyTheServersRoutesAndStatuses) {
 
   {
     // The shared job store unreachable (nothing listens on that port): 503 on the job routes.
-    const int fd = socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in addr{};
-    addr.sin_family = AF_INET;
-    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    socklen_t len = sizeof addr;
-    bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
-    getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
-    close(fd);
-    ServerProcess server({"--workers", "1", "--queue", "redis://127.0.0.1:" + std::to_string(ntohs(addr.sin_port))});
+    ServerProcess server({"--workers", "1", "--queue", "redis://127.0.0.1:" + std::to_string(test::free_loopback_port())});
     ASSERT_TRUE(server.started()) << server.log();
     auto c = server.client();
     const std::string job = "/v1/jobs/0123456789abcdef0123456789abcdef";

@@ -28,17 +28,7 @@ using Seconds = std::chrono::seconds;
 const char* kMediumParams = R"({"n_normal":600,"n_vertex":600,"n_aniso":20})";
 const char* kSmallParams = R"({"n_normal":12,"n_vertex":8})";
 
-int free_port() {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t len = sizeof addr;
-  bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
-  getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
-  close(fd);
-  return ntohs(addr.sin_port);
-}
+int free_port() { return mdn::test::free_loopback_port(); }
 
 // Sends one inline command and returns the first reply line ("+PONG", "-LOADING ...", "").
 std::string redis_inline(int port, const std::string& command) {
