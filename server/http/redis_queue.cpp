@@ -180,32 +180,43 @@ class Pool {
 // Each is one atomic step of a job's life. Keys are passed in KEYS (single Redis, not Cluster:
 // the idempotency replay reads the earlier job's hash by name).
 
+// Accepting a job: the hash, the input, the idempotency key and the stream entry, or why not.
+// Returns {'ok', entries waiting before this one}, {'full', waiting}, {'reused'} or
+// {'replay', earlier job id}.
+constexpr const char* kSubmitJob = R"lua(
+local function submit(hash, input_key, stream, idem, id, input, format, params, created_ms, capacity, fingerprint,
+                      group, has_key, job_prefix)
+  if has_key == '1' then
+    local prev = redis.call('GET', idem)
+    if prev then
+      local bar = string.find(prev, '|', 1, true)
+      local jid = string.sub(prev, 1, bar - 1)
+      if string.sub(prev, bar + 1) ~= fingerprint then return {'reused'} end
+      if redis.call('EXISTS', job_prefix .. jid) == 1 then return {'replay', jid} end
+    end
+  end
+  if redis.call('EXISTS', stream) == 0 then
+    redis.call('XGROUP', 'CREATE', stream, group, '0', 'MKSTREAM')
+  end
+  local waiting = redis.call('XLEN', stream) - redis.call('XPENDING', stream, group)[1]
+  if waiting >= tonumber(capacity) then return {'full', waiting} end
+  redis.call('HSET', hash, 'state', 'queued', 'stage', 'queued', 'fraction', '0', 'format', format,
+             'params', params, 'created_ms', created_ms, 'input_bytes', string.len(input), 'attempts', '0')
+  redis.call('SET', input_key, input)
+  if has_key == '1' then
+    redis.call('SET', idem, id .. '|' .. fingerprint)
+    redis.call('HSET', hash, 'idem', idem)
+  end
+  redis.call('XADD', stream, '*', 'id', id)
+  return {'ok', waiting}
+end
+)lua";
+
 // KEYS: hash, input, stream, idem.  ARGV: id, input, format, params, created_ms, capacity,
 // fingerprint, group, has_key, job key prefix.
 constexpr const char* kSubmit = R"lua(
-if ARGV[9] == '1' then
-  local prev = redis.call('GET', KEYS[4])
-  if prev then
-    local bar = string.find(prev, '|', 1, true)
-    local jid = string.sub(prev, 1, bar - 1)
-    if string.sub(prev, bar + 1) ~= ARGV[7] then return {'reused'} end
-    if redis.call('EXISTS', ARGV[10] .. jid) == 1 then return {'replay', jid} end
-  end
-end
-if redis.call('EXISTS', KEYS[3]) == 0 then
-  redis.call('XGROUP', 'CREATE', KEYS[3], ARGV[8], '0', 'MKSTREAM')
-end
-local waiting = redis.call('XLEN', KEYS[3]) - redis.call('XPENDING', KEYS[3], ARGV[8])[1]
-if waiting >= tonumber(ARGV[6]) then return {'full', waiting} end
-redis.call('HSET', KEYS[1], 'state', 'queued', 'stage', 'queued', 'fraction', '0', 'format', ARGV[3],
-           'params', ARGV[4], 'created_ms', ARGV[5], 'input_bytes', string.len(ARGV[2]), 'attempts', '0')
-redis.call('SET', KEYS[2], ARGV[2])
-if ARGV[9] == '1' then
-  redis.call('SET', KEYS[4], ARGV[1] .. '|' .. ARGV[7])
-  redis.call('HSET', KEYS[1], 'idem', KEYS[4])
-end
-redis.call('XADD', KEYS[3], '*', 'id', ARGV[1])
-return {'ok'}
+return submit(KEYS[1], KEYS[2], KEYS[3], KEYS[4], ARGV[1], ARGV[2], ARGV[3], ARGV[4], ARGV[5], ARGV[6], ARGV[7],
+              ARGV[8], ARGV[9], ARGV[10])
 )lua";
 
 // Shared by the scripts that end a job: state, error, expiry, and the entry acknowledged.
@@ -256,6 +267,13 @@ local function start_job(entry, jid)
              'fraction', '0')
   return {'run', n, previous, input, redis.call('HGET', hash, 'format'), redis.call('HGET', hash, 'params'), entry, jid}
 end
+local function start_entry(e)
+  local jid = ''
+  for i = 1, #e[2], 2 do
+    if e[2][i] == 'id' then jid = e[2][i + 1] end
+  end
+  return start_job(e[1], jid)
+end
 )lua";
 
 // Takes the next new entry for this consumer and starts its job, in one step (one write, one
@@ -266,12 +284,22 @@ if not r then
   local last = redis.call('XREVRANGE', KEYS[1], '+', '-', 'COUNT', '1')
   return {'none', 0, '', '', '', '', #last == 0 and '0-0' or last[1][1], ''}
 end
-local e = r[1][2][1]
-local jid = ''
-for i = 1, #e[2], 2 do
-  if e[2][i] == 'id' then jid = e[2][i + 1] end
-end
-return start_job(e[1], jid)
+return start_entry(r[1][2][1])
+)lua";
+
+// Accepting a job and, when no other entry waits, starting it at once for this consumer (a local
+// worker slot is free): one write instead of two, and the input is not sent back (element 4 of
+// the reply is empty). KEYS: stream, hash, input, idem.  ARGV: those of start_job, then id,
+// input, format, params, created_ms, capacity, fingerprint, has_key.
+constexpr const char* kSubmitStart = R"lua(
+local r = submit(KEYS[2], KEYS[3], KEYS[1], KEYS[4], ARGV[11], ARGV[12], ARGV[13], ARGV[14], ARGV[15], ARGV[16],
+                 ARGV[17], ARGV[5], ARGV[18], ARGV[10])
+if r[1] ~= 'ok' or r[2] > 0 then return r end
+local x = redis.call('XREADGROUP', 'GROUP', ARGV[5], ARGV[1], 'COUNT', '1', 'STREAMS', KEYS[1], '>')
+if not x then return r end
+local t = start_entry(x[1][2][1])
+t[4] = ''
+return t
 )lua";
 
 // An entry taken over with XAUTOCLAIM (already in this consumer's pending list).
@@ -591,13 +619,36 @@ class RedisJobStore final : public JobStore {
     const std::string idem = key ? prefix_ + "idem:" + *key : prefix_ + "idem:";
     const std::string capacity = std::to_string(config_.queue_capacity);
     const std::string job_prefix = prefix_ + "job:";
+    // A worker slot of this replica waiting for work: accept and start in one step, and hand
+    // the job (whose input is here already) to that slot.
+    SlotReservation slot(*this);
+    const std::int64_t input_bytes = std::int64_t(input.bytes.size());
     auto reply = run([&](Connection& c) {
-      return c.checked({"EVAL", kSubmit, "4", job_key(id), input_key(id), stream_, idem, id, input.bytes, format,
-                        params, created, capacity, fingerprint, kGroup, key ? "1" : "0", job_prefix});
+      if (!slot) {
+        return c.checked({"EVAL", kSubmitJob + std::string(kSubmit), "4", job_key(id), input_key(id), stream_, idem, id,
+                          input.bytes, format, params, created, capacity, fingerprint, kGroup, key ? "1" : "0",
+                          job_prefix});
+      }
+      auto args = start_args(kSubmitJob + std::string(kSubmitStart));
+      args[2] = "4";
+      args.insert(args.begin() + 4, {job_key(id), input_key(id), idem});
+      std::vector<std::string_view> views(args.begin(), args.end());
+      for (const std::string_view v : {std::string_view(id), std::string_view(input.bytes), std::string_view(format),
+                                       std::string_view(params), std::string_view(created), std::string_view(capacity),
+                                       std::string_view(fingerprint), std::string_view(key ? "1" : "0")})
+        views.push_back(v);
+      return c.checked(views);
     });
     std::string_view outcome;
     try {
       outcome = str(element(reply.get(), 0));
+      if (outcome == "run") {
+        Taken t = parse_taken(reply);
+        t.input = std::move(input.bytes);
+        slot.hand(std::move(t));
+        ++started_on_submit_;
+        outcome = "ok";
+      }
     } catch (const std::exception& e) {
       throw HttpError(make_problem(500, "queue-error", "Job store error", e.what()));
     }
@@ -619,7 +670,7 @@ class RedisJobStore final : public JobStore {
     JobSnapshot s;
     s.id = id;
     s.asynchronous = true;
-    s.input_bytes = std::int64_t(input.bytes.size());
+    s.input_bytes = input_bytes;
     s.created_wall = std::chrono::system_clock::time_point(std::chrono::milliseconds(std::stoll(created)));
     return {std::move(s), false};
   }
@@ -702,7 +753,16 @@ class RedisJobStore final : public JobStore {
     if (stopped_) return;
     draining_ = true;
     stopping_ = true;
+    handoff_cv_.notify_all();
     for (auto& t : slots_) t.join();
+    // Jobs handed to a slot that stopped first (rare): back to the queue while Redis answers.
+    for (std::unique_ptr<Connection> c; !handoffs_.empty(); handoffs_.pop_front(), --busy_) {
+      try {
+        release(c, handoffs_.front());
+      } catch (const std::exception& ex) {
+        if (log_) log_->warn("job_unreleased", {{"job_id", handoffs_.front().job_id}, {"detail", ex.what()}});
+      }
+    }
     {
       std::lock_guard finish_lock(finish_mutex_);
       finisher_stop_ = true;
@@ -726,6 +786,9 @@ class RedisJobStore final : public JobStore {
          "Jobs taken by a worker of any replica and not yet finished (XPENDING, sampled every second).", pending_);
     line("mdn_queue_reclaimed_total", "counter",
          "Jobs this replica took over from a worker that stopped answering (XAUTOCLAIM).", reclaimed_);
+    line("mdn_queue_started_on_submit_total", "counter",
+         "Jobs this replica accepted and started at once on one of its idle workers (no queue round trip).",
+         started_on_submit_);
     line("mdn_queue_retries_total", "counter", "Runs this replica started of jobs that had run before.", retries_);
     line("mdn_queue_attempts_exhausted_total", "counter",
          "Jobs this replica failed because they reached --queue-max-attempts.", exhausted_);
@@ -853,6 +916,73 @@ class RedisJobStore final : public JobStore {
     bool reclaimed = false;
   };
 
+  // A worker slot of this replica reserved by submit() for a job it accepts and starts in one
+  // step (kSubmitStart); released unused when the job could not start at once (others waited).
+  class SlotReservation {
+   public:
+    explicit SlotReservation(RedisJobStore& s) : s_(s) {
+      std::lock_guard lock(s_.handoff_mutex_);
+      if (!s_.draining_ && s_.idle_slots_ > s_.reserved_) {
+        ++s_.reserved_;
+        held_ = true;
+      }
+    }
+    SlotReservation(const SlotReservation&) = delete;
+    SlotReservation& operator=(const SlotReservation&) = delete;
+    ~SlotReservation() { release(std::nullopt); }
+    explicit operator bool() const { return held_; }
+    // The started job, for the waiting slot (counted as busy from now on, like a taken one).
+    void hand(Taken t) { release(std::move(t)); }
+
+   private:
+    void release(std::optional<Taken> t) {
+      if (!held_) return;
+      {
+        std::lock_guard lock(s_.handoff_mutex_);
+        --s_.reserved_;
+        if (t) {
+          ++s_.busy_;
+          s_.handoffs_.push_back(std::move(*t));
+        }
+        held_ = false;
+      }
+      s_.handoff_cv_.notify_all();
+    }
+    RedisJobStore& s_;
+    bool held_ = false;
+  };
+
+  // A job started for this replica by submit(), if one is (or is about to be) handed over; waits
+  // while a reservation is outstanding. Marks the slot busy when it returns one.
+  std::optional<Taken> take_handoff(bool& idle, bool wait) {
+    std::unique_lock lock(handoff_mutex_);
+    if (!idle) {
+      ++idle_slots_;
+      idle = true;
+    }
+    if (wait)
+      handoff_cv_.wait_for(lock, 2s, [&] { return !handoffs_.empty() || reserved_ == 0 || stopping_; });
+    std::optional<Taken> t = pop_handoff_locked();
+    if (t) {
+      --idle_slots_;
+      idle = false;
+    }
+    return t;
+  }
+
+  std::optional<Taken> pop_handoff_locked() {
+    if (handoffs_.empty()) return std::nullopt;
+    Taken t = std::move(handoffs_.front());
+    handoffs_.pop_front();
+    return t;
+  }
+
+  void leave_idle(bool& idle) {
+    std::lock_guard lock(handoff_mutex_);
+    if (idle) --idle_slots_;
+    idle = false;
+  }
+
   static Taken parse_taken(const Reply& r) {
     Taken t;
     t.outcome = std::string(str(element(r.get(), 0)));
@@ -866,7 +996,7 @@ class RedisJobStore final : public JobStore {
     return t;
   }
 
-  std::vector<std::string> start_args(const char* script) const {
+  std::vector<std::string> start_args(const std::string& script) const {
     return {"EVAL", kFinishHelpers + std::string(kStartJob) + script, "1", stream_, consumer_, std::to_string(now_ms()),
             std::to_string(config_.queue_max_attempts), "", kGroup, exhausted_problem_, cancelled_problem_, ttl_ms_,
             lost_problem_, prefix_ + "job:"};
@@ -918,12 +1048,24 @@ class RedisJobStore final : public JobStore {
     std::unique_ptr<Connection> c;
     auto backoff = 100ms;
     std::string last_id = "0-0";
+    bool idle = false;  // counted in idle_slots_ (submit() may hand this slot a job)
     while (!stopping_) {
-      if (draining_) {
-        std::this_thread::sleep_for(50ms);
-        continue;
-      }
       try {
+        if (draining_) {  // no new jobs; those already handed over still run
+          leave_idle(idle);
+          std::optional<Taken> handed;
+          {
+            std::lock_guard lock(handoff_mutex_);
+            handed = pop_handoff_locked();
+          }
+          if (handed) run_taken(c, std::move(*handed));
+          else std::this_thread::sleep_for(50ms);
+          continue;
+        }
+        if (std::optional<Taken> handed = take_handoff(idle, true)) {
+          run_taken(c, std::move(*handed));
+          continue;
+        }
         if (!c || c->broken()) {
           c.reset();
           c = std::make_unique<Connection>(pool_.address(), pool_.timeout());
@@ -935,14 +1077,9 @@ class RedisJobStore final : public JobStore {
           c->checked({"XREAD", "COUNT", "1", "BLOCK", "1000", "STREAMS", stream_, last_id});
           continue;
         }
+        leave_idle(idle);
         ++busy_;
-        try {
-          process(c, std::move(t));
-        } catch (...) {
-          --busy_;
-          throw;
-        }
-        --busy_;
+        run_taken(c, std::move(t));
       } catch (const RedisDown& e) {
         c.reset();
         mark_down(e.what());
@@ -965,6 +1102,24 @@ class RedisJobStore final : public JobStore {
         backoff = std::min<std::chrono::milliseconds>(backoff * 2, 2000ms);
       }
     }
+  }
+
+  // Hands a started job back to the queue (this replica stops), not counted as an attempt.
+  void release(std::unique_ptr<Connection>& c, const Taken& e) {
+    retry(c, [&](Connection& conn) {
+      conn.checked({"EVAL", kFinishHelpers + std::string(kRelease), "2", job_key(e.job_id), stream_, consumer_,
+                    e.entry_id, kGroup, e.job_id});
+    });
+    if (log_) log_->info("job_released", {{"job_id", e.job_id}, {"detail", "this replica stopped; back in the queue"}});
+  }
+
+  // Runs a taken job already counted in busy_.
+  void run_taken(std::unique_ptr<Connection>& c, Taken t) {
+    struct Done {
+      std::atomic<int>& busy;
+      ~Done() { --busy; }
+    } done{busy_};
+    process(c, std::move(t));
   }
 
   void sleep_unless_stopping(std::chrono::milliseconds d) {
@@ -1108,11 +1263,7 @@ class RedisJobStore final : public JobStore {
     }
     std::unique_ptr<Connection>& fin = conn;
     if (end == End::Released) {
-      retry(fin, [&](Connection& c) {
-        c.checked({"EVAL", kFinishHelpers + std::string(kRelease), "2", job_key(e.job_id), stream_, consumer_,
-                   e.entry_id, kGroup, e.job_id});
-      });
-      if (log_) log_->info("job_released", {{"job_id", e.job_id}, {"detail", "this replica stopped; back in the queue"}});
+      release(fin, e);
       return;
     }
     // Stored by the finisher thread, so that this slot takes its next job meanwhile (the
@@ -1174,7 +1325,7 @@ class RedisJobStore final : public JobStore {
   std::mt19937_64 rng_;
 
   std::atomic<bool> up_{false}, ever_up_{false}, draining_{false}, stopping_{false};
-  std::atomic<std::int64_t> length_{0}, pending_{0}, reclaimed_{0}, retries_{0}, exhausted_{0}, reconnects_{0};
+  std::atomic<std::int64_t> length_{0}, pending_{0}, reclaimed_{0}, started_on_submit_{0}, retries_{0}, exhausted_{0}, reconnects_{0};
   std::atomic<int> busy_{0};  // jobs taken and not yet stored (running, or waiting for the finisher)
 
   std::mutex finish_mutex_;
@@ -1182,6 +1333,13 @@ class RedisJobStore final : public JobStore {
   std::deque<Finish> finishes_;
   bool finisher_stop_ = false;
   std::thread finisher_;
+
+  // Jobs submit() started for this replica's idle slots (kSubmitStart).
+  std::mutex handoff_mutex_;
+  std::condition_variable handoff_cv_;
+  std::deque<Taken> handoffs_;
+  int idle_slots_ = 0;  // slots waiting for work
+  int reserved_ = 0;    // of those, promised to a submit() in flight
 
   std::mutex reclaim_mutex_;
   Clock::time_point next_reclaim_ = Clock::now();

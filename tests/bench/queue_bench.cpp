@@ -1,7 +1,9 @@
 // Benchmark of the shared job store (issue 6's targets). Prints figures, asserts nothing;
 // compare numbers only within one run on one machine.
 //
-//   queue_bench [--jobs N] [--runs N] [--level L] [--fsync always|everysec] [--rounds R] [--poll-ms P]
+//   queue_bench [--jobs N] [--runs N] [--level L] [--fsync always|everysec] [--rounds R]
+//               [--poll-ms P] [--clients C] [--params JSON]
+//               [--only latency|throughput|redis-throughput]
 //
 // A redis-server (Debian's, /usr/bin/redis-server) is started on a free loopback port with the
 // compose file's settings (append-only file, fsync on every write: --fsync always; everysec for
@@ -11,17 +13,21 @@
 //
 // 1. Latency: asynchronous jobs one at a time (POST /v1/jobs, poll GET every 1 ms, GET
 //    /result), 1 replica with 1 worker, memory store vs Redis store, alternating one job each
-//    so that both see the same background load; the median difference is what the Redis
-//    round trips add to a job (target: <= 10 ms).
-// 2. Throughput: 8 clients, N asynchronous jobs; 1 replica x 2 workers (memory) vs 3 replicas
-//    x 1 worker (Redis), each job posted to one replica and polled (every --poll-ms, 10) and
-//    fetched through another (target: 3 replicas >= 1 replica x 2 workers). --rounds R alternates the two R times and
-//    reports the median of each.
+//    so that both see the same background load; the median of the pairwise differences is what
+//    the Redis round trips add to a job (target: <= 10 ms). --params (X-Denoise-Params) makes
+//    the jobs cheap, so that the denoising's own spread does not hide the difference.
+// 2. Throughput: C clients (8), N asynchronous jobs; 1 replica x 2 workers (memory) vs 3
+//    replicas x 1 worker (Redis), each job posted to one replica and polled (every --poll-ms,
+//    10) and fetched through another (target: 3 replicas >= 1 replica x 2 workers). --rounds R
+//    alternates the two R times and reports the median of each. Each run also prints how busy
+//    the CPUs were and the CPU time per job (this process and redis-server): whether a set-up
+//    was bound by the CPUs or by waiting, and what the store costs per job.
 // Input: a noisy icosphere (20 * 4^L faces, default L = 5), default parameters.
 #include <netinet/in.h>
 #include <signal.h>
 #include <sys/socket.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -30,6 +36,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -88,6 +95,7 @@ class Redis {
     waitpid(pid_, nullptr, 0);
     fs::remove_all(dir_);
   }
+  pid_t pid() const { return pid_; }
   std::string url() const { return "redis://127.0.0.1:" + std::to_string(port_) + "/0"; }
 
  private:
@@ -127,9 +135,12 @@ struct Replica {
 
 // One asynchronous job: posted to `post`, polled (every `poll_ms`) and fetched through `poll`.
 // Returns the milliseconds from POST to the last byte of the result, or -1 on failure.
-double run_job(httplib::Client& post, httplib::Client& poll, const std::string& body, int poll_ms) {
+double run_job(httplib::Client& post, httplib::Client& poll, const std::string& body, int poll_ms,
+               const std::string& params = "") {
+  httplib::Headers headers;
+  if (!params.empty()) headers.emplace("X-Denoise-Params", params);
   const auto t = Clock::now();
-  auto r = post.Post("/v1/jobs", body, "model/x-off");
+  auto r = post.Post("/v1/jobs", headers, body, "model/x-off");
   if (!r || r->status != 202) {
     std::fprintf(stderr, "  POST /v1/jobs: %d %s\n", r ? r->status : -1, r ? r->body.c_str() : "");
     return -1;
@@ -160,27 +171,73 @@ double run_job(httplib::Client& post, httplib::Client& poll, const std::string& 
 }
 
 // Job latencies on two replicas, alternating one job each.
-void latencies(Replica& a, Replica& b, const std::string& body, int runs, std::vector<double>& out_a,
-               std::vector<double>& out_b) {
+void latencies(Replica& a, Replica& b, const std::string& body, const std::string& params, int runs,
+               std::vector<double>& out_a, std::vector<double>& out_b) {
   httplib::Client ca("127.0.0.1", a.port), cb("127.0.0.1", b.port);
   ca.set_read_timeout(600, 0);
   cb.set_read_timeout(600, 0);
-  run_job(ca, ca, body, 1);  // warm-up
-  run_job(cb, cb, body, 1);
+  run_job(ca, ca, body, 1, params);  // warm-up
+  run_job(cb, cb, body, 1, params);
   for (int i = 0; i < runs; ++i) {
-    out_a.push_back(run_job(ca, ca, body, 1));
-    out_b.push_back(run_job(cb, cb, body, 1));
+    out_a.push_back(run_job(ca, ca, body, 1, params));
+    out_b.push_back(run_job(cb, cb, body, 1, params));
   }
+}
+
+// The machine's busy share since the last call (all cores, from /proc/stat): whether a
+// throughput run was bound by the CPUs or by waiting.
+double cpu_busy_since(std::pair<long long, long long>& last) {
+  std::FILE* f = std::fopen("/proc/stat", "r");
+  long long v[8] = {};
+  if (!f || std::fscanf(f, "cpu %lld %lld %lld %lld %lld %lld %lld %lld", v, v + 1, v + 2, v + 3, v + 4, v + 5, v + 6,
+                        v + 7) != 8) {
+    if (f) std::fclose(f);
+    return -1;
+  }
+  std::fclose(f);
+  long long total = 0;
+  for (long long x : v) total += x;
+  const long long idle = v[3] + v[4];
+  const auto prev = last;
+  last = {total, idle};
+  const long long dt = total - prev.first;
+  return dt > 0 ? 100.0 * double(dt - (idle - prev.second)) / double(dt) : -1;
+}
+
+// CPU seconds used so far by this process and by process `pid` (0: none), for CPU per job.
+double cpu_seconds(pid_t pid) {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  double s = double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+  if (pid > 0) {
+    std::FILE* f = std::fopen(("/proc/" + std::to_string(pid) + "/stat").c_str(), "r");
+    if (f) {
+      char buf[1024] = {};
+      const std::size_t n = std::fread(buf, 1, sizeof buf - 1, f);
+      std::fclose(f);
+      buf[n] = 0;
+      // Fields 14 and 15 (utime, stime, in clock ticks) follow the ")" that ends the command name.
+      const char* p = std::strrchr(buf, ')');
+      long long ut = 0, st = 0;
+      if (p && std::sscanf(p + 2, "%*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %lld %lld", &ut, &st) == 2)
+        s += double(ut + st) / double(sysconf(_SC_CLK_TCK));
+    }
+  }
+  return s;
 }
 
 // Jobs per second: 8 clients, `jobs` in all, job k posted to replica k % n, polled and
 // fetched through replica (k + 1) % n.
-double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::string& body, int jobs, int poll_ms) {
+double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::string& body, int jobs, int poll_ms,
+                  int clients_n, pid_t redis_pid) {
   std::atomic<int> next{0}, failed{0};
+  std::pair<long long, long long> cpu{};
+  cpu_busy_since(cpu);
+  const double cpu0 = cpu_seconds(redis_pid);
   const auto start = Clock::now();
   std::vector<std::thread> clients;
   const std::size_t n = replicas.size();
-  for (int k = 0; k < 8; ++k) {
+  for (int k = 0; k < clients_n; ++k) {
     clients.emplace_back([&] {
       std::vector<std::unique_ptr<httplib::Client>> cs;
       for (auto& r : replicas) {
@@ -192,6 +249,9 @@ double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::st
     });
   }
   for (auto& t : clients) t.join();
+  const double busy = cpu_busy_since(cpu);
+  std::printf("  %zu replica(s): %.2f jobs/s, CPU busy %.0f%%, %.2f CPU ms per job (this process and redis-server)\n", n,
+              jobs / (ms_since(start) / 1000), busy, 1000 * (cpu_seconds(redis_pid) - cpu0) / jobs);
   if (failed) std::printf("  (%d jobs failed)\n", failed.load());
   return jobs / (ms_since(start) / 1000);
 }
@@ -199,7 +259,8 @@ double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::st
 }  // namespace
 
 int main(int argc, char** argv) {
-  int jobs = 24, runs = 15, level = 5, rounds = 1, poll_ms = 10;
+  int jobs = 24, runs = 15, level = 5, rounds = 1, poll_ms = 10, clients = 8;
+  std::string only, params;  // params: X-Denoise-Params of the latency jobs (default: none)  // "latency" or "throughput": run one part
   std::string fsync = "always";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -209,8 +270,11 @@ int main(int argc, char** argv) {
     else if (a == "--fsync" && i + 1 < argc) fsync = argv[++i];
     else if (a == "--rounds" && i + 1 < argc) rounds = std::atoi(argv[++i]);
     else if (a == "--poll-ms" && i + 1 < argc) poll_ms = std::atoi(argv[++i]);
+    else if (a == "--clients" && i + 1 < argc) clients = std::atoi(argv[++i]);
+    else if (a == "--only" && i + 1 < argc) only = argv[++i];
+    else if (a == "--params" && i + 1 < argc) params = argv[++i];
     else {
-      std::fprintf(stderr, "usage: %s [--jobs N] [--runs N] [--level L] [--fsync always|everysec] [--rounds R] [--poll-ms P]\n",
+      std::fprintf(stderr, "usage: %s [--jobs N] [--runs N] [--level L] [--fsync always|everysec] [--rounds R] [--poll-ms P] [--clients C] [--only latency|throughput|redis-throughput] [--params JSON]\n",
                    argv[0]);
       return 2;
     }
@@ -231,33 +295,37 @@ int main(int argc, char** argv) {
 
   // 1. Latency, one job at a time, one worker.
   std::vector<double> memory, shared;
-  {
+  if (only.empty() || only == "latency") {
     Replica m(1, "memory", "mdn:");
     Replica r(1, redis.url(), "lat:");
-    latencies(m, r, body, runs, memory, shared);
+    latencies(m, r, body, params, runs, memory, shared);
   }
-  const double m = median(memory), s = median(shared);
-  std::printf("latency (1 worker, POST -> poll every 1 ms -> result, %d jobs each, alternating): memory median %.1f ms, "
-              "redis median %.1f ms, added %.1f ms (target <= 10 ms)\n",
-              runs, m, s, s - m);
+  std::vector<double> added;  // per pair: a Redis job minus the memory job just before it
+  for (std::size_t i = 0; i < memory.size() && i < shared.size(); ++i) added.push_back(shared[i] - memory[i]);
+  if (!memory.empty())
+    std::printf("latency (1 worker, POST -> poll every 1 ms -> result, %d jobs each, alternating%s%s): memory median "
+                "%.1f ms, redis median %.1f ms, added %.1f ms (median of pairwise differences %.1f ms; target <= 10 ms)\n",
+                runs, params.empty() ? "" : ", params ", params.c_str(), median(memory), median(shared),
+                median(shared) - median(memory), median(added));
 
   // 2. Throughput, alternating the two set-ups `rounds` times.
   std::vector<double> one, three;
-  for (int round = 0; round < rounds; ++round) {
-    {
+  for (int round = 0; round < rounds && only != "latency"; ++round) {
+    if (only != "redis-throughput") {
       std::vector<std::unique_ptr<Replica>> replicas;
       replicas.push_back(std::make_unique<Replica>(2, "memory", "mdn:"));
-      one.push_back(throughput(replicas, body, jobs, poll_ms));
+      one.push_back(throughput(replicas, body, jobs, poll_ms, clients, 0));
     }
     {
       std::vector<std::unique_ptr<Replica>> replicas;
       for (int i = 0; i < 3; ++i) replicas.push_back(std::make_unique<Replica>(1, redis.url(), "tp:"));
-      three.push_back(throughput(replicas, body, jobs, poll_ms));
+      three.push_back(throughput(replicas, body, jobs, poll_ms, clients, redis.pid()));
     }
-    if (rounds > 1) std::printf("  round %d: %.2f vs %.2f jobs/s\n", round + 1, one.back(), three.back());
+    if (rounds > 1 && !one.empty()) std::printf("  round %d: %.2f vs %.2f jobs/s\n", round + 1, one.back(), three.back());
   }
-  std::printf("throughput (%d jobs, 8 clients polling every %d ms, median of %d): 1 replica x 2 workers (memory) %.2f jobs/s, 3 replicas x 1 "
+  if (!one.empty())
+    std::printf("throughput (%d jobs, %d clients polling every %d ms, median of %d): 1 replica x 2 workers (memory) %.2f jobs/s, 3 replicas x 1 "
               "worker (redis) %.2f jobs/s, ratio %.2f (target >= 1)\n",
-              jobs, poll_ms, rounds, median(one), median(three), median(three) / median(one));
+              jobs, clients, poll_ms, rounds, median(one), median(three), median(three) / median(one));
   return 0;
 }

@@ -382,6 +382,36 @@ TEST_F(RedisQueue, CancelAcrossReplicas) {
   for (const auto& id : ids) b->client()->Delete("/v1/jobs/" + id);
 }
 
+// A replica whose worker waits for work starts a job it accepts at once (one Redis step, the
+// input not read back); a busy one leaves it in the shared queue, where it waits its turn.
+TEST_F(RedisQueue, AnIdleReplicaStartsAJobAtOnceABusyOneQueuesIt) {
+  RedisServer redis;
+  auto a = replica(redis);
+  ASSERT_TRUE(wait_status(*a, "/readyz", 200)) << a->log();
+  const std::string small = noisy_sphere_off(3, 7);
+  const std::string first = post_job(*a, small, kSmallParams);
+  EXPECT_EQ(wait_state(*a, first, {"succeeded", "failed"}).value("state", ""), "succeeded");
+  EXPECT_EQ(metric(*a, "mdn_queue_started_on_submit_total"), 1);
+  auto r = a->client()->Get("/v1/jobs/" + first + "/result");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(r->body, cli_output(small, kSmallParams));
+
+  const std::string heavy = post_job(*a, noisy_sphere_off(5, 3), R"({"n_normal":1000,"n_vertex":1000,"n_aniso":20})");
+  EXPECT_EQ(wait_state(*a, heavy, {"running", "succeeded", "failed"}).value("state", ""), "running");
+  EXPECT_EQ(metric(*a, "mdn_queue_started_on_submit_total"), 2);
+  const std::string second = post_job(*a, small, kSmallParams);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(parse_json(a->client()->Get("/v1/jobs/" + second)->body).value("state", ""), "queued");
+  EXPECT_EQ(metric(*a, "mdn_queue_started_on_submit_total"), 2);
+  auto d = a->client()->Delete("/v1/jobs/" + heavy);
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->status, 202) << d->body;
+  EXPECT_EQ(wait_state(*a, second, {"succeeded", "failed"}).value("state", ""), "succeeded");
+  EXPECT_EQ(metric(*a, "mdn_queue_started_on_submit_total"), 2);
+  EXPECT_EQ(a->client()->Get("/v1/jobs/" + second + "/result")->body, r->body);
+}
+
 TEST_F(RedisQueue, IdempotencyKeyHoldsAcrossReplicas) {
   RedisServer redis;
   auto a = replica(redis);
