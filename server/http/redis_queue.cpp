@@ -918,6 +918,8 @@ class RedisJobStore final : public JobStore {
 
   // A worker slot of this replica reserved by submit() for a job it accepts and starts in one
   // step (kSubmitStart); released unused when the job could not start at once (others waited).
+  // Rarely, the reserved slot takes another job meanwhile (kTake in flight): the handed job then
+  // waits for the first free slot of this replica.
   class SlotReservation {
    public:
     explicit SlotReservation(RedisJobStore& s) : s_(s) {
@@ -1073,6 +1075,12 @@ class RedisJobStore final : public JobStore {
         Taken t = next_job(*c, last_id);
         backoff = 100ms;
         if (t.outcome == "none") {
+          // A job submit() started for this slot after kTake looked (its entry is the last one,
+          // so XREAD would not wake for it): run it now.
+          if (std::optional<Taken> handed = take_handoff(idle, true)) {
+            run_taken(c, std::move(*handed));
+            continue;
+          }
           // Wait for an entry newer than the last one (read-only: no write, no fsync).
           c->checked({"XREAD", "COUNT", "1", "BLOCK", "1000", "STREAMS", stream_, last_id});
           continue;
