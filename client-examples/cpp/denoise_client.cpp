@@ -1,15 +1,13 @@
 // meshdenoise-server client in C++ with cpp-httplib (build with pkg-config's flags:
 //   g++ -std=c++20 denoise_client.cpp $(pkg-config --cflags --libs cpp-httplib)).
 // Usage: denoise_client <host> <port> <input> <output> [params-json]
-// Sends the mesh as an asynchronous job, polls it, downloads the result.
+// Sends the mesh as an asynchronous job, waits for it (long polls), downloads the result.
 #include <httplib.h>
 
-#include <chrono>
 #include <fstream>
 #include <iostream>
 #include <sstream>
 #include <string>
-#include <thread>
 
 namespace {
 
@@ -55,13 +53,13 @@ int main(int argc, char** argv) {
   if (created->status != 202) return std::cerr << created->status << " " << created->body << "\n", 1;
   const std::string location = created->get_header_value("Location");
 
+  // Long polls: each GET answers when the job finishes, or after 30 s with it still running.
   for (;;) {
-    auto job = client.Get(location.c_str(), headers);
+    auto job = client.Get((location + "?wait=30").c_str(), headers);
     if (!job || job->status != 200) return std::cerr << "polling failed\n", 1;
     const std::string state = job_state(job->body);
     if (state == "succeeded") break;
     if (state == "failed" || state == "cancelled") return std::cerr << job->body << "\n", 1;
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
   auto result = client.Get((location + "/result").c_str(), headers);
   if (!result || result->status != 200) return std::cerr << "download failed\n", 1;

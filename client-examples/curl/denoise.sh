@@ -25,17 +25,18 @@ curl --silent --show-error --fail-with-body "${auth[@]}" \
   --data-binary @"$input" -o "$output" -D "$output.headers" "$url/v1/denoise"
 grep -i '^x-denoise-params:\|^server-timing:' "$output.headers" >&2 || true
 
-# 2. Asynchronous: 202 + Location, poll until finished, download the result.
+# 2. Asynchronous: 202 + Location, wait until finished (long polls: each GET answers when the
+#    job finishes, or after 30 s), download the result.
 location=$(curl --silent --show-error --fail-with-body "${auth[@]}" \
   -H "Content-Type: $type" -H "X-Denoise-Params: $params" \
   --data-binary @"$input" -o /dev/null -w '%header{location}' "$url/v1/jobs")
 while :; do
-  state=$(curl --silent --show-error --fail-with-body "${auth[@]}" "$url$location" |
+  state=$(curl --silent --show-error --fail-with-body "${auth[@]}" "$url$location?wait=30" |
           python3 -c 'import json,sys; print(json.load(sys.stdin)["state"])')
   case "$state" in
     succeeded) break ;;
     failed|cancelled) echo "job $state" >&2; curl --silent "${auth[@]}" "$url$location" >&2; exit 1 ;;
-    *) sleep 0.2 ;;
+    *) ;;
   esac
 done
 curl --silent --show-error --fail-with-body "${auth[@]}" -o "$output.async" "$url$location/result"

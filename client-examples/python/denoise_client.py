@@ -8,7 +8,6 @@ Errors come back as RFC 9457 problem+json; they are printed and the exit status 
 import json
 import os
 import sys
-import time
 import urllib.error
 import urllib.request
 
@@ -46,14 +45,13 @@ def main():
     else:
         status, resp_headers, data = request("POST", base + "/v1/jobs", body, headers)
         location = resp_headers["Location"]
-        while True:
-            _, job_headers, job_body = request("GET", base + location)
+        while True:  # long polls: each answers when the job finishes, or after 30 s
+            _, _, job_body = request("GET", base + location + "?wait=30")
             job = json.loads(job_body)
             if job["state"] == "succeeded":
                 break
             if job["state"] in ("failed", "cancelled"):
                 sys.exit(f"job {job['state']}: {job.get('error', {}).get('detail')}")
-            time.sleep(min(float(job_headers.get("Retry-After", "1")), 0.2))
         _, _, data = request("GET", base + location + "/result")
     with open(dst, "wb") as f:
         f.write(data)

@@ -667,11 +667,44 @@ struct HttpService::Impl {
 
   JobSnapshot find_job(Context& ctx, bool with_result) {
     const std::string id = ctx.req.matches[1];
-    auto job = store->find(id, with_result);
+    return found(id, store->find(id, with_result));
+  }
+
+  static JobSnapshot found(const std::string& id, std::optional<JobSnapshot> job) {
     if (!job)
       throw HttpError(make_problem(404, "job-not-found", "Job not found",
                                    "no job '" + header_safe(id) + "' (unknown, deleted or expired)"));
     return std::move(*job);
+  }
+
+  // GET /v1/jobs/{id}?wait=S (long poll): answers when the job has finished, or after S seconds
+  // (0 to kMaxWaitS) with its current state. At most half the HTTP threads wait at once; beyond
+  // that a request answers at once (a client's next poll waits again).
+  static constexpr double kMaxWaitS = 60;
+  JobSnapshot wait_job(Context& ctx) {
+    const std::string text = ctx.req.get_param_value("wait");
+    double seconds = -1;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), seconds);
+    if (ec != std::errc() || end != text.data() + text.size() || !(seconds >= 0 && seconds <= kMaxWaitS)) {
+      Problem p = make_problem(400, "invalid-query", "Invalid query parameter",
+                               "wait must be a number of seconds from 0 to " + std::to_string(int(kMaxWaitS)) +
+                                   " (got '" + header_safe(text) + "')");
+      p.extensions["field"] = "wait";
+      p.extensions["minimum"] = 0;
+      p.extensions["maximum"] = kMaxWaitS;
+      throw HttpError(std::move(p));
+    }
+    if (seconds == 0 || waiting_requests.fetch_add(1) >= std::max(1, config.io_threads / 2)) {
+      if (seconds > 0) --waiting_requests;
+      return find_job(ctx, false);
+    }
+    struct Leave {
+      std::atomic<int>& n;
+      ~Leave() { --n; }
+    } leave{waiting_requests};
+    const std::string id = ctx.req.matches[1];
+    return found(id, store->wait_finished(
+                         id, Clock::now() + std::chrono::microseconds(std::int64_t(std::llround(seconds * 1e6)))));
   }
 
   // ---------------------------------------------------------------- handlers
@@ -780,7 +813,7 @@ struct HttpService::Impl {
   }
 
   void get_job(Context& ctx) {
-    const JobSnapshot s = find_job(ctx, false);
+    const JobSnapshot s = ctx.req.has_param("wait") ? wait_job(ctx) : find_job(ctx, false);
     if (!is_terminal(s.state)) ctx.res.set_header("Retry-After", "1");
     set_json(ctx.res, job_json(s, ctx.request_id));
   }
@@ -832,6 +865,7 @@ struct HttpService::Impl {
   std::vector<Route> routes;
   std::string id_prefix;
   std::atomic<std::uint64_t> request_counter{0};
+  std::atomic<int> waiting_requests{0};  // long polls waiting now
   int listen_fd = -1;
   std::mutex start_mutex;
   std::map<std::thread::id, Clock::time_point> request_start;  // for access-log durations

@@ -14,6 +14,8 @@
 // but std::bad_alloc.
 #pragma once
 
+#include <algorithm>
+#include <chrono>
 #include <memory>
 #include <optional>
 #include <string>
@@ -39,6 +41,9 @@ class JobStore {
   // The job's state; nullopt when unknown, deleted or expired. With `with_result`, a succeeded
   // job's output carries its bytes (GET /result); without, only their count (output_bytes).
   virtual std::optional<JobSnapshot> find(const std::string& id, bool with_result) = 0;
+  // Long poll (GET /v1/jobs/{id}?wait=): blocks until the job is finished, `deadline` passes or
+  // the server drains, then answers as find(id, false) does.
+  virtual std::optional<JobSnapshot> wait_finished(const std::string& id, Clock::time_point deadline) = 0;
   // GET /result delivered the bytes once (the memory store's drain waits for this).
   virtual void result_fetched(const std::string& id) = 0;
 
@@ -76,6 +81,16 @@ class MemoryJobStore final : public JobStore {
   std::optional<JobSnapshot> find(const std::string& id, bool) override {
     auto job = queue_.find(id);
     if (!job) return std::nullopt;
+    return job->snapshot();
+  }
+  std::optional<JobSnapshot> wait_finished(const std::string& id, Clock::time_point deadline) override {
+    auto job = queue_.find(id);
+    if (!job) return std::nullopt;
+    // In slices, so that a drain ends the wait.
+    for (auto now = Clock::now(); now < deadline && !queue_.draining(); now = Clock::now())
+      if (job->wait_for(std::min<std::chrono::milliseconds>(
+              std::chrono::ceil<std::chrono::milliseconds>(deadline - now), std::chrono::milliseconds(250))))
+        break;
     return job->snapshot();
   }
   void result_fetched(const std::string& id) override {

@@ -1,6 +1,7 @@
 #include "server/http/redis_queue.h"
 
 #include <hiredis.h>
+#include <poll.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -14,6 +15,7 @@
 #include <mutex>
 #include <random>
 #include <thread>
+#include <unordered_map>
 #include <vector>
 
 #include "server/params_json.h"
@@ -132,6 +134,22 @@ class Connection {
     if (r->type == REDIS_REPLY_ERROR) throw RedisReplyError(std::string(str(r.get())));
     return r;
   }
+  // On a subscribed connection: the next message pushed by Redis, or nullptr when none came
+  // within `wait`.
+  Reply next_message(std::chrono::milliseconds wait) {
+    if (broken_) throw RedisDown("connection already failed");
+    void* r = nullptr;
+    if (redisGetReplyFromReader(ctx_, &r) == REDIS_OK && !r) {
+      pollfd p{ctx_->fd, POLLIN, 0};
+      if (::poll(&p, 1, int(wait.count())) == 0) return Reply();
+      if (redisGetReply(ctx_, &r) != REDIS_OK) r = nullptr;
+    }
+    if (!r) {
+      broken_ = true;
+      throw RedisDown(std::string("Redis connection failed: ") + (ctx_->err ? ctx_->errstr : "no reply"));
+    }
+    return Reply(static_cast<redisReply*>(r));
+  }
   bool broken() const { return broken_; }
 
  private:
@@ -219,7 +237,8 @@ return submit(KEYS[1], KEYS[2], KEYS[3], KEYS[4], ARGV[1], ARGV[2], ARGV[3], ARG
               ARGV[8], ARGV[9], ARGV[10])
 )lua";
 
-// Shared by the scripts that end a job: state, error, expiry, and the entry acknowledged.
+// Shared by the scripts that end a job: state, error, expiry (and the "done" message), and the
+// entry acknowledged.
 // KEYS: hash, input, stream.  ARGV (of the caller) give: now_ms, ttl_ms, entry id, group.
 constexpr const char* kFinishHelpers = R"lua(
 local function drop(stream, group, entry)
@@ -230,6 +249,9 @@ local function expire_job(hash, ttl_ms)
   redis.call('PEXPIRE', hash, ttl_ms)
   local idem = redis.call('HGET', hash, 'idem')
   if idem then redis.call('PEXPIRE', idem, ttl_ms) end
+  -- Every replica's long polls (GET /v1/jobs/{id}?wait=) learn that the job finished.
+  local prefix, id = string.match(hash, '^(.*)job:(%x+)$')
+  if prefix then redis.call('PUBLISH', prefix .. 'done', id) end
 end
 )lua";
 
@@ -589,6 +611,7 @@ class RedisJobStore final : public JobStore {
     }
     monitor_ = std::thread([this] { monitor_loop(); });
     finisher_ = std::thread([this] { finisher_loop(); });
+    subscriber_ = std::thread([this] { subscriber_loop(); });
     for (int i = 0; i < slots; ++i) slots_.emplace_back([this] { slot_loop(); });
     if (log_) {
       const RedisAddress& a = pool_.address();
@@ -706,6 +729,36 @@ class RedisJobStore final : public JobStore {
     }
   }
 
+  std::optional<JobSnapshot> wait_finished(const std::string& id, Clock::time_point deadline) override {
+    if (!valid_id(id)) return std::nullopt;
+    // Registered before the first read, so that a "done" message between the read and the wait
+    // is not missed. Without messages (the subscriber reconnecting), the job is read again every
+    // kWaitRecheck.
+    std::unique_lock lock(wait_mutex_);
+    Waiters& w = waiters_[id];
+    ++w.count;
+    struct Unregister {
+      RedisJobStore& s;
+      const std::string& id;
+      ~Unregister() {
+        std::lock_guard l(s.wait_mutex_);
+        if (auto it = s.waiters_.find(id); it != s.waiters_.end() && --it->second.count == 0) s.waiters_.erase(it);
+      }
+    };
+    std::uint64_t seen = w.done;
+    lock.unlock();
+    Unregister unregister{*this, id};
+    for (;;) {
+      std::optional<JobSnapshot> s = find(id, false);
+      if (!s || is_terminal(s->state) || draining_ || Clock::now() >= deadline) return s;
+      lock.lock();
+      wait_cv_.wait_until(lock, std::min(deadline, Clock::now() + kWaitRecheck),
+                          [&] { return waiters_[id].done != seen || draining_ || stopping_; });
+      seen = waiters_[id].done;
+      lock.unlock();
+    }
+  }
+
   void result_fetched(const std::string&) override {}  // results live in Redis: nothing waits for this
 
   CancelResult cancel(const std::string& id) override {
@@ -737,7 +790,10 @@ class RedisJobStore final : public JobStore {
     return p;
   }
 
-  void begin_drain() override { draining_ = true; }
+  void begin_drain() override {
+    draining_ = true;
+    wake_waiters();
+  }
 
   bool wait_drained(Clock::time_point deadline) override {
     // First the shared jobs this replica runs (their results go to Redis), then the local ones.
@@ -771,6 +827,8 @@ class RedisJobStore final : public JobStore {
     if (finisher_.joinable()) finisher_.join();
     monitor_wake_.notify_all();
     if (monitor_.joinable()) monitor_.join();
+    if (subscriber_.joinable()) subscriber_.join();
+    wake_waiters();
     stopped_ = true;
   }
 
@@ -901,6 +959,43 @@ class RedisJobStore final : public JobStore {
       std::unique_lock lock(monitor_mutex_);
       monitor_wake_.wait_for(lock, up_ ? 1000ms : 250ms, [&] { return stopping_.load(); });
     }
+  }
+
+  // ---------------------------------------------------------------- long polls
+  // Subscribed to "<prefix>done" (published by expire_job when a job finishes): wakes this
+  // replica's long polls of that job. After a (re)connection every long poll reads its job
+  // again, as messages may have been missed meanwhile.
+  void subscriber_loop() {
+    std::unique_ptr<Connection> c;
+    const std::string channel = prefix_ + "done";
+    while (!stopping_) {
+      try {
+        if (!c || c->broken()) {
+          c.reset();
+          c = std::make_unique<Connection>(pool_.address(), pool_.timeout());
+          c->checked({"SUBSCRIBE", channel});
+          wake_waiters();
+        }
+        Reply m = c->next_message(250ms);
+        // ["message", channel, job id]
+        if (!m || m->type != REDIS_REPLY_ARRAY || m->elements != 3 || str(m->element[0]) != "message") continue;
+        const std::string id(str(m->element[2]));
+        std::lock_guard lock(wait_mutex_);
+        if (auto it = waiters_.find(id); it != waiters_.end()) {
+          ++it->second.done;
+          wait_cv_.notify_all();
+        }
+      } catch (const std::exception&) {
+        c.reset();
+        sleep_unless_stopping(500ms);
+      }
+    }
+  }
+
+  void wake_waiters() {
+    std::lock_guard lock(wait_mutex_);
+    for (auto& [id, w] : waiters_) ++w.done;
+    wait_cv_.notify_all();
   }
 
   // ---------------------------------------------------------------- worker slots
@@ -1341,6 +1436,18 @@ class RedisJobStore final : public JobStore {
   std::deque<Finish> finishes_;
   bool finisher_stop_ = false;
   std::thread finisher_;
+
+  // Long polls waiting on this replica, per job: how many, and a counter bumped by each "done"
+  // message (or reconnection) for the job.
+  struct Waiters {
+    int count = 0;
+    std::uint64_t done = 0;
+  };
+  static constexpr std::chrono::seconds kWaitRecheck{5};
+  std::mutex wait_mutex_;
+  std::condition_variable wait_cv_;
+  std::unordered_map<std::string, Waiters> waiters_;
+  std::thread subscriber_;
 
   // Jobs submit() started for this replica's idle slots (kSubmitStart).
   std::mutex handoff_mutex_;

@@ -2,7 +2,7 @@
 // compare numbers only within one run on one machine.
 //
 //   queue_bench [--jobs N] [--runs N] [--level L] [--fsync always|everysec] [--rounds R]
-//               [--poll-ms P] [--clients C] [--params JSON]
+//               [--poll-ms P] [--wait S] [--clients C] [--params JSON]
 //               [--only latency|throughput|redis-throughput]
 //
 // A redis-server (Debian's, /usr/bin/redis-server) is started on a free loopback port with the
@@ -18,7 +18,8 @@
 //    the jobs cheap, so that the denoising's own spread does not hide the difference.
 // 2. Throughput: C clients (8), N asynchronous jobs; 1 replica x 2 workers (memory) vs 3
 //    replicas x 1 worker (Redis), each job posted to one replica and polled (every --poll-ms,
-//    10) and fetched through another (target: 3 replicas >= 1 replica x 2 workers). --rounds R
+//    10; or long polls, GET ?wait=S, with --wait S) and fetched through another (target: 3
+//    replicas >= 1 replica x 2 workers). --rounds R
 //    alternates the two R times and reports the median of each. Each run also prints how busy
 //    the CPUs were and the CPU time per job (this process and redis-server): whether a set-up
 //    was bound by the CPUs or by waiting, and what the store costs per job.
@@ -135,8 +136,9 @@ struct Replica {
 
 // One asynchronous job: posted to `post`, polled (every `poll_ms`) and fetched through `poll`.
 // Returns the milliseconds from POST to the last byte of the result, or -1 on failure.
+// With wait_s > 0 the polls are long polls (GET ?wait=wait_s) instead of GET every poll_ms.
 double run_job(httplib::Client& post, httplib::Client& poll, const std::string& body, int poll_ms,
-               const std::string& params = "") {
+               const std::string& params = "", int wait_s = 0) {
   httplib::Headers headers;
   if (!params.empty()) headers.emplace("X-Denoise-Params", params);
   const auto t = Clock::now();
@@ -146,8 +148,9 @@ double run_job(httplib::Client& post, httplib::Client& poll, const std::string& 
     return -1;
   }
   const std::string id = nlohmann::json::parse(r->body).value("id", "");
+  const std::string job_url = "/v1/jobs/" + id + (wait_s > 0 ? "?wait=" + std::to_string(wait_s) : "");
   for (;;) {
-    auto g = poll.Get(("/v1/jobs/" + id).c_str());
+    auto g = poll.Get(job_url.c_str());
     if (!g || g->status != 200) {
       std::fprintf(stderr, "  GET /v1/jobs/%s: %d %s\n", id.c_str(), g ? g->status : -1, g ? g->body.c_str() : "");
       return -1;
@@ -158,7 +161,7 @@ double run_job(httplib::Client& post, httplib::Client& poll, const std::string& 
       std::fprintf(stderr, "  job %s: %s\n", id.c_str(), g->body.c_str());
       return -1;
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(poll_ms));
+    if (wait_s == 0) std::this_thread::sleep_for(std::chrono::milliseconds(poll_ms));
   }
   auto res = poll.Get(("/v1/jobs/" + id + "/result").c_str());
   if (!res || res->status != 200) {
@@ -229,7 +232,7 @@ double cpu_seconds(pid_t pid) {
 // Jobs per second: 8 clients, `jobs` in all, job k posted to replica k % n, polled and
 // fetched through replica (k + 1) % n.
 double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::string& body, int jobs, int poll_ms,
-                  int clients_n, pid_t redis_pid) {
+                  int clients_n, pid_t redis_pid, int wait_s) {
   std::atomic<int> next{0}, failed{0};
   std::pair<long long, long long> cpu{};
   cpu_busy_since(cpu);
@@ -245,7 +248,7 @@ double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::st
         cs.back()->set_read_timeout(600, 0);
       }
       for (int j; (j = next.fetch_add(1)) < jobs;)
-        if (run_job(*cs[std::size_t(j) % n], *cs[std::size_t(j + 1) % n], body, poll_ms) < 0) ++failed;
+        if (run_job(*cs[std::size_t(j) % n], *cs[std::size_t(j + 1) % n], body, poll_ms, "", wait_s) < 0) ++failed;
     });
   }
   for (auto& t : clients) t.join();
@@ -260,6 +263,7 @@ double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::st
 
 int main(int argc, char** argv) {
   int jobs = 24, runs = 15, level = 5, rounds = 1, poll_ms = 10, clients = 8;
+  int wait_s = 0;  // > 0: throughput clients long-poll (GET ?wait=) instead of polling every poll_ms
   std::string only, params;  // params: X-Denoise-Params of the latency jobs (default: none)  // "latency" or "throughput": run one part
   std::string fsync = "always";
   for (int i = 1; i < argc; ++i) {
@@ -273,8 +277,9 @@ int main(int argc, char** argv) {
     else if (a == "--clients" && i + 1 < argc) clients = std::atoi(argv[++i]);
     else if (a == "--only" && i + 1 < argc) only = argv[++i];
     else if (a == "--params" && i + 1 < argc) params = argv[++i];
+    else if (a == "--wait" && i + 1 < argc) wait_s = std::atoi(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: %s [--jobs N] [--runs N] [--level L] [--fsync always|everysec] [--rounds R] [--poll-ms P] [--clients C] [--only latency|throughput|redis-throughput] [--params JSON]\n",
+      std::fprintf(stderr, "usage: %s [--jobs N] [--runs N] [--level L] [--fsync always|everysec] [--rounds R] [--poll-ms P] [--clients C] [--only latency|throughput|redis-throughput] [--params JSON] [--wait S]\n",
                    argv[0]);
       return 2;
     }
@@ -314,18 +319,19 @@ int main(int argc, char** argv) {
     if (only != "redis-throughput") {
       std::vector<std::unique_ptr<Replica>> replicas;
       replicas.push_back(std::make_unique<Replica>(2, "memory", "mdn:"));
-      one.push_back(throughput(replicas, body, jobs, poll_ms, clients, 0));
+      one.push_back(throughput(replicas, body, jobs, poll_ms, clients, 0, wait_s));
     }
     {
       std::vector<std::unique_ptr<Replica>> replicas;
       for (int i = 0; i < 3; ++i) replicas.push_back(std::make_unique<Replica>(1, redis.url(), "tp:"));
-      three.push_back(throughput(replicas, body, jobs, poll_ms, clients, redis.pid()));
+      three.push_back(throughput(replicas, body, jobs, poll_ms, clients, redis.pid(), wait_s));
     }
     if (rounds > 1 && !one.empty()) std::printf("  round %d: %.2f vs %.2f jobs/s\n", round + 1, one.back(), three.back());
   }
   if (!one.empty())
-    std::printf("throughput (%d jobs, %d clients polling every %d ms, median of %d): 1 replica x 2 workers (memory) %.2f jobs/s, 3 replicas x 1 "
+    std::printf("throughput (%d jobs, %d clients %s %d %s, median of %d): 1 replica x 2 workers (memory) %.2f jobs/s, 3 replicas x 1 "
               "worker (redis) %.2f jobs/s, ratio %.2f (target >= 1)\n",
-              jobs, clients, poll_ms, rounds, median(one), median(three), median(three) / median(one));
+              jobs, clients, wait_s > 0 ? "long-polling, wait" : "polling every", wait_s > 0 ? wait_s : poll_ms,
+              wait_s > 0 ? "s" : "ms", rounds, median(one), median(three), median(three) / median(one));
   return 0;
 }

@@ -202,6 +202,60 @@ TEST_F(HttpApi, DeleteCancelsQueuedAndRunningJobs) {
   EXPECT_EQ(p.value("job_state", ""), "cancelled");
 }
 
+// GET /v1/jobs/{id}?wait=S: one request instead of a polling loop.
+TEST_F(HttpApi, LongPollAnswersWhenTheJobFinishesOrTheWaitEnds) {
+  using Ms = std::chrono::milliseconds;
+  ServerProcess server({"--workers", "1"});
+  ASSERT_TRUE(server.started()) << server.log();
+  auto c = server.client();
+  auto heavy = c->Post("/v1/jobs", {{"X-Denoise-Params", kHeavyParams}}, noisy_sphere_off(5, 3), "model/x-off");
+  ASSERT_TRUE(heavy);
+  ASSERT_EQ(heavy->status, 202);
+  const std::string heavy_url = heavy->get_header_value("Location");
+
+  // The wait ends first: the job as it is then, after about that long.
+  auto t = std::chrono::steady_clock::now();
+  auto r = c->Get(heavy_url + "?wait=0.4");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_GE(std::chrono::duration_cast<Ms>(std::chrono::steady_clock::now() - t).count(), 390);
+  const std::string state = parse_json(r->body).value("state", "");
+  EXPECT_TRUE(state == "queued" || state == "running") << state;
+  EXPECT_EQ(r->get_header_value("Retry-After"), "1");
+
+  // The job ends first (cancelled from another connection): the answer comes then.
+  std::thread canceller([&] {
+    std::this_thread::sleep_for(Ms(300));
+    server.client()->Delete(heavy_url);
+  });
+  t = std::chrono::steady_clock::now();
+  r = c->Get(heavy_url + "?wait=60");
+  canceller.join();
+  ASSERT_TRUE(r);
+  EXPECT_EQ(parse_json(r->body).value("state", ""), "cancelled") << r->body;
+  EXPECT_LT(std::chrono::duration_cast<Ms>(std::chrono::steady_clock::now() - t).count(), 30000);
+  EXPECT_TRUE(r->get_header_value("Retry-After").empty());
+
+  // A small job: one long poll sees it succeed.
+  auto small = c->Post("/v1/jobs", noisy_sphere_off(3, 5), "model/x-off");
+  ASSERT_TRUE(small);
+  r = c->Get(small->get_header_value("Location") + "?wait=60");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(parse_json(r->body).value("state", ""), "succeeded") << r->body;
+  // wait=0 answers at once.
+  r = c->Get(small->get_header_value("Location") + "?wait=0");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+
+  for (const char* bad : {"-1", "61", "abc", "", "1s", "nan", "inf"}) {
+    const json p = expect_problem(c->Get(heavy_url + "?wait=" + url_encode(bad)), 400);
+    EXPECT_EQ(p.value("type", ""), "urn:meshdenoise:problem:invalid-query") << bad;
+    EXPECT_EQ(p.value("field", ""), "wait") << bad;
+    EXPECT_EQ(p.value("maximum", 0), 60) << bad;
+  }
+  expect_problem(c->Get("/v1/jobs/0123456789abcdef0123456789abcdef?wait=5"), 404);
+}
+
 TEST_F(HttpApi, JobTimeLimitFailsTheJob) {
   ServerProcess server({"--workers", "1", "--job-time-limit", "0.3"});
   ASSERT_TRUE(server.started()) << server.log();

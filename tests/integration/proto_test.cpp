@@ -173,6 +173,7 @@ TEST(Proto, OpenApiDocumentsExactlyTheServersRoutesAndStatuses) {
     observe(seen, "GET", "/v1/jobs/{id}", c->Get(good_url));
     observe(seen, "GET", "/v1/jobs/{id}", c->Get("/v1/jobs/unknown"));
     observe(seen, "GET", "/v1/jobs/{id}", c->Get(good_url, two_ranges));
+    observe(seen, "GET", "/v1/jobs/{id}", c->Get(good_url + "?wait=abc"));  // 400
     observe(seen, "GET", "/v1/jobs/{id}/result", c->Get(good_url + "/result"));
     observe(seen, "GET", "/v1/jobs/{id}/result", c->Get(good_url + "/result", {{"Range", "bytes=0-3"}}));
     observe(seen, "GET", "/v1/jobs/{id}/result", c->Get(good_url + "/result", two_ranges));

@@ -412,6 +412,48 @@ TEST_F(RedisQueue, AnIdleReplicaStartsAJobAtOnceABusyOneQueuesIt) {
   EXPECT_EQ(a->client()->Get("/v1/jobs/" + second + "/result")->body, r->body);
 }
 
+// A long poll through another replica than the one running the job answers when the job ends:
+// the runner's "done" message wakes it, well before its 5 s fallback re-read.
+TEST_F(RedisQueue, LongPollThroughAnotherReplicaAnswersWhenTheJobEnds) {
+  using Ms = std::chrono::milliseconds;
+  const auto since = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration_cast<Ms>(std::chrono::steady_clock::now() - t).count();
+  };
+  RedisServer redis;
+  auto a = replica(redis);
+  auto b = replica(redis);
+  for (ServerProcess* s : {a.get(), b.get()}) ASSERT_TRUE(wait_status(*s, "/readyz", 200)) << s->log();
+
+  // Posted to a, whose worker waits for work: a runs it (started on submit).
+  const std::string id = post_job(*a, noisy_sphere_off(3, 9), kSmallParams);
+  auto t = std::chrono::steady_clock::now();
+  auto r = b->client()->Get("/v1/jobs/" + id + "?wait=30");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(parse_json(r->body).value("state", ""), "succeeded") << r->body;
+  EXPECT_LT(since(t), 4000);
+  EXPECT_EQ(metric(*a, "mdn_queue_started_on_submit_total"), 1);
+
+  const std::string heavy = post_job(*a, noisy_sphere_off(5, 3), R"({"n_normal":1000,"n_vertex":1000,"n_aniso":20})");
+  t = std::chrono::steady_clock::now();
+  r = b->client()->Get("/v1/jobs/" + heavy + "?wait=0.5");
+  ASSERT_TRUE(r);
+  EXPECT_GE(since(t), 490);
+  const std::string state = parse_json(r->body).value("state", "");
+  EXPECT_TRUE(state == "queued" || state == "running") << state;
+
+  std::thread canceller([&] {
+    std::this_thread::sleep_for(Ms(300));
+    a->client()->Delete("/v1/jobs/" + heavy);
+  });
+  t = std::chrono::steady_clock::now();
+  r = b->client()->Get("/v1/jobs/" + heavy + "?wait=60");
+  canceller.join();
+  ASSERT_TRUE(r);
+  EXPECT_EQ(parse_json(r->body).value("state", ""), "cancelled") << r->body;
+  EXPECT_LT(since(t), 4300);
+  expect_problem(b->client()->Get("/v1/jobs/" + heavy + "?wait=61"), 400);
+}
+
 TEST_F(RedisQueue, IdempotencyKeyHoldsAcrossReplicas) {
   RedisServer redis;
   auto a = replica(redis);
