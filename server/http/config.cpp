@@ -127,7 +127,7 @@ const std::vector<Setting>& settings() {
       {"max-vertices", "MDN_MAX_VERTICES", "largest number of vertices of one surface",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_vertices = parse_int(n, v, 1, std::int64_t{1} << 31); },
        [](const ServerConfig& c) { return std::to_string(c.max_vertices); }},
-      {"io-threads", "MDN_IO_THREADS", "HTTP threads; each open connection holds one",
+      {"io-threads", "MDN_IO_THREADS", "HTTP threads; each open connection holds one; at most half wait in long polls",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.io_threads = int(parse_int(n, v, 4, 4096)); },
        [](const ServerConfig& c) { return std::to_string(c.io_threads); }},
       {"keep-alive-timeout", "MDN_KEEP_ALIVE_TIMEOUT", "seconds an idle keep-alive connection is kept",
