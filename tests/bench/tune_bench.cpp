@@ -3,7 +3,10 @@
 //   tune_bench search  [--data DIR] [--jobs N] [--set train|validation|all] [--only NAME] OUT.tsv
 //       builds the cases (clean mesh + synthetic noise), measures each noisy input the way Auto
 //       does, and searches the best parameters (core/tune.h); one TSV row per case.
-//   tune_bench fit     [--data DIR] ROWS.tsv   fits the rule on the training rows; prints the C++ table
+//   tune_bench fit     [--data DIR] [--jobs N] [--matrix FILE] ROWS.tsv
+//       fits the rule on the training rows; prints the C++ table. --matrix caches the cost
+//       matrix (every case with every candidate, the expensive part): read if FILE holds it,
+//       else computed and written there.
 //   tune_bench report  [--data DIR] [--jobs N] ROWS.tsv
 //       re-creates every case, runs Auto (the rule compiled in now) and prints, per set, the
 //       ratios MSAE(auto)/MSAE(best found) and MSAE(auto)/MSAE(paper's Fandisk parameters).
@@ -30,6 +33,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench_stats.h"
 #include "cgal_data.h"
 #include "core/auto_params.h"
 #include "core/metrics.h"
@@ -205,12 +209,7 @@ int search(const fs::path& data, int jobs, const std::string& which, const std::
   return 0;
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+using bench::median;
 
 int report(const fs::path& data, int jobs, const fs::path& rows_path) {
   const std::vector<Row> rows = read_rows(rows_path);
@@ -283,7 +282,7 @@ int report(const fs::path& data, int jobs, const fs::path& rows_path) {
 
 // The training rows with their cases measured again (the rule's features may have changed
 // since the search ran; the best parameters have not).
-int fit_command(const fs::path& data, int jobs, const fs::path& rows_path) {
+int fit_command(const fs::path& data, int jobs, const fs::path& rows_path, const std::string& matrix_path) {
   std::map<std::string, DenoiseParams> best;
   std::map<std::string, double> msae_of;
   for (const Row& row : read_rows(rows_path)) {
@@ -307,13 +306,13 @@ int fit_command(const fs::path& data, int jobs, const fs::path& rows_path) {
     cases.push_back({key, measure(c.noisy, DenoiseParams{}), best.at(key), msae_of.at(key)});
   }
   const FitScore score = [&](std::size_t i, const DenoiseParams& p) { return msae(denoise(all[i].noisy, p).mesh, all[i].truth); };
-  return fit(cases, score, jobs);
+  return fit(cases, score, jobs, matrix_path);
 }
 
 [[noreturn]] void usage(int code) {
   std::fprintf(code ? stderr : stdout,
                "usage: tune_bench search [--data DIR] [--jobs N] [--set train|validation|all] [--only MESH] OUT.tsv\n"
-               "       tune_bench fit [--data DIR] ROWS.tsv\n"
+               "       tune_bench fit [--data DIR] [--jobs N] [--matrix FILE] ROWS.tsv\n"
                "       tune_bench report [--data DIR] [--jobs N] ROWS.tsv\n");
   std::exit(code);
 }
@@ -326,7 +325,7 @@ int main(int argc, char** argv) {
   const std::string command = argv[1];
   fs::path data = bench::default_cgal_data(), file;
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  std::string which = "all", only;
+  std::string which = "all", only, matrix;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     const auto value = [&]() -> std::string {
@@ -337,13 +336,14 @@ int main(int argc, char** argv) {
     else if (a == "--jobs") jobs = std::max(1, std::stoi(value()));
     else if (a == "--set") which = value();
     else if (a == "--only") only = value();
+    else if (a == "--matrix") matrix = value();
     else if (a == "--help" || a == "-h") usage(0);
     else if (!a.empty() && a[0] != '-' && file.empty()) file = a;
     else usage(2);
   }
   if (file.empty()) usage(2);
   try {
-    if (command == "fit") return fit_command(data, jobs, file);
+    if (command == "fit") return fit_command(data, jobs, file, matrix);
     if (command == "search") return search(data, jobs, which, only, file);
     if (command == "report") return report(data, jobs, file);
   } catch (const std::exception& e) {

@@ -11,31 +11,84 @@
 //     (auto_features), and the prototype with the least summed cost over them.
 //  k and the number of prototypes are chosen by leave-one-mesh-out cross-validation on the
 //  training set (a case's own mesh never votes for it).
+// The cost matrix is most of the time (minutes); `--matrix FILE` caches it (see tune_fit.h).
 #include "tune_fit.h"
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <limits>
+#include <sstream>
 #include <thread>
+
+#include "bench_stats.h"
 
 namespace {
 
 using mdn::kAutoFeatures;
 constexpr int kFeatures = kAutoFeatures - 1;  // auto_features without the constant 1
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+using mdn::bench::median;
+using Matrix = std::vector<std::vector<double>>;
 
 std::string mesh_of(const std::string& name) { return name.substr(0, name.find('/')); }
 
+bool same_params(const mdn::DenoiseParams& a, const mdn::DenoiseParams& b) {
+  return a.alpha == b.alpha && a.sigma_theta == b.sigma_theta && a.n_aniso == b.n_aniso &&
+         a.sigma_gamma == b.sigma_gamma && a.n_normal == b.n_normal && a.n_vertex == b.n_vertex;
+}
+
+// The cache file: the candidates (one per line: alpha sigma_theta n_aniso sigma_gamma n_normal
+// n_vertex), then one line per case: its name and its costs, in candidate order.
+void write_matrix(const std::string& path, const std::vector<FitCase>& cases,
+                  const std::vector<mdn::DenoiseParams>& cand, const Matrix& cost) {
+  std::ofstream out(path);
+  out << "# tune_bench fit cost matrix: ln(MSAE(case, candidate) / best MSAE(case))\n";
+  out << "candidates " << cand.size() << "\n";
+  char line[256];
+  for (const auto& c : cand) {
+    std::snprintf(line, sizeof line, "%.17g %.17g %d %.17g %d %d\n", c.alpha, c.sigma_theta, c.n_aniso, c.sigma_gamma,
+                  c.n_normal, c.n_vertex);
+    out << line;
+  }
+  out << "cases " << cases.size() << "\n";
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    out << cases[i].name;
+    for (const double c : cost[i]) {
+      std::snprintf(line, sizeof line, " %.9g", c);
+      out << line;
+    }
+    out << "\n";
+  }
+  if (!out) throw std::runtime_error("cannot write " + path);
+}
+
+// The cached matrix, or an empty one when the file is missing or holds other cases or candidates.
+Matrix read_matrix(const std::string& path, const std::vector<FitCase>& cases,
+                   const std::vector<mdn::DenoiseParams>& cand) {
+  std::ifstream in(path);
+  std::string line, word;
+  std::size_t count = 0;
+  if (!in || !std::getline(in, line) || !(in >> word >> count) || word != "candidates" || count != cand.size()) return {};
+  for (const auto& c : cand) {
+    mdn::DenoiseParams p;
+    in >> p.alpha >> p.sigma_theta >> p.n_aniso >> p.sigma_gamma >> p.n_normal >> p.n_vertex;
+    if (!in || !same_params(p, c)) return {};
+  }
+  if (!(in >> word >> count) || word != "cases" || count != cases.size()) return {};
+  Matrix cost(cases.size(), std::vector<double>(cand.size()));
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    if (!(in >> word) || word != cases[i].name) return {};
+    for (double& c : cost[i]) in >> c;
+  }
+  return in ? cost : Matrix{};
+}
+
 }  // namespace
 
-int fit(const std::vector<FitCase>& train, const FitScore& score, int jobs) {
+int fit(const std::vector<FitCase>& train, const FitScore& score, int jobs, const std::string& matrix_path) {
   const std::size_t n = train.size();
   if (n < 8) {
     std::fprintf(stderr, "fit: %zu training cases, need at least 8\n", n);
@@ -43,31 +96,37 @@ int fit(const std::vector<FitCase>& train, const FitScore& score, int jobs) {
   }
   // Candidates (deduplicated), the paper's row first.
   std::vector<mdn::DenoiseParams> cand{mdn::DenoiseParams{}};
-  const auto same = [](const mdn::DenoiseParams& a, const mdn::DenoiseParams& b) {
-    return a.alpha == b.alpha && a.sigma_theta == b.sigma_theta && a.n_aniso == b.n_aniso &&
-           a.sigma_gamma == b.sigma_gamma && a.n_normal == b.n_normal && a.n_vertex == b.n_vertex;
-  };
   for (const auto& c : train)
-    if (std::none_of(cand.begin(), cand.end(), [&](const auto& d) { return same(d, c.best); })) cand.push_back(c.best);
+    if (std::none_of(cand.begin(), cand.end(), [&](const auto& d) { return same_params(d, c.best); }))
+      cand.push_back(c.best);
   const std::size_t m = cand.size();
   std::fprintf(stderr, "fit: %zu cases x %zu candidates\n", n, m);
 
-  // Cost matrix, in parallel over cases.
-  std::vector<std::vector<double>> cost(n, std::vector<double>(m));
-  std::atomic<std::size_t> next{0};
-  std::vector<std::thread> pool;
-  for (int t = 0; t < jobs; ++t)
-    pool.emplace_back([&] {
-      for (std::size_t i; (i = next++) < n;) {
-        for (std::size_t j = 0; j < m; ++j) {
-          mdn::DenoiseParams p = cand[j];
-          p.region_mode = mdn::auto_features(train[i].measures)[kAutoFeatures - 1] > 0.5 ? mdn::RegionMode::On
-                                                                                         : mdn::RegionMode::Off;
-          cost[i][j] = std::log(std::max(score(i, p), 1e-300) / train[i].best_msae);
+  // Cost matrix: cached, or computed in parallel over cases.
+  Matrix cost = matrix_path.empty() ? Matrix{} : read_matrix(matrix_path, train, cand);
+  if (!cost.empty()) {
+    std::fprintf(stderr, "fit: cost matrix read from %s\n", matrix_path.c_str());
+  } else {
+    cost.assign(n, std::vector<double>(m));
+    std::atomic<std::size_t> next{0};
+    std::vector<std::thread> pool;
+    for (int t = 0; t < jobs; ++t)
+      pool.emplace_back([&] {
+        for (std::size_t i; (i = next++) < n;) {
+          for (std::size_t j = 0; j < m; ++j) {
+            mdn::DenoiseParams p = cand[j];
+            p.region_mode = mdn::auto_features(train[i].measures)[kAutoFeatures - 1] > 0.5 ? mdn::RegionMode::On
+                                                                                           : mdn::RegionMode::Off;
+            cost[i][j] = std::log(std::max(score(i, p), 1e-300) / train[i].best_msae);
+          }
         }
-      }
-    });
-  for (auto& t : pool) t.join();
+      });
+    for (auto& t : pool) t.join();
+    if (!matrix_path.empty()) {
+      write_matrix(matrix_path, train, cand, cost);
+      std::fprintf(stderr, "fit: cost matrix written to %s\n", matrix_path.c_str());
+    }
+  }
 
   // Standardised features.
   std::vector<std::array<double, kFeatures>> x(n);

@@ -18,4 +18,6 @@ struct FitCase {
 using FitScore = std::function<double(std::size_t i, const mdn::DenoiseParams& params)>;
 
 // Prints the rule as the C++ data core/auto_rule.inc holds; returns a process exit code.
-int fit(const std::vector<FitCase>& cases, const FitScore& score, int jobs);
+// matrix_path (optional): the cost matrix's cache. Read from there when the file exists and
+// holds the same cases and candidates; otherwise computed (the expensive part) and written there.
+int fit(const std::vector<FitCase>& cases, const FitScore& score, int jobs, const std::string& matrix_path = {});
