@@ -3,7 +3,7 @@
 //
 //   queue_bench [--jobs N] [--runs N] [--level L] [--fsync always|everysec] [--rounds R]
 //               [--poll-ms P] [--wait S] [--clients C] [--params JSON]
-//               [--only latency|throughput|redis-throughput]
+//               [--only latency|throughput|redis-throughput] [--commandstats]
 //
 // A redis-server (Debian's, /usr/bin/redis-server) is started on a free loopback port with the
 // compose file's settings (append-only file, fsync on every write: --fsync always; everysec for
@@ -97,6 +97,16 @@ class Redis {
     fs::remove_all(dir_);
   }
   pid_t pid() const { return pid_; }
+  // Runs redis-cli against this server; its output.
+  std::string cli(const std::string& args) const {
+    std::string out;
+    if (std::FILE* f = popen(("redis-cli -p " + std::to_string(port_) + " " + args).c_str(), "r")) {
+      char buf[4096];
+      for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, f)) > 0;) out.append(buf, n);
+      pclose(f);
+    }
+    return out;
+  }
   std::string url() const { return "redis://127.0.0.1:" + std::to_string(port_) + "/0"; }
 
  private:
@@ -207,12 +217,14 @@ double cpu_busy_since(std::pair<long long, long long>& last) {
   return dt > 0 ? 100.0 * double(dt - (idle - prev.second)) / double(dt) : -1;
 }
 
-// CPU seconds used so far by this process and by process `pid` (0: none), for CPU per job.
+// CPU seconds used so far by this process (pid 0) or by process `pid`, for CPU per job.
 double cpu_seconds(pid_t pid) {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  double s = double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-  if (pid > 0) {
+  double s = 0;
+  if (pid == 0) {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    s = double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+  } else {
     std::FILE* f = std::fopen(("/proc/" + std::to_string(pid) + "/stat").c_str(), "r");
     if (f) {
       char buf[1024] = {};
@@ -236,7 +248,7 @@ double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::st
   std::atomic<int> next{0}, failed{0};
   std::pair<long long, long long> cpu{};
   cpu_busy_since(cpu);
-  const double cpu0 = cpu_seconds(redis_pid);
+  const double self0 = cpu_seconds(0), redis0 = redis_pid > 0 ? cpu_seconds(redis_pid) : 0;
   const auto start = Clock::now();
   std::vector<std::thread> clients;
   const std::size_t n = replicas.size();
@@ -253,8 +265,10 @@ double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::st
   }
   for (auto& t : clients) t.join();
   const double busy = cpu_busy_since(cpu);
-  std::printf("  %zu replica(s): %.2f jobs/s, CPU busy %.0f%%, %.2f CPU ms per job (this process and redis-server)\n", n,
-              jobs / (ms_since(start) / 1000), busy, 1000 * (cpu_seconds(redis_pid) - cpu0) / jobs);
+  const double self_ms = 1000 * (cpu_seconds(0) - self0) / jobs;
+  const double redis_ms = redis_pid > 0 ? 1000 * (cpu_seconds(redis_pid) - redis0) / jobs : 0;
+  std::printf("  %zu replica(s): %.2f jobs/s, CPU busy %.0f%%, CPU ms per job %.2f (this process %.2f, redis-server %.2f)\n",
+              n, jobs / (ms_since(start) / 1000), busy, self_ms + redis_ms, self_ms, redis_ms);
   if (failed) std::printf("  (%d jobs failed)\n", failed.load());
   return jobs / (ms_since(start) / 1000);
 }
@@ -263,6 +277,7 @@ double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::st
 
 int main(int argc, char** argv) {
   int jobs = 24, runs = 15, level = 5, rounds = 1, poll_ms = 10, clients = 8;
+  bool commandstats = false;  // print Redis's INFO commandstats after each Redis throughput run
   int wait_s = 0;  // > 0: throughput clients long-poll (GET ?wait=) instead of polling every poll_ms
   std::string only, params;  // params: X-Denoise-Params of the latency jobs (default: none)  // "latency" or "throughput": run one part
   std::string fsync = "always";
@@ -278,8 +293,9 @@ int main(int argc, char** argv) {
     else if (a == "--only" && i + 1 < argc) only = argv[++i];
     else if (a == "--params" && i + 1 < argc) params = argv[++i];
     else if (a == "--wait" && i + 1 < argc) wait_s = std::atoi(argv[++i]);
+    else if (a == "--commandstats") commandstats = true;
     else {
-      std::fprintf(stderr, "usage: %s [--jobs N] [--runs N] [--level L] [--fsync always|everysec] [--rounds R] [--poll-ms P] [--clients C] [--only latency|throughput|redis-throughput] [--params JSON] [--wait S]\n",
+      std::fprintf(stderr, "usage: %s [--jobs N] [--runs N] [--level L] [--fsync always|everysec] [--rounds R] [--poll-ms P] [--clients C] [--only latency|throughput|redis-throughput] [--params JSON] [--wait S] [--commandstats]\n",
                    argv[0]);
       return 2;
     }
@@ -324,7 +340,12 @@ int main(int argc, char** argv) {
     {
       std::vector<std::unique_ptr<Replica>> replicas;
       for (int i = 0; i < 3; ++i) replicas.push_back(std::make_unique<Replica>(1, redis.url(), "tp:"));
+      if (commandstats) redis.cli("CONFIG RESETSTAT");
       three.push_back(throughput(replicas, body, jobs, poll_ms, clients, redis.pid(), wait_s));
+    }
+    if (commandstats) {  // where redis-server's time went, per command (microseconds per call)
+      std::string stats = redis.cli("INFO commandstats");
+      std::printf("%s", stats.c_str());
     }
     if (rounds > 1 && !one.empty()) std::printf("  round %d: %.2f vs %.2f jobs/s\n", round + 1, one.back(), three.back());
   }
