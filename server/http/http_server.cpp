@@ -694,14 +694,13 @@ struct HttpService::Impl {
       p.extensions["maximum"] = kMaxWaitS;
       throw HttpError(std::move(p));
     }
-    if (seconds == 0 || waiting_requests.fetch_add(1) >= std::max(1, config.io_threads / 2)) {
-      if (seconds > 0) --waiting_requests;
-      return find_job(ctx, false);
-    }
+    if (seconds == 0) return find_job(ctx, false);
+    const int waiting = waiting_requests.fetch_add(1);
     struct Leave {
       std::atomic<int>& n;
       ~Leave() { --n; }
     } leave{waiting_requests};
+    if (waiting >= std::max(1, config.io_threads / 2)) return find_job(ctx, false);
     const std::string id = ctx.req.matches[1];
     return found(id, store->wait_finished(
                          id, Clock::now() + std::chrono::microseconds(std::int64_t(std::llround(seconds * 1e6)))));
