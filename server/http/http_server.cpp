@@ -732,7 +732,7 @@ struct HttpService::Impl {
   void metrics_route(Context& ctx) {
     ctx.res.status = 200;
     std::string text = metrics.render({queue.queued(), queue.capacity(), queue.running(), queue.workers(),
-                                       queue.draining()});
+                                       queue.draining(), std::max(0, waiting_requests.load())});
     store->render_metrics(text);
     ctx.res.set_content(text, "text/plain; version=0.0.4; charset=utf-8");
   }

@@ -111,6 +111,9 @@ std::string Metrics::render(const Gauges& g) const {
   out += "mdn_workers " + std::to_string(g.workers) + "\n";
   out += "# HELP mdn_draining 1 while the server drains after SIGTERM/SIGINT.\n# TYPE mdn_draining gauge\n";
   out += "mdn_draining " + std::string(g.draining ? "1" : "0") + "\n";
+  out += "# HELP mdn_long_polls Long polls (GET /v1/jobs/{id}?wait=) waiting now; at most half the HTTP threads.\n"
+         "# TYPE mdn_long_polls gauge\n";
+  out += "mdn_long_polls " + std::to_string(g.long_polls) + "\n";
   return out;
 }
 

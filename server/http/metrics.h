@@ -38,6 +38,7 @@ class Metrics {
   struct Gauges {
     int queue_depth, queue_capacity, running, workers;
     bool draining;
+    int long_polls;  // GET /v1/jobs/{id}?wait= requests waiting now
   };
   // The whole exposition; gauges are read at scrape time.
   std::string render(const Gauges& gauges) const;

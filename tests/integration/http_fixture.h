@@ -269,6 +269,15 @@ inline nlohmann::json expect_problem(const httplib::Result& res, int status) {
   return p;
 }
 
+// The value of a series without labels in a /metrics body (the line that starts with its
+// name); -1 when absent.
+inline double metric_value(const std::string& metrics, const std::string& series) {
+  std::istringstream in(metrics);
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind(series + " ", 0) == 0) return std::atof(line.c_str() + series.size() + 1);
+  return -1;
+}
+
 // Polls GET /v1/jobs/{id} until the job is finished; returns its last JSON.
 inline nlohmann::json wait_job(httplib::Client& c, const std::string& id,
                                std::chrono::seconds timeout = std::chrono::seconds(60)) {

@@ -25,12 +25,6 @@ std::string cli_denoise(const std::string& dir, const std::string& input, const 
   return read_file(dir + "/" + name + "_out.off");
 }
 
-double metric_value(const std::string& metrics, const std::string& series) {
-  const auto pos = metrics.find(series + " ");
-  if (pos == std::string::npos) return 0;
-  return std::atof(metrics.c_str() + pos + series.size() + 1);
-}
-
 TEST(HttpLoad, ThirtyTwoConcurrentClientsAllAnsweredCorrectly) {
   ServerProcess server({"--workers", "2", "--queue-capacity", "64"});
   ASSERT_TRUE(server.started()) << server.log();
