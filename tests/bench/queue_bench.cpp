@@ -3,7 +3,7 @@
 //
 //   queue_bench [--jobs N] [--runs N] [--level L] [--fsync always|everysec] [--rounds R]
 //               [--poll-ms P] [--wait S] [--clients C] [--params JSON]
-//               [--only latency|throughput|redis-throughput] [--commandstats]
+//               [--only latency|throughput|redis-throughput] [--memory3] [--commandstats]
 //
 // A redis-server (Debian's, /usr/bin/redis-server) is started on a free loopback port with the
 // compose file's settings (append-only file, fsync on every write: --fsync always; everysec for
@@ -22,7 +22,9 @@
 //    replicas >= 1 replica x 2 workers). --rounds R
 //    alternates the two R times and reports the median of each. Each run also prints how busy
 //    the CPUs were and the CPU time per job (this process and redis-server): whether a set-up
-//    was bound by the CPUs or by waiting, and what the store costs per job.
+//    was bound by the CPUs or by waiting, and what the store costs per job. --memory3 adds 3
+//    replicas x 1 worker with memory stores (each job polled where it was posted): what three
+//    replicas on two cores cost without Redis.
 // Input: a noisy icosphere (20 * 4^L faces, default L = 5), default parameters.
 #include <netinet/in.h>
 #include <signal.h>
@@ -260,7 +262,9 @@ double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::st
         cs.back()->set_read_timeout(600, 0);
       }
       for (int j; (j = next.fetch_add(1)) < jobs;)
-        if (run_job(*cs[std::size_t(j) % n], *cs[std::size_t(j + 1) % n], body, poll_ms, "", wait_s) < 0) ++failed;
+        if (run_job(*cs[std::size_t(j) % n], *cs[std::size_t(j + (redis_pid > 0 ? 1 : 0)) % n], body, poll_ms, "",
+                    wait_s) < 0)
+          ++failed;
     });
   }
   for (auto& t : clients) t.join();
@@ -278,8 +282,10 @@ double throughput(std::vector<std::unique_ptr<Replica>>& replicas, const std::st
 int main(int argc, char** argv) {
   int jobs = 24, runs = 15, level = 5, rounds = 1, poll_ms = 10, clients = 8;
   bool commandstats = false;  // print Redis's INFO commandstats after each Redis throughput run
+  bool memory3 = false;       // also 3 replicas x 1 worker with memory stores in each throughput round
   int wait_s = 0;  // > 0: throughput clients long-poll (GET ?wait=) instead of polling every poll_ms
-  std::string only, params;  // params: X-Denoise-Params of the latency jobs (default: none)  // "latency" or "throughput": run one part
+  std::string only;    // "latency", "throughput" or "redis-throughput": run one part
+  std::string params;  // X-Denoise-Params of the latency jobs (default: none)
   std::string fsync = "always";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -294,8 +300,9 @@ int main(int argc, char** argv) {
     else if (a == "--params" && i + 1 < argc) params = argv[++i];
     else if (a == "--wait" && i + 1 < argc) wait_s = std::atoi(argv[++i]);
     else if (a == "--commandstats") commandstats = true;
+    else if (a == "--memory3") memory3 = true;
     else {
-      std::fprintf(stderr, "usage: %s [--jobs N] [--runs N] [--level L] [--fsync always|everysec] [--rounds R] [--poll-ms P] [--clients C] [--only latency|throughput|redis-throughput] [--params JSON] [--wait S] [--commandstats]\n",
+      std::fprintf(stderr, "usage: %s [--jobs N] [--runs N] [--level L] [--fsync always|everysec] [--rounds R] [--poll-ms P] [--clients C] [--only latency|throughput|redis-throughput] [--memory3] [--params JSON] [--wait S] [--commandstats]\n",
                    argv[0]);
       return 2;
     }
@@ -342,6 +349,11 @@ int main(int argc, char** argv) {
       for (int i = 0; i < 3; ++i) replicas.push_back(std::make_unique<Replica>(1, redis.url(), "tp:"));
       if (commandstats) redis.cli("CONFIG RESETSTAT");
       three.push_back(throughput(replicas, body, jobs, poll_ms, clients, redis.pid(), wait_s));
+    }
+    if (memory3) {  // what 3 replicas cost without Redis: memory stores, each job polled where it was posted
+      std::vector<std::unique_ptr<Replica>> replicas;
+      for (int i = 0; i < 3; ++i) replicas.push_back(std::make_unique<Replica>(1, "memory", "mdn:"));
+      throughput(replicas, body, jobs, poll_ms, clients, 0, wait_s);
     }
     if (commandstats) {  // where redis-server's time went, per command (microseconds per call)
       std::string stats = redis.cli("INFO commandstats");
