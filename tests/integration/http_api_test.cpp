@@ -169,7 +169,6 @@ TEST_F(HttpApi, IdempotencyKeyReturnsTheSameJob) {
 }
 
 // A job that runs for seconds: a 20k-face sphere with the maximum iteration counts.
-const char* kHeavyParams = R"({"n_normal":1000,"n_vertex":1000,"n_aniso":20})";
 
 TEST_F(HttpApi, DeleteCancelsQueuedAndRunningJobs) {
   ServerProcess server({"--workers", "1"});

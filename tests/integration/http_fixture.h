@@ -269,6 +269,9 @@ inline nlohmann::json expect_problem(const httplib::Result& res, int status) {
   return p;
 }
 
+// Parameters that keep a job running for seconds (to observe it queued or running, cancel it).
+inline constexpr const char* kHeavyParams = R"({"n_normal":1000,"n_vertex":1000,"n_aniso":20})";
+
 // The value of a series without labels in a /metrics body (the line that starts with its
 // name); -1 when absent.
 inline double metric_value(const std::string& metrics, const std::string& series) {

@@ -15,7 +15,6 @@ namespace {
 
 using nlohmann::json;
 
-const char* kHeavyParams = R"({"n_normal":1000,"n_vertex":1000,"n_aniso":20})";
 
 std::string cli_denoise(const std::string& dir, const std::string& input, const std::string& name) {
   write_file(dir + "/" + name + ".off", input);

@@ -141,7 +141,7 @@ TEST(Proto, OpenApiDocumentsExactlyTheServersRoutesAndStatuses) {
   Observed seen;
   const std::string mesh = noisy_sphere_off(1);
   const std::string heavy = noisy_sphere_off(5, 9);
-  const httplib::Headers heavy_params = {{"X-Denoise-Params", R"({"n_normal":1000,"n_vertex":1000,"n_aniso":20})"}};
+  const httplib::Headers heavy_params = {{"X-Denoise-Params", kHeavyParams}};
   const httplib::Headers two_ranges = {{"Range", "bytes=0-1,4-5"}};
   const std::string gltf_external =
       R"({"asset":{"version":"2.0"},"buffers":[{"uri":"http://example.org/x.bin","byteLength":36}],)"

@@ -336,10 +336,9 @@ TEST_F(RedisQueue, CancelAcrossReplicas) {
   auto b = replica(redis);
   auto c = replica(redis);
   const std::string heavy = noisy_sphere_off(5, 3);
-  const char* heavy_params = R"({"n_normal":1000,"n_vertex":1000,"n_aniso":20})";
   // Three heavy jobs, two workers (a and b; c's worker is kept busy too): the third waits.
   std::vector<std::string> ids;
-  for (int i = 0; i < 4; ++i) ids.push_back(post_job(*a, heavy, heavy_params));
+  for (int i = 0; i < 4; ++i) ids.push_back(post_job(*a, heavy, kHeavyParams));
   std::string running, queued;
   const auto deadline = std::chrono::steady_clock::now() + Seconds(60);
   while ((running.empty() || queued.empty()) && std::chrono::steady_clock::now() < deadline) {
@@ -392,7 +391,7 @@ TEST_F(RedisQueue, AnIdleReplicaStartsAJobAtOnceABusyOneQueuesIt) {
   ASSERT_EQ(r->status, 200) << r->body;
   EXPECT_EQ(r->body, cli_output(small, kSmallParams));
 
-  const std::string heavy = post_job(*a, noisy_sphere_off(5, 3), R"({"n_normal":1000,"n_vertex":1000,"n_aniso":20})");
+  const std::string heavy = post_job(*a, noisy_sphere_off(5, 3), kHeavyParams);
   EXPECT_EQ(wait_state(*a, heavy, {"running", "succeeded", "failed"}).value("state", ""), "running");
   EXPECT_EQ(metric(*a, "mdn_queue_started_on_submit_total"), 2);
   const std::string second = post_job(*a, small, kSmallParams);
@@ -428,7 +427,7 @@ TEST_F(RedisQueue, LongPollThroughAnotherReplicaAnswersWhenTheJobEnds) {
   EXPECT_EQ(parse_json(r->body).value("state", ""), "succeeded") << r->body;
   EXPECT_EQ(metric(*a, "mdn_queue_started_on_submit_total"), 1);
 
-  const std::string heavy = post_job(*a, noisy_sphere_off(5, 3), R"({"n_normal":1000,"n_vertex":1000,"n_aniso":20})");
+  const std::string heavy = post_job(*a, noisy_sphere_off(5, 3), kHeavyParams);
   auto t = std::chrono::steady_clock::now();
   r = b->client()->Get("/v1/jobs/" + heavy + "?wait=0.5");
   ASSERT_TRUE(r);
