@@ -173,10 +173,11 @@ JobQueue::Submitted JobQueue::submit(service::JobInput input, bool asynchronous,
   return {job, false};
 }
 
-std::shared_ptr<Job> JobQueue::run_external(std::string id, service::JobInput input) {
+std::shared_ptr<Job> JobQueue::run_external(std::string id, service::JobInput input, bool held) {
   input.threads = options_.threads_per_job;
   auto job = std::make_shared<Job>(std::move(id), std::move(input), true);
   job->external_ = true;
+  job->held_ = held;
   {
     std::lock_guard lock(mutex_);
     queue_.push_back(job);
@@ -222,6 +223,20 @@ JobQueue::CancelOutcome JobQueue::cancel(const std::string& id) {
       idle_cv_.notify_all();
       return CancelOutcome::Removed;
   }
+}
+
+void JobQueue::settle(const std::shared_ptr<Job>& job, bool keep) {
+  std::optional<Job::End> end;
+  {
+    std::lock_guard lock(job->mutex_);
+    if (!job->held_) return;
+    job->held_ = false;
+    job->discarded_ = !keep;
+    end = std::move(job->held_end_);
+    job->held_end_.reset();
+  }
+  if (end) end_run(*job, std::move(*end), keep);
+  else if (!keep) cancel(job);  // queued: ends now; running: its end goes unreported
 }
 
 void JobQueue::cancel(const std::shared_ptr<Job>& job) {
@@ -358,19 +373,32 @@ void JobQueue::run(const std::shared_ptr<Job>& job) {
     error = problem_from_exception(std::current_exception());
   }
   input = {};  // free the request bytes before publishing
-  if (on_finished_) {
+  bool report = true;
+  {
+    std::lock_guard lock(job->mutex_);
+    if (job->held_) {  // not accepted yet: settle() ends it
+      job->held_end_ = Job::End{state, std::move(error), std::move(output)};
+      return;
+    }
+    report = !job->discarded_;
+  }
+  end_run(*job, Job::End{state, std::move(error), std::move(output)}, report);
+}
+
+void JobQueue::end_run(Job& job, Job::End end, bool report) {
+  if (on_finished_ && report) {
     // Before the final state is published: a client that sees the job finished (the waiting
     // request, a poll) also sees it counted in the metrics.
-    JobSnapshot s = job->snapshot();
-    s.state = state;
-    s.error = error;
-    s.output = output;
-    s.output_bytes = output ? std::int64_t(output->bytes.size()) : 0;
-    if (state == JobState::Succeeded) s.stage = "done", s.fraction = 1;
+    JobSnapshot s = job.snapshot();
+    s.state = end.state;
+    s.error = end.error;
+    s.output = end.output;
+    s.output_bytes = end.output ? std::int64_t(end.output->bytes.size()) : 0;
+    if (end.state == JobState::Succeeded) s.stage = "done", s.fraction = 1;
     on_finished_(s);
   }
-  std::lock_guard lock(job->mutex_);
-  finish_locked(*job, state, std::move(error), std::move(output));
+  std::lock_guard lock(job.mutex_);
+  finish_locked(job, end.state, std::move(end.error), std::move(end.output));
 }
 
 void JobQueue::finish_locked(Job& job, JobState state, std::optional<Problem> error,

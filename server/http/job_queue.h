@@ -92,6 +92,14 @@ class Job {
   std::optional<Problem> error_;
   std::shared_ptr<const service::JobOutput> output_;
   bool result_fetched_ = false;
+  // run_external(held): until settle(), the end of the run waits here, unreported.
+  struct End {
+    JobState state;
+    std::optional<Problem> error;
+    std::shared_ptr<const service::JobOutput> output;
+  };
+  bool held_ = false, discarded_ = false;
+  std::optional<End> held_end_;
 };
 
 struct JobQueueOptions {
@@ -132,7 +140,13 @@ class JobQueue {
   // Runs a job accepted elsewhere (the shared Redis queue): no capacity or drain check, not
   // listed by find() nor kept after it finishes; `id` only names it in logs and metrics.
   // The caller waits on the returned job and may cancel it with cancel(job).
-  std::shared_ptr<Job> run_external(std::string id, service::JobInput input);
+  // `held`: a run started before the shared queue has accepted the job (so that it overlaps
+  // the accepting); it runs at once, but its end is not published (finished hook, final
+  // state) until settle(job, true). The caller must settle it either way.
+  std::shared_ptr<Job> run_external(std::string id, service::JobInput input, bool held = false);
+  // Kept: the held job's end is published as usual (now, if the run already ended). Not kept:
+  // it is cancelled and its end is never reported (for metrics and logs it never ran).
+  void settle(const std::shared_ptr<Job>& job, bool keep);
 
   enum class CancelOutcome { NotFound, CancelledQueued, CancelRequested, Removed };
   // Queued: cancelled at once. Running: cancellation requested (the pipeline stops at its next
@@ -161,6 +175,8 @@ class JobQueue {
  private:
   void worker_loop();
   void run(const std::shared_ptr<Job>& job);
+  // The end of a run: the finished hook (unless discarded), then the final state.
+  void end_run(Job& job, Job::End end, bool report);
   void finish_locked(Job& job, JobState state, std::optional<Problem> error,
                      std::shared_ptr<const service::JobOutput> output);  // job.mutex_ held
   void sweep_locked();  // mutex_ held: drops expired and surplus finished jobs

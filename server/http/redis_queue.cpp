@@ -134,6 +134,13 @@ class Connection {
     if (r->type == REDIS_REPLY_ERROR) throw RedisReplyError(std::string(str(r.get())));
     return r;
   }
+  // Like pipeline(), but an error reply to any of the commands throws RedisReplyError.
+  std::vector<Reply> checked_pipeline(const std::vector<std::vector<std::string_view>>& commands) {
+    std::vector<Reply> replies = pipeline(commands);
+    for (const Reply& r : replies)
+      if (r->type == REDIS_REPLY_ERROR) throw RedisReplyError(std::string(str(r.get())));
+    return replies;
+  }
   // On a subscribed connection: the next message pushed by Redis, or nullptr when none came
   // within `wait`.
   Reply next_message(std::chrono::milliseconds wait) {
@@ -198,29 +205,33 @@ class Pool {
 // Each is one atomic step of a job's life. Keys are passed in KEYS (single Redis, not Cluster:
 // the idempotency replay reads the earlier job's hash by name).
 
-// Accepting a job: the hash, the input, the idempotency key and the stream entry, or why not.
-// Returns {'ok', entries waiting before this one}, {'full', waiting}, {'reused'} or
-// {'replay', earlier job id}.
+// Accepting a job: the hash, the idempotency key and the stream entry, or why not. The input
+// itself is SET (with an expiry, in case this script never runs) just before, in the same
+// pipeline: a payload passed through Lua costs about 2 ms per MB more than a plain SET. An
+// accepted job's input loses the expiry; a refused one's is deleted.
+// Returns {'ok', entries waiting before this one}, {'full', waiting}, {'reused'},
+// {'replay', earlier job id} or {'noinput'} (the SET did not happen).
 constexpr const char* kSubmitJob = R"lua(
-local function submit(hash, input_key, stream, idem, id, input, format, params, created_ms, capacity, fingerprint,
+local function submit(hash, input_key, stream, idem, id, input_bytes, format, params, created_ms, capacity, fingerprint,
                       group, has_key, job_prefix)
+  if redis.call('EXISTS', input_key) == 0 then return {'noinput'} end
   if has_key == '1' then
     local prev = redis.call('GET', idem)
     if prev then
       local bar = string.find(prev, '|', 1, true)
       local jid = string.sub(prev, 1, bar - 1)
-      if string.sub(prev, bar + 1) ~= fingerprint then return {'reused'} end
-      if redis.call('EXISTS', job_prefix .. jid) == 1 then return {'replay', jid} end
+      if string.sub(prev, bar + 1) ~= fingerprint then redis.call('DEL', input_key) return {'reused'} end
+      if redis.call('EXISTS', job_prefix .. jid) == 1 then redis.call('DEL', input_key) return {'replay', jid} end
     end
   end
   if redis.call('EXISTS', stream) == 0 then
     redis.call('XGROUP', 'CREATE', stream, group, '0', 'MKSTREAM')
   end
   local waiting = redis.call('XLEN', stream) - redis.call('XPENDING', stream, group)[1]
-  if waiting >= tonumber(capacity) then return {'full', waiting} end
+  if waiting >= tonumber(capacity) then redis.call('DEL', input_key) return {'full', waiting} end
   redis.call('HSET', hash, 'state', 'queued', 'stage', 'queued', 'fraction', '0', 'format', format,
-             'params', params, 'created_ms', created_ms, 'input_bytes', string.len(input), 'attempts', '0')
-  redis.call('SET', input_key, input)
+             'params', params, 'created_ms', created_ms, 'input_bytes', input_bytes, 'attempts', '0')
+  redis.call('PERSIST', input_key)
   if has_key == '1' then
     redis.call('SET', idem, id .. '|' .. fingerprint)
     redis.call('HSET', hash, 'idem', idem)
@@ -260,7 +271,7 @@ end
 // problem, job key prefix, (kStart: entry id, job id).
 // Returns {outcome, attempt, previous owner, input, format, params, entry id, job id}.
 constexpr const char* kStartJob = R"lua(
-local function start_job(entry, jid)
+local function start_job(entry, jid, want_input)
   local hash = ARGV[10] .. jid
   local input_key = hash .. ':input'
   local function finish(state, problem)
@@ -283,18 +294,23 @@ local function start_job(entry, jid)
     finish('failed', ARGV[6])
     return result('exhausted', n - 1, previous)
   end
-  local input = redis.call('GET', input_key)
-  if not input then finish('failed', ARGV[9]) return result('lost') end
+  local input = ''
+  if want_input then
+    input = redis.call('GET', input_key)
+    if not input then finish('failed', ARGV[9]) return result('lost') end
+  elseif redis.call('EXISTS', input_key) == 0 then
+    finish('failed', ARGV[9]) return result('lost')
+  end
   redis.call('HSET', hash, 'state', 'running', 'owner', ARGV[1], 'started_ms', ARGV[2], 'stage', 'decode',
              'fraction', '0')
   return {'run', n, previous, input, redis.call('HGET', hash, 'format'), redis.call('HGET', hash, 'params'), entry, jid}
 end
-local function start_entry(e)
+local function start_entry(e, want_input)
   local jid = ''
   for i = 1, #e[2], 2 do
     if e[2][i] == 'id' then jid = e[2][i + 1] end
   end
-  return start_job(e[1], jid)
+  return start_job(e[1], jid, want_input)
 end
 )lua";
 
@@ -306,11 +322,11 @@ if not r then
   local last = redis.call('XREVRANGE', KEYS[1], '+', '-', 'COUNT', '1')
   return {'none', 0, '', '', '', '', #last == 0 and '0-0' or last[1][1], ''}
 end
-return start_entry(r[1][2][1])
+return start_entry(r[1][2][1], true)
 )lua";
 
 // Accepting a job and, when no other entry waits, starting it at once for this consumer (a local
-// worker slot is free): one write instead of two, and the input is not sent back (element 4 of
+// worker slot is free): one write instead of two, and the input is not read back (element 4 of
 // the reply is empty). KEYS: stream, hash, input, idem.  ARGV: those of start_job, then id,
 // input, format, params, created_ms, capacity, fingerprint, has_key.
 constexpr const char* kSubmitStart = R"lua(
@@ -319,14 +335,12 @@ local r = submit(KEYS[2], KEYS[3], KEYS[1], KEYS[4], ARGV[11], ARGV[12], ARGV[13
 if r[1] ~= 'ok' or r[2] > 0 then return r end
 local x = redis.call('XREADGROUP', 'GROUP', ARGV[5], ARGV[1], 'COUNT', '1', 'STREAMS', KEYS[1], '>')
 if not x then return r end
-local t = start_entry(x[1][2][1])
-t[4] = ''
-return t
+return start_entry(x[1][2][1], false)
 )lua";
 
 // An entry taken over with XAUTOCLAIM (already in this consumer's pending list).
 constexpr const char* kStart = R"lua(
-return start_job(ARGV[11], ARGV[12])
+return start_job(ARGV[11], ARGV[12], true)
 )lua";
 
 // Heartbeat. KEYS: hash, stream.  ARGV: consumer, stage ('' = unchanged), fraction, entry id, group.
@@ -350,14 +364,19 @@ if redis.call('HGET', KEYS[1], 'cancel') == '1' then return 'cancel' end
 return 'ok'
 )lua";
 
-// KEYS: hash, input, stream, result.  ARGV: consumer, state, problem, output summary, result
-// bytes, ttl_ms, now_ms, entry id, group, output_bytes.
+// A succeeded job's result is SET (with the results' expiry) under this consumer's own staging
+// key just before, in the same pipeline, and renamed here: a payload passed through Lua costs
+// about 2 ms per MB more, and a replica that lost the job never overwrites the owner's result.
+// KEYS: hash, input, stream, result, staged result.  ARGV: consumer, state, problem, output
+// summary, (unused), ttl_ms, now_ms, entry id, group, output_bytes.
 constexpr const char* kFinish = R"lua(
 if redis.call('HGET', KEYS[1], 'owner') ~= ARGV[1] or redis.call('HGET', KEYS[1], 'state') ~= 'running' then
+  redis.call('DEL', KEYS[5])
   return 'stale'
 end
 if ARGV[2] == 'succeeded' then
-  redis.call('SET', KEYS[4], ARGV[5], 'PX', ARGV[6])
+  if redis.call('EXISTS', KEYS[5]) == 0 then return redis.error_reply('the staged result is missing') end
+  redis.call('RENAME', KEYS[5], KEYS[4])
   redis.call('HSET', KEYS[1], 'output', ARGV[4], 'output_bytes', ARGV[10], 'stage', 'done', 'fraction', '1')
 else
   redis.call('HSET', KEYS[1], 'error', ARGV[3])
@@ -643,31 +662,44 @@ class RedisJobStore final : public JobStore {
     const std::string capacity = std::to_string(config_.queue_capacity);
     const std::string job_prefix = prefix_ + "job:";
     // A worker slot of this replica waiting for work: accept and start in one step, and hand
-    // the job (whose input is here already) to that slot.
+    // the job to that slot. It starts running here and now, while Redis stores it (a megabyte
+    // and its fsync take a few ms); until the script has accepted and started it for this
+    // replica, its end is held back, and a run that was not accepted ends unreported.
     SlotReservation slot(*this);
+    struct Early {
+      JobQueue& queue;
+      std::shared_ptr<Job> job;
+      ~Early() {
+        if (job) queue.settle(job, false);
+      }
+    } early{queue_, slot ? queue_.run_external(id, input, true) : nullptr};
     const std::int64_t input_bytes = std::int64_t(input.bytes.size());
+    const std::string input_length = std::to_string(input_bytes), input_name = input_key(id);
     auto reply = run([&](Connection& c) {
+      // The input by a plain SET, then the script (see kSubmitJob), in one round trip.
+      const std::vector<std::string_view> set = {"SET", input_name, input.bytes, "PX", kUnacceptedInputMs};
       if (!slot) {
-        return c.checked({"EVAL", kSubmitJob + std::string(kSubmit), "4", job_key(id), input_key(id), stream_, idem, id,
-                          input.bytes, format, params, created, capacity, fingerprint, kGroup, key ? "1" : "0",
-                          job_prefix});
+        return std::move(c.checked_pipeline({set, {"EVAL", kSubmitJob + std::string(kSubmit), "4", job_key(id),
+                                                   input_name, stream_, idem, id, input_length, format, params,
+                                                   created, capacity, fingerprint, kGroup, key ? "1" : "0",
+                                                   job_prefix}})
+                             .back());
       }
       auto args = start_args(kSubmitJob + std::string(kSubmitStart));
       args[2] = "4";
-      args.insert(args.begin() + 4, {job_key(id), input_key(id), idem});
-      std::vector<std::string_view> views(args.begin(), args.end());
-      for (const std::string_view v : {std::string_view(id), std::string_view(input.bytes), std::string_view(format),
-                                       std::string_view(params), std::string_view(created), std::string_view(capacity),
-                                       std::string_view(fingerprint), std::string_view(key ? "1" : "0")})
-        views.push_back(v);
-      return c.checked(views);
+      args.insert(args.begin() + 4, {job_key(id), input_name, idem});
+      for (const std::string& v : {id, input_length, format, params, created, capacity, fingerprint,
+                                   std::string(key ? "1" : "0")})
+        args.push_back(v);
+      return std::move(c.checked_pipeline({set, std::vector<std::string_view>(args.begin(), args.end())}).back());
     });
     std::string_view outcome;
     try {
       outcome = str(element(reply.get(), 0));
       if (outcome == "run") {
         Taken t = parse_taken(reply);
-        t.input = std::move(input.bytes);
+        queue_.settle(early.job, true);
+        t.early = std::move(early.job);
         slot.hand(std::move(t));
         ++started_on_submit_;
         outcome = "ok";
@@ -675,6 +707,8 @@ class RedisJobStore final : public JobStore {
     } catch (const std::exception& e) {
       throw HttpError(make_problem(500, "queue-error", "Job store error", e.what()));
     }
+    if (outcome == "noinput")
+      throw HttpError(make_problem(500, "queue-error", "Job store error", "the job's input could not be stored"));
     if (outcome == "reused")
       throw HttpError(make_problem(422, "idempotency-key-reused", "Idempotency-Key reused",
                                    "this Idempotency-Key was already used with a different body or parameters"));
@@ -703,12 +737,12 @@ class RedisJobStore final : public JobStore {
     // Plain reads, no script: polls are the most frequent request. The hash and the result
     // expire together; a result missing next to a succeeded hash means it just expired.
     const std::string hash = job_key(id), result_name = result_key(id);
+    // A result this replica stored is not read back (the hash says whether it still counts).
+    std::optional<RecentResults::Entry> local = with_result ? recent_.find(id) : std::nullopt;
     std::vector<Reply> replies;
     run([&](Connection& c) {
-      if (with_result) replies = c.pipeline({{"HGETALL", hash}, {"GET", result_name}});
-      else replies = c.pipeline({{"HGETALL", hash}});
-      for (const Reply& r : replies)
-        if (r->type == REDIS_REPLY_ERROR) throw RedisReplyError(std::string(str(r.get())));
+      if (with_result && !local) replies = c.checked_pipeline({{"HGETALL", hash}, {"GET", result_name}});
+      else replies = c.checked_pipeline({{"HGETALL", hash}});
       return Reply();
     });
     const redisReply* fields = replies.at(0).get();
@@ -718,8 +752,16 @@ class RedisJobStore final : public JobStore {
       h[std::string(str(fields->element[i]))] = std::string(str(fields->element[i + 1]));
     std::optional<std::string> result;
     if (with_result && h["state"] == "succeeded") {
-      if (replies.at(1)->type != REDIS_REPLY_STRING) return std::nullopt;
-      result = std::string(str(replies.at(1).get()));
+      if (local && local->finished_ms == h["finished_ms"]) {
+        result = *local->bytes;
+      } else {
+        if (local) {  // not the run this replica stored (cannot happen: a succeeded job is final)
+          Reply r = run([&](Connection& c) { return c.checked({"GET", result_name}); });
+          replies.push_back(std::move(r));
+        }
+        if (replies.back()->type != REDIS_REPLY_STRING) return std::nullopt;
+        result = std::string(str(replies.back().get()));
+      }
     }
     try {
       return snapshot_from_hash(id, std::move(h), result);
@@ -773,6 +815,7 @@ class RedisJobStore final : public JobStore {
     const std::string_view outcome = str(reply.get());
     if (outcome == "none") return r;
     if (outcome == "removed") {
+      recent_.erase(id);
       r.outcome = JobQueue::CancelOutcome::Removed;
       return r;
     }
@@ -859,6 +902,9 @@ class RedisJobStore final : public JobStore {
 
  private:
   static constexpr const char* kGroup = "workers";
+  // Expiry of an input SET before its job is accepted (kSubmitJob removes it, or deletes the
+  // input of a refused job): only an input whose script never ran expires.
+  static constexpr const char* kUnacceptedInputMs = "600000";
   static constexpr int kRetryAfterS = 2;
 
   std::string job_key(const std::string& id) const { return prefix_ + "job:" + id; }
@@ -1009,6 +1055,7 @@ class RedisJobStore final : public JobStore {
     int attempt = 0;
     std::string previous, input, format, params, entry_id, job_id;
     bool reclaimed = false;
+    std::shared_ptr<Job> early;  // started by submit() while Redis accepted it (then no input)
   };
 
   // A worker slot of this replica reserved by submit() for a job it accepts and starts in one
@@ -1291,7 +1338,7 @@ class RedisJobStore final : public JobStore {
     std::int64_t result_bytes = 0;
     enum class End { Finished, Lost, Released } end = End::Finished;
     if (!error) {
-      auto job = queue_.run_external(e.job_id, std::move(input));
+      auto job = e.early ? e.early : queue_.run_external(e.job_id, std::move(input));
       bool cancel_by_user = false;
       std::string last_stage;
       double last_fraction = -1;
@@ -1398,11 +1445,20 @@ class RedisJobStore final : public JobStore {
       bool done = false;
       try {
         done = retry(c, [&](Connection& conn) {
-          Reply r = conn.checked({"EVAL", kFinishHelpers + std::string(kFinish), "4", job_key(f.job_id),
-                                  input_key(f.job_id), stream_, result_key(f.job_id), consumer_, f.state, f.error,
-                                  f.summary, f.result, ttl_ms_, f.finished_ms, f.entry_id, kGroup, f.result_bytes});
-          stored = std::string(str(r.get()));
+          static const std::string script = kFinishHelpers + std::string(kFinish);
+          const std::string hash = job_key(f.job_id), input = input_key(f.job_id), result = result_key(f.job_id),
+                            staged = result + ":" + consumer_;
+          const std::vector<std::string_view> finish = {
+              "EVAL", script, "5", hash, input, stream_, result, staged, consumer_, f.state, f.error, f.summary, "", ttl_ms_, f.finished_ms, f.entry_id, kGroup,
+              f.result_bytes};
+          // The result by a plain SET, then the script (see kFinish), in one round trip.
+          std::vector<Reply> r = f.state == "succeeded"
+                                     ? conn.checked_pipeline({{"SET", staged, f.result, "PX", ttl_ms_}, finish})
+                                     : conn.checked_pipeline({finish});
+          stored = std::string(str(r.back().get()));
         });
+        if (done && stored == "ok" && f.state == "succeeded")
+          recent_.add(f.job_id, f.finished_ms, std::move(f.result));
       } catch (const std::exception& ex) {
         if (log_) log_->error("job_unstored", {{"job_id", f.job_id}, {"detail", ex.what()}});
       }
@@ -1413,6 +1469,55 @@ class RedisJobStore final : public JobStore {
         log_->warn("job_lost", {{"job_id", f.job_id}, {"detail", "another replica took the job over"}});
     }
   }
+
+  // Results this replica stored lately, so that GET /result through it need not read them
+  // back (a megabyte through Redis costs a few milliseconds each way). find() serves one only
+  // while Redis holds its job as succeeded with the same finish time: deleted and expired jobs
+  // are never served from here. Oldest first out, within kBytes and kPlaces.
+  class RecentResults {
+   public:
+    struct Entry {
+      std::string finished_ms;
+      std::shared_ptr<const std::string> bytes;
+    };
+    static constexpr std::size_t kBytes = 64u << 20, kLargest = kBytes / 4, kPlaces = 4096;
+    void add(const std::string& id, const std::string& finished_ms, std::string bytes) {
+      if (bytes.size() > kLargest) return;
+      std::lock_guard lock(mutex_);
+      erase_locked(id);
+      total_ += bytes.size();
+      entries_[id] = {finished_ms, std::make_shared<const std::string>(std::move(bytes))};
+      order_.push_back(id);
+      // Places of erased entries count too, so that order_ stays bounded however many results
+      // DELETE removed meanwhile.
+      while (!order_.empty() && (total_ > kBytes || order_.size() > kPlaces)) {
+        erase_locked(order_.front());
+        order_.pop_front();
+      }
+    }
+    std::optional<Entry> find(const std::string& id) const {
+      std::lock_guard lock(mutex_);
+      auto it = entries_.find(id);
+      if (it == entries_.end()) return std::nullopt;
+      return it->second;
+    }
+    void erase(const std::string& id) {
+      std::lock_guard lock(mutex_);
+      erase_locked(id);  // its place in order_ goes when it comes first
+    }
+
+   private:
+    void erase_locked(const std::string& id) {
+      auto it = entries_.find(id);
+      if (it == entries_.end()) return;
+      total_ -= it->second.bytes->size();
+      entries_.erase(it);
+    }
+    mutable std::mutex mutex_;
+    std::unordered_map<std::string, Entry> entries_;
+    std::deque<std::string> order_;
+    std::size_t total_ = 0;
+  };
 
   // ---------------------------------------------------------------- state
   const ServerConfig config_;
@@ -1430,6 +1535,8 @@ class RedisJobStore final : public JobStore {
   std::atomic<bool> up_{false}, ever_up_{false}, draining_{false}, stopping_{false};
   std::atomic<std::int64_t> length_{0}, pending_{0}, reclaimed_{0}, started_on_submit_{0}, retries_{0}, exhausted_{0}, reconnects_{0};
   std::atomic<int> busy_{0};  // jobs taken and not yet stored (running, or waiting for the finisher)
+
+  RecentResults recent_;
 
   std::mutex finish_mutex_;
   std::condition_variable finish_cv_;

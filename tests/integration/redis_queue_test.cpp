@@ -49,6 +49,12 @@ std::string redis_inline(int port, const std::string& command) {
   return out.substr(0, out.find("\r\n"));
 }
 
+// How many keys match `pattern` (KEYS, through a script: its reply is one line, ":N").
+int count_keys(int port, const std::string& pattern) {
+  const std::string reply = redis_inline(port, "EVAL \"return #redis.call('KEYS', ARGV[1])\" 0 " + pattern);
+  return reply.size() > 1 && reply[0] == ':' ? std::stoi(reply.substr(1)) : -1;
+}
+
 // redis-server as a child process; restartable on the same port and data directory.
 class RedisServer {
  public:
@@ -466,6 +472,21 @@ TEST_F(RedisQueue, IdempotencyKeyHoldsAcrossReplicas) {
   EXPECT_EQ(p.value("type", ""), "urn:meshdenoise:problem:idempotency-key-reused");
   const std::string id = parse_json(first->body).value("id", "");
   EXPECT_EQ(wait_state(*a, id, {"succeeded", "failed"}).value("state", ""), "succeeded");
+  // Each POST stored its input before the script decided; the replayed and the refused ones
+  // were deleted at once (not left to expire), the job's own when it finished. Its result was
+  // staged under the replica's key and renamed: no staged copy is left.
+  EXPECT_EQ(count_keys(redis.port(), "mdn:job:*:input"), 0);
+  EXPECT_EQ(count_keys(redis.port(), "mdn:job:*:result"), 1);
+  EXPECT_EQ(count_keys(redis.port(), "mdn:job:*:result:*"), 0);
+  // B's idle worker started each of its two POSTs while Redis decided (a replay, a refusal):
+  // neither was accepted, so neither run is reported, however it ended.
+  const auto deadline = std::chrono::steady_clock::now() + Seconds(30);
+  while (std::chrono::steady_clock::now() < deadline && metric(*b, "mdn_jobs_running") != 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_EQ(metric(*b, "mdn_jobs_running"), 0);
+  EXPECT_EQ(metric(*b, "mdn_jobs_total{state=\"succeeded\"}"), -1) << "not a series: no job ended on B";
+  EXPECT_EQ(metric(*b, "mdn_jobs_total{state=\"cancelled\"}"), -1);
+  EXPECT_EQ(metric(*a, "mdn_jobs_total{state=\"succeeded\"}"), 1);
   // Deleting the job frees the key.
   auto del = b->client()->Delete("/v1/jobs/" + id);
   ASSERT_TRUE(del);

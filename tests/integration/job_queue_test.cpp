@@ -1,0 +1,102 @@
+// JobQueue::run_external(held) and settle(), used by the Redis store to start a job while Redis
+// is still accepting it: a held run publishes its end (the finished hook, its final state) only
+// once kept, and a run that was not accepted is never reported, whether it had ended or not.
+#include <atomic>
+#include <chrono>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "server/http/job_queue.h"
+#include "support/shapes.h"
+
+namespace mdn::http {
+namespace {
+
+using namespace std::chrono_literals;
+
+service::JobInput off_input(int sphere_levels) {
+  service::JobInput in;
+  in.bytes = test::off_text(test::sphere(sphere_levels));
+  in.format = io::Format::Off;
+  return in;
+}
+
+struct Reported {
+  std::atomic<int> count{0};
+  JobFinishedHook hook() {
+    return [this](const JobSnapshot&) { ++count; };
+  }
+};
+
+JobQueueOptions one_worker() {
+  JobQueueOptions o;
+  o.workers = 1;
+  return o;
+}
+
+// Waits until the queue's worker is done with everything it took (running() counts a run until
+// its end has been handed over, published or held).
+bool wait_idle(JobQueue& q) {
+  const auto deadline = std::chrono::steady_clock::now() + 60s;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (q.running() == 0 && q.queued() == 0) return true;
+    std::this_thread::sleep_for(5ms);
+  }
+  return false;
+}
+
+TEST(JobQueueHeld, AnEndedRunWaitsUnpublishedUntilKept) {
+  Reported reported;
+  JobQueue q(one_worker(), reported.hook());
+  auto job = q.run_external("held", off_input(1), true);
+  ASSERT_TRUE(wait_idle(q));
+  EXPECT_EQ(job->state(), JobState::Running) << "held: the run's end is not published";
+  EXPECT_FALSE(job->wait_for(0ms));
+  EXPECT_EQ(reported.count, 0);
+  q.settle(job, true);
+  ASSERT_TRUE(job->wait_for(0ms));
+  EXPECT_EQ(job->state(), JobState::Succeeded);
+  EXPECT_EQ(reported.count, 1);
+  q.settle(job, false);  // settling again changes nothing
+  EXPECT_EQ(job->state(), JobState::Succeeded);
+  EXPECT_EQ(reported.count, 1);
+}
+
+TEST(JobQueueHeld, AKeptRunStillRunningEndsAsUsual) {
+  Reported reported;
+  JobQueue q(one_worker(), reported.hook());
+  auto job = q.run_external("kept", off_input(4), true);
+  q.settle(job, true);
+  ASSERT_TRUE(job->wait_for(60s));
+  EXPECT_EQ(job->state(), JobState::Succeeded);
+  EXPECT_EQ(reported.count, 1);
+}
+
+TEST(JobQueueHeld, ARunNotAcceptedIsNeverReported) {
+  Reported reported;
+  JobQueue q(one_worker(), reported.hook());
+  // Ended before the answer came.
+  auto ended = q.run_external("ended", off_input(1), true);
+  ASSERT_TRUE(wait_idle(q));
+  q.settle(ended, false);
+  EXPECT_TRUE(ended->wait_for(0ms));
+  // Still running (a 20k-face mesh): cancelled, and its end unreported too.
+  auto running = q.run_external("running", off_input(5), true);
+  auto queued = q.run_external("queued", off_input(1), true);  // behind it: the only worker is busy
+  q.settle(running, false);
+  q.settle(queued, false);
+  ASSERT_TRUE(running->wait_for(60s));
+  EXPECT_EQ(running->state(), JobState::Cancelled);
+  ASSERT_TRUE(queued->wait_for(60s));
+  EXPECT_EQ(queued->state(), JobState::Cancelled);
+  ASSERT_TRUE(wait_idle(q));
+  EXPECT_EQ(reported.count, 0);
+  // An ordinary run on the same queue is reported as before.
+  auto plain = q.run_external("plain", off_input(1));
+  ASSERT_TRUE(plain->wait_for(60s));
+  EXPECT_EQ(reported.count, 1);
+}
+
+}  // namespace
+}  // namespace mdn::http
