@@ -487,10 +487,18 @@ TEST_F(RedisQueue, IdempotencyKeyHoldsAcrossReplicas) {
   EXPECT_EQ(metric(*b, "mdn_jobs_total{state=\"succeeded\"}"), -1) << "not a series: no job ended on B";
   EXPECT_EQ(metric(*b, "mdn_jobs_total{state=\"cancelled\"}"), -1);
   EXPECT_EQ(metric(*a, "mdn_jobs_total{state=\"succeeded\"}"), 1);
-  // Deleting the job frees the key.
+  // A serves the result it stored from memory, B reads it from Redis: the same bytes.
+  auto from_a = a->client()->Get("/v1/jobs/" + id + "/result");
+  auto from_b = b->client()->Get("/v1/jobs/" + id + "/result");
+  ASSERT_TRUE(from_a && from_b);
+  ASSERT_EQ(from_a->status, 200);
+  EXPECT_EQ(from_a->body, from_b->body);
+  EXPECT_EQ(from_a->body, cli_output(body, kSmallParams));
+  // Deleting the job frees the key, and A no longer serves the result it keeps.
   auto del = b->client()->Delete("/v1/jobs/" + id);
   ASSERT_TRUE(del);
   EXPECT_EQ(del->status, 204);
+  expect_problem(a->client()->Get("/v1/jobs/" + id + "/result"), 404);
   auto fresh = a->client()->Post("/v1/jobs", key, noisy_sphere_off(2, 6), "model/x-off");
   ASSERT_TRUE(fresh);
   EXPECT_EQ(fresh->status, 202) << fresh->body;
