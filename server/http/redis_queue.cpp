@@ -664,7 +664,8 @@ class RedisJobStore final : public JobStore {
     // A worker slot of this replica waiting for work: accept and start in one step, and hand
     // the job to that slot. It starts running here and now, while Redis stores it (a megabyte
     // and its fsync take a few ms); until the script has accepted and started it for this
-    // replica, its end is held back, and a run that was not accepted ends unreported.
+    // replica, its end is held back, and a run that was not accepted ends unreported. (Not
+    // while Redis is known to be down: the request is refused at once.)
     SlotReservation slot(*this);
     struct Early {
       JobQueue& queue;
@@ -672,7 +673,7 @@ class RedisJobStore final : public JobStore {
       ~Early() {
         if (job) queue.settle(job, false);
       }
-    } early{queue_, slot ? queue_.run_external(id, input, true) : nullptr};
+    } early{queue_, slot && up_ ? queue_.run_external(id, input, true) : nullptr};
     const std::int64_t input_bytes = std::int64_t(input.bytes.size());
     const std::string input_length = std::to_string(input_bytes), input_name = input_key(id);
     auto reply = run([&](Connection& c) {
@@ -698,8 +699,12 @@ class RedisJobStore final : public JobStore {
       outcome = str(element(reply.get(), 0));
       if (outcome == "run") {
         Taken t = parse_taken(reply);
-        queue_.settle(early.job, true);
-        t.early = std::move(early.job);
+        if (early.job) {
+          queue_.settle(early.job, true);
+          t.early = std::move(early.job);
+        } else {
+          t.input = std::move(input.bytes);
+        }
         slot.hand(std::move(t));
         ++started_on_submit_;
         outcome = "ok";

@@ -334,6 +334,8 @@ TEST_F(RedisQueue, RedisRestartGivesClear503sThenFullService) {
   EXPECT_EQ(wait_state(*b, after, {"succeeded", "failed"}).value("state", ""), "succeeded");
   EXPECT_GE(metric(*a, "mdn_queue_redis_reconnects_total"), 1);
   EXPECT_NE(a->log().find("redis_reconnected"), std::string::npos);
+  // The posts refused while Redis was down left no run behind.
+  for (ServerProcess* s : {a.get(), b.get()}) EXPECT_EQ(metric(*s, "mdn_jobs_total{state=\"cancelled\"}"), -1);
 }
 
 TEST_F(RedisQueue, CancelAcrossReplicas) {
