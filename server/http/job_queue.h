@@ -112,8 +112,9 @@ struct JobQueueOptions {
   io::Limits limits;               // decoder limits
 };
 
-// Called on a worker thread when a job has run, just before its final state is published (so a
-// client that sees the job finished also sees it in the metrics); must not call back into the
+// Called when a job has run, just before its final state is published (so a client that sees
+// the job finished also sees it in the metrics): on the worker thread, or for a held run that
+// ended before it was settled, on the thread calling settle(). Must not call back into the
 // queue.
 using JobFinishedHook = std::function<void(const JobSnapshot&)>;
 
