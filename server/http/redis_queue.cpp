@@ -759,6 +759,7 @@ class RedisJobStore final : public JobStore {
     if (with_result && h["state"] == "succeeded") {
       if (local && local->finished_ms == h["finished_ms"]) {
         result = *local->bytes;
+        ++results_served_locally_;
       } else {
         if (local) {  // not the run this replica stored (cannot happen: a succeeded job is final)
           Reply r = run([&](Connection& c) { return c.checked({"GET", result_name}); });
@@ -896,6 +897,9 @@ class RedisJobStore final : public JobStore {
          "Jobs this replica accepted and started at once on one of its idle workers (no queue round trip).",
          started_on_submit_);
     line("mdn_queue_retries_total", "counter", "Runs this replica started of jobs that had run before.", retries_);
+    line("mdn_queue_results_served_locally_total", "counter",
+         "Results this replica served from its own memory (it had stored them) instead of reading them from Redis.",
+         results_served_locally_);
     line("mdn_queue_attempts_exhausted_total", "counter",
          "Jobs this replica failed because they reached --queue-max-attempts.", exhausted_);
     line("mdn_queue_redis_reconnects_total", "counter", "Times Redis answered again after being unreachable.",
@@ -1538,7 +1542,8 @@ class RedisJobStore final : public JobStore {
   std::mt19937_64 rng_;
 
   std::atomic<bool> up_{false}, ever_up_{false}, draining_{false}, stopping_{false};
-  std::atomic<std::int64_t> length_{0}, pending_{0}, reclaimed_{0}, started_on_submit_{0}, retries_{0}, exhausted_{0}, reconnects_{0};
+  std::atomic<std::int64_t> length_{0}, pending_{0}, reclaimed_{0}, started_on_submit_{0}, retries_{0}, exhausted_{0}, reconnects_{0},
+      results_served_locally_{0};
   std::atomic<int> busy_{0};  // jobs taken and not yet stored (running, or waiting for the finisher)
 
   RecentResults recent_;
