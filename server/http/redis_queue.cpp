@@ -668,12 +668,14 @@ class RedisJobStore final : public JobStore {
     // while Redis is known to be down: the request is refused at once.)
     SlotReservation slot(*this);
     struct Early {
-      JobQueue& queue;
+      RedisJobStore& store;
       std::shared_ptr<Job> job;
       ~Early() {
-        if (job) queue.settle(job, false);
+        if (!job) return;
+        store.queue_.settle(job, false);
+        ++store.early_runs_discarded_;
       }
-    } early{queue_, slot && up_ ? queue_.run_external(id, input, true) : nullptr};
+    } early{*this, slot && up_ ? queue_.run_external(id, input, true) : nullptr};
     const std::int64_t input_bytes = std::int64_t(input.bytes.size());
     const std::string input_length = std::to_string(input_bytes), input_name = input_key(id);
     auto reply = run([&](Connection& c) {
@@ -897,6 +899,10 @@ class RedisJobStore final : public JobStore {
          "Jobs this replica accepted and started at once on one of its idle workers (no queue round trip).",
          started_on_submit_);
     line("mdn_queue_retries_total", "counter", "Runs this replica started of jobs that had run before.", retries_);
+    line("mdn_queue_early_runs_discarded_total", "counter",
+         "Runs this replica began while Redis was accepting their job, then dropped because Redis did not start "
+         "the job here (refused, replayed, queued behind others, or Redis unreachable).",
+         early_runs_discarded_);
     line("mdn_queue_results_served_locally_total", "counter",
          "Results this replica served from its own memory (it had stored them) instead of reading them from Redis.",
          results_served_locally_);
@@ -1543,7 +1549,7 @@ class RedisJobStore final : public JobStore {
 
   std::atomic<bool> up_{false}, ever_up_{false}, draining_{false}, stopping_{false};
   std::atomic<std::int64_t> length_{0}, pending_{0}, reclaimed_{0}, started_on_submit_{0}, retries_{0}, exhausted_{0}, reconnects_{0},
-      results_served_locally_{0};
+      results_served_locally_{0}, early_runs_discarded_{0};
   std::atomic<int> busy_{0};  // jobs taken and not yet stored (running, or waiting for the finisher)
 
   RecentResults recent_;

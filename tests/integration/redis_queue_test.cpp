@@ -486,6 +486,8 @@ TEST_F(RedisQueue, IdempotencyKeyHoldsAcrossReplicas) {
   EXPECT_EQ(metric(*b, "mdn_jobs_running"), 0);
   EXPECT_EQ(metric(*b, "mdn_jobs_total{state=\"succeeded\"}"), -1) << "not a series: no job ended on B";
   EXPECT_EQ(metric(*b, "mdn_jobs_total{state=\"cancelled\"}"), -1);
+  EXPECT_EQ(metric(*b, "mdn_queue_early_runs_discarded_total"), 2);
+  EXPECT_EQ(metric(*a, "mdn_queue_early_runs_discarded_total"), 0);
   EXPECT_EQ(metric(*a, "mdn_jobs_total{state=\"succeeded\"}"), 1);
   // A serves the result it stored from memory, B reads it from Redis: the same bytes.
   auto from_a = a->client()->Get("/v1/jobs/" + id + "/result");
