@@ -79,7 +79,7 @@ InputMeasures measure_input(const Vertices& P, const Triangles& F, const Topolog
   Executor serial(1);
   Executor& ex = executor ? *executor : serial;
   InputMeasures m;
-  const double l = mean_edge_length(P, F);
+  const double l = topo.mean_edge_length(P);
   if (l > 0) {
     const Residuals raw = residuals(P, F, topo, ex);
     m.noise = raw.median / l;

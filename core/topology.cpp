@@ -154,6 +154,21 @@ Topology Topology::build(const Triangles& F, std::int32_t num_vertices) {
   return t;
 }
 
+double Topology::mean_edge_length(const Vertices& V) const {
+  // vv lists a vertex's neighbours in the order of the sorted unique edges, so (i, j > i) for
+  // ascending i visits the edges in mean_edge_length(V, F)'s order.
+  double sum = 0;
+  std::int64_t count = 0;
+  for (std::size_t i = 0; i + 1 < vv_offsets.size(); ++i)
+    for (std::int32_t k = vv_offsets[i]; k < vv_offsets[i + 1]; ++k) {
+      const std::int32_t j = vv_vertices[static_cast<std::size_t>(k)];
+      if (j <= static_cast<std::int32_t>(i)) continue;
+      sum += (V.row(static_cast<Eigen::Index>(i)) - V.row(j)).norm();
+      ++count;
+    }
+  return count ? sum / static_cast<double>(count) : 0;
+}
+
 std::vector<bool> Topology::boundary_vertex_mask() const {
   std::vector<bool> mask(static_cast<std::size_t>(num_vertices), false);
   for (Eigen::Index e = 0; e < boundary_edges.rows(); ++e)

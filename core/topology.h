@@ -33,6 +33,10 @@ struct Topology {
   static Topology build(const Triangles& F, std::int32_t num_vertices);
 
   std::int64_t num_interior_edges() const { return interior_edges.rows(); }
+  // Mean length of the unique undirected edges under positions V: mean_edge_length(V, F) bit
+  // for bit (same edges, same order), without its sort (a large share of ParamMode::Auto's
+  // measuring otherwise).
+  double mean_edge_length(const Vertices& V) const;
   // True if the vertex lies on a boundary or non-manifold edge.
   std::vector<bool> boundary_vertex_mask() const;
 };

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "support/shapes.h"
 
@@ -62,6 +63,22 @@ TEST(Topology, NonManifoldAndDegenerateEdgesGetNoShapingTerm) {
   ASSERT_EQ(t.nonmanifold_edges.rows(), 2);
   EXPECT_EQ(t.nonmanifold_edges.row(0), (Eigen::RowVector2i(0, 1)));
   EXPECT_EQ(t.nonmanifold_edges.row(1), (Eigen::RowVector2i(2, 3)));
+}
+
+TEST(Topology, MeanEdgeLengthEqualsTheFaceListVersionExactly) {
+  // Boundary, a non-manifold edge and a degenerate face (as above), and an irregular sphere.
+  Triangles F(4, 3);
+  F << 0, 1, 2, 1, 0, 3, 0, 1, 4, 2, 2, 3;
+  Vertices V(5, 3);
+  V << 0, 0, 0, 1, 0, 0, 0.3, 0.9, 0.1, 0.5, -0.7, 0.2, 0.4, 0.1, 1.3;
+  EXPECT_EQ(Topology::build(F, 5).mean_edge_length(V), mean_edge_length(V, F));
+  const TriMesh m = test::sphere(3);
+  Vertices P = m.V;
+  for (Eigen::Index i = 0; i < P.rows(); ++i) P.row(i) *= 1.0 + 0.1 * std::sin(7.0 * static_cast<double>(i));
+  const Topology t = Topology::build(m.F, static_cast<std::int32_t>(P.rows()));
+  EXPECT_EQ(t.mean_edge_length(P), mean_edge_length(P, m.F));
+  EXPECT_GT(t.mean_edge_length(P), 0);
+  EXPECT_EQ(Topology::build(Triangles(0, 3), 0).mean_edge_length(Vertices(0, 3)), 0);
 }
 
 }  // namespace
