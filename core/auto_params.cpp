@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <limits>
+#include <stdexcept>
 #include <chrono>
 #include <cmath>
 #include <vector>
@@ -143,10 +144,17 @@ int choose_prototype(const InputMeasures& measures, double irregular_area_ratio)
   return best;
 }
 
+int rule_prototype_count() { return kRulePrototypes; }
+
 DenoiseParams choose_parameters(const InputMeasures& measures, const DenoiseParams& requested) {
+  return prototype_parameters(choose_prototype(measures, requested.irregular_area_ratio), measures, requested);
+}
+
+DenoiseParams prototype_parameters(int index, const InputMeasures& measures, const DenoiseParams& requested) {
+  if (index < 0 || index >= kRulePrototypes) throw std::out_of_range("prototype_parameters: no such prototype");
   DenoiseParams p = requested;
   p.mode = ParamMode::Manual;
-  const double* proto = kPrototype[choose_prototype(measures, requested.irregular_area_ratio)];
+  const double* proto = kPrototype[index];
   if (!requested.is_pinned(AutoField::Alpha)) p.alpha = proto[0];
   if (!requested.is_pinned(AutoField::SigmaTheta)) p.sigma_theta = proto[1];
   if (!requested.is_pinned(AutoField::NAniso)) p.n_aniso = static_cast<int>(proto[2]);

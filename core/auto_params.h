@@ -46,5 +46,10 @@ inline constexpr int kAutoFeatures = 7;
 using AutoFeatures = Eigen::Matrix<double, kAutoFeatures, 1>;
 AutoFeatures auto_features(const InputMeasures& measures, double irregular_area_ratio = DenoiseParams{}.irregular_area_ratio);
 int choose_prototype(const InputMeasures& measures, double irregular_area_ratio);  // index into the rule's table
+int rule_prototype_count();
+// `requested` with prototype p (0 <= p < rule_prototype_count()) filled in as choose_parameters
+// does; choose_parameters is this with p = choose_prototype. tune_bench uses it to show what
+// the best choice among the prototypes would give (the ceiling of the rule's form).
+DenoiseParams prototype_parameters(int p, const InputMeasures& measures, const DenoiseParams& requested);
 
 }  // namespace mdn

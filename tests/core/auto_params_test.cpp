@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <stdexcept>
+
 #include "core/errors.h"
 #include "core/metrics.h"
 #include "core/noise.h"
@@ -69,6 +71,28 @@ TEST(ChooseParameters, PinnedFieldsKeepTheirValuesAndTheResultIsValid) {
   EXPECT_EQ(pinned.region_mode, RegionMode::Auto);
   EXPECT_EQ(pinned.sigma_gamma, free.sigma_gamma);  // the others are the rule's
   EXPECT_EQ(pinned.n_vertex, free.n_vertex);
+}
+
+TEST(ChooseParameters, IsTheChosenPrototypeAndThePaperRowIsOne) {
+  const InputMeasures m = measure(noisy_copy(test::cube(12), 0.2));
+  DenoiseParams request;
+  request.mode = ParamMode::Auto;
+  const DenoiseParams chosen = choose_parameters(m, request);
+  const DenoiseParams same = prototype_parameters(choose_prototype(m, request.irregular_area_ratio), m, request);
+  EXPECT_EQ(chosen.alpha, same.alpha);
+  EXPECT_EQ(chosen.n_normal, same.n_normal);
+  EXPECT_EQ(chosen.n_vertex, same.n_vertex);
+  EXPECT_EQ(chosen.region_mode, same.region_mode);
+  // The fit puts the paper's Fandisk row (Table 1, DenoiseParams' defaults) first.
+  const DenoiseParams paper, first = prototype_parameters(0, m, request);
+  EXPECT_EQ(first.alpha, paper.alpha);
+  EXPECT_EQ(first.sigma_theta, paper.sigma_theta);
+  EXPECT_EQ(first.n_aniso, paper.n_aniso);
+  EXPECT_EQ(first.sigma_gamma, paper.sigma_gamma);
+  EXPECT_EQ(first.n_normal, paper.n_normal);
+  EXPECT_EQ(first.n_vertex, paper.n_vertex);
+  EXPECT_THROW(prototype_parameters(rule_prototype_count(), m, request), std::out_of_range);
+  EXPECT_THROW(prototype_parameters(-1, m, request), std::out_of_range);
 }
 
 TEST(ChooseParameters, IrregularSamplingTurnsTheRegionPrefilterOn) {
