@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <unordered_map>
+#include <vector>
 
 namespace mdn::io::detail {
 
@@ -18,33 +18,52 @@ Weld weld_positions(const Vertices& P, double relative_tolerance) {
   const double diagonal = (P.colwise().maxCoeff() - P.colwise().minCoeff()).norm();
   const double magnitude = P.cwiseAbs().maxCoeff();
   const double tol = relative_tolerance * std::max(diagonal, magnitude);
-  // Grid hashing with cells of size `tol`: a point's partners lie in the 27 cells around it.
-  const double cell = tol > 0 && std::isfinite(tol) ? tol : 1.0;
-  auto key_of = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
-    return (static_cast<std::uint64_t>(x) * 73856093ULL) ^ (static_cast<std::uint64_t>(y) * 19349663ULL) ^
-           (static_cast<std::uint64_t>(z) * 83492791ULL);
+  // Grid hashing with cells a little wider than 2 tol: along each axis a point's partners
+  // (within tol) lie in its own cell or in the neighbour on the side of the cell's nearer
+  // half, so 8 cells hold them all. The table is open-addressed on the exact cell; each cell
+  // chains its representatives (head, next).
+  const double cell = tol > 0 && std::isfinite(tol) ? 2 * tol * (1 + 1e-6) : 1.0;
+  struct Slot {
+    std::int64_t x, y, z;
+    std::int32_t head = -1;  // -1: empty slot
   };
-  std::unordered_map<std::uint64_t, std::vector<std::int32_t>> grid;
-  grid.reserve(static_cast<std::size_t>(n));
+  std::size_t capacity = 16;
+  while (capacity < 2 * static_cast<std::size_t>(n)) capacity *= 2;
+  std::vector<Slot> table(capacity);
+  const auto slot_of = [&](std::int64_t x, std::int64_t y, std::int64_t z) -> Slot& {
+    std::uint64_t h = (static_cast<std::uint64_t>(x) * 73856093ULL) ^ (static_cast<std::uint64_t>(y) * 19349663ULL) ^
+                      (static_cast<std::uint64_t>(z) * 83492791ULL);
+    h ^= h >> 29;
+    for (std::size_t k = static_cast<std::size_t>(h * 0x9E3779B97F4A7C15ULL) & (capacity - 1);; k = (k + 1) & (capacity - 1)) {
+      Slot& s = table[k];
+      if (s.head < 0 || (s.x == x && s.y == y && s.z == z)) return s;
+    }
+  };
   std::vector<Eigen::Index> representatives;
+  std::vector<std::int32_t> next;  // per representative: the previous one in its cell, or -1
   representatives.reserve(static_cast<std::size_t>(n));
+  next.reserve(static_cast<std::size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) {
-    const std::int64_t cx = static_cast<std::int64_t>(std::floor(P(i, 0) / cell));
-    const std::int64_t cy = static_cast<std::int64_t>(std::floor(P(i, 1) / cell));
-    const std::int64_t cz = static_cast<std::int64_t>(std::floor(P(i, 2) / cell));
+    std::int64_t c[3], side[3];
+    for (int a = 0; a < 3; ++a) {
+      const double u = P(i, a) / cell, f = std::isfinite(u) ? std::floor(u) : 0;  // |u| <= 5e5 when finite
+      c[a] = static_cast<std::int64_t>(f);
+      side[a] = u - f < 0.5 ? -1 : 1;
+    }
     std::int32_t found = std::numeric_limits<std::int32_t>::max();
-    for (std::int64_t dx = -1; dx <= 1; ++dx)
-      for (std::int64_t dy = -1; dy <= 1; ++dy)
-        for (std::int64_t dz = -1; dz <= 1; ++dz) {
-          const auto it = grid.find(key_of(cx + dx, cy + dy, cz + dz));
-          if (it == grid.end()) continue;
-          for (const std::int32_t w : it->second)
-            if (w < found && (P.row(representatives[static_cast<std::size_t>(w)]) - P.row(i)).norm() <= tol) found = w;
-        }
+    for (int corner = 0; corner < 8; ++corner) {
+      const Slot& s = slot_of(c[0] + ((corner & 1) ? side[0] : 0), c[1] + ((corner & 2) ? side[1] : 0),
+                              c[2] + ((corner & 4) ? side[2] : 0));
+      for (std::int32_t w = s.head; w >= 0; w = next[static_cast<std::size_t>(w)])
+        if (w < found && (P.row(representatives[static_cast<std::size_t>(w)]) - P.row(i)).norm() <= tol) found = w;
+    }
     if (found == std::numeric_limits<std::int32_t>::max()) {
       found = static_cast<std::int32_t>(representatives.size());
       representatives.push_back(i);
-      grid[key_of(cx, cy, cz)].push_back(found);
+      Slot& s = slot_of(c[0], c[1], c[2]);
+      s.x = c[0], s.y = c[1], s.z = c[2];
+      next.push_back(s.head);
+      s.head = found;
     }
     weld.map[static_cast<std::size_t>(i)] = found;
   }
