@@ -10,6 +10,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <cstdlib>
 #include <deque>
 #include <map>
 #include <mutex>
@@ -618,6 +619,8 @@ class RedisJobStore final : public JobStore {
         problem_text(make_problem(409, "cancelled", "Job cancelled", "cancelled by DELETE before it started"));
     lost_problem_ = problem_text(
         make_problem(500, "input-lost", "Job input lost", "the job's input is no longer in the job store"));
+    if (const char* v = std::getenv("MDN_TEST_HANDOFF_PICKUP_DELAY_MS"))
+      handoff_pickup_delay_ = std::chrono::milliseconds(std::atoi(v));
     const int slots = c.effective_workers();
     // One attempt now, so that a server whose Redis answers is ready as soon as it listens
     // (at most the 1 s connect timeout when it does not; the monitor keeps trying).
@@ -1081,7 +1084,8 @@ class RedisJobStore final : public JobStore {
    public:
     explicit SlotReservation(RedisJobStore& s) : s_(s) {
       std::lock_guard lock(s_.handoff_mutex_);
-      if (!s_.draining_ && s_.idle_slots_ > s_.reserved_) {
+      // A slot handed a job it has not picked up yet still counts in idle_slots_: not free.
+      if (!s_.draining_ && s_.idle_slots_ > s_.reserved_ + static_cast<int>(s_.handoffs_.size())) {
         ++s_.reserved_;
         held_ = true;
       }
@@ -1121,6 +1125,11 @@ class RedisJobStore final : public JobStore {
     }
     if (wait)
       handoff_cv_.wait_for(lock, 2s, [&] { return !handoffs_.empty() || reserved_ == 0 || stopping_; });
+    if (handoff_pickup_delay_.count() > 0 && !handoffs_.empty()) {  // test hook, see its member
+      lock.unlock();
+      std::this_thread::sleep_for(handoff_pickup_delay_);
+      lock.lock();
+    }
     std::optional<Taken> t = pop_handoff_locked();
     if (t) {
       --idle_slots_;
@@ -1576,6 +1585,10 @@ class RedisJobStore final : public JobStore {
   std::mutex handoff_mutex_;
   std::condition_variable handoff_cv_;
   std::deque<Taken> handoffs_;
+  // Test hook (MDN_TEST_HANDOFF_PICKUP_DELAY_MS; tests/integration/redis_queue_test.cpp): a slot
+  // handed a job waits this long before picking it up, which widens the window in which the
+  // slot still counts as idle; never set in production.
+  std::chrono::milliseconds handoff_pickup_delay_{0};
   int idle_slots_ = 0;  // slots waiting for work
   int reserved_ = 0;    // of those, promised to a submit() in flight
 
