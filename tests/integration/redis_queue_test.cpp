@@ -386,8 +386,9 @@ TEST_F(RedisQueue, CancelAcrossReplicas) {
 // A replica whose worker waits for work starts a job it accepts at once (one Redis step, the
 // input not read back); a busy one leaves it in the shared queue, where it waits its turn.
 // The replica's slot picks up a job handed to it 300 ms late (a test hook): a second job
-// posted meanwhile must still find the only worker taken (once, under CI load, it was started
-// at once as well, and two jobs ran on one worker).
+// posted meanwhile must still find the only worker taken. Once, under CI load, it was started
+// at once as well: reported running and tied to this replica while it waited for the worker,
+// where another replica's idle worker could have taken it from the shared queue.
 TEST_F(RedisQueue, AnIdleReplicaStartsAJobAtOnceABusyOneQueuesIt) {
   RedisServer redis;
   auto a = replica(redis, {}, {"MDN_TEST_HANDOFF_PICKUP_DELAY_MS=300"});
