@@ -140,7 +140,9 @@ TEST(Proto, OpenApiDocumentsExactlyTheServersRoutesAndStatuses) {
 
   Observed seen;
   const std::string mesh = noisy_sphere_off(1);
-  const std::string heavy = noisy_sphere_off(5, 9);
+  // 82k faces with kHeavyParams: about 11 s on two threads here, so it is still running when the
+  // 3 s time limit below ends it even on a much faster machine (20k faces took 2.7 s: too close).
+  const std::string heavy = noisy_sphere_off(6, 9);
   const httplib::Headers heavy_params = {{"X-Denoise-Params", kHeavyParams}};
   const httplib::Headers two_ranges = {{"Range", "bytes=0-1,4-5"}};
   const std::string gltf_external =
@@ -208,13 +210,17 @@ TEST(Proto, OpenApiDocumentsExactlyTheServersRoutesAndStatuses) {
     }
   }
   {
-    ServerProcess server({"--workers", "1", "--queue-capacity", "1", "--job-time-limit", "2"});
+    ServerProcess server({"--workers", "1", "--queue-capacity", "1", "--job-time-limit", "3"});
     ASSERT_TRUE(server.started()) << server.log();
     auto c = server.client();
     auto running = c->Post("/v1/jobs", heavy_params, heavy, "model/x-off");
     ASSERT_TRUE(running && running->status == 202);
-    for (int i = 0; i < 200 && parse_json(c->Get(running->get_header_value("Location"))->body).value("state", "") != "running"; ++i)
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    std::string state;
+    for (int i = 0; i < 1000 && state != "running"; ++i) {
+      state = parse_json(c->Get(running->get_header_value("Location"))->body).value("state", "");
+      if (state != "running") std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    ASSERT_EQ(state, "running");
     auto queued = c->Post("/v1/jobs", heavy_params, heavy, "model/x-off");
     ASSERT_TRUE(queued && queued->status == 202);
     observe(seen, "POST", "/v1/jobs", c->Post("/v1/jobs", heavy_params, heavy, "model/x-off"));        // 503
