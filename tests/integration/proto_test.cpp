@@ -223,8 +223,8 @@ TEST(Proto, OpenApiDocumentsExactlyTheServersRoutesAndStatuses) {
     ASSERT_EQ(state, "running");
     auto queued = c->Post("/v1/jobs", heavy_params, heavy, "model/x-off");
     ASSERT_TRUE(queued && queued->status == 202);
-    observe(seen, "POST", "/v1/jobs", c->Post("/v1/jobs", heavy_params, heavy, "model/x-off"));        // 503
-    observe(seen, "POST", "/v1/denoise", c->Post("/v1/denoise", heavy_params, heavy, "model/x-off"));  // 503
+    observe(seen, "POST", "/v1/jobs", c->Post("/v1/jobs", mesh, "model/x-off"));        // 503: the queue is full
+    observe(seen, "POST", "/v1/denoise", c->Post("/v1/denoise", mesh, "model/x-off"));  // 503
     observe(seen, "GET", "/readyz", c->Get("/readyz"));                                                 // 503
     observe(seen, "GET", "/v1/jobs/{id}/result", c->Get(queued->get_header_value("Location") + "/result"));  // 409
     observe(seen, "DELETE", "/v1/jobs/{id}", c->Delete(queued->get_header_value("Location")));   // 200
