@@ -15,6 +15,7 @@
 #include <random>
 #include <regex>
 #include <thread>
+#include <utility>
 
 #include "core/params.h"
 #include "server/http/connection_probe.h"
@@ -60,10 +61,15 @@ void replace_header(httplib::Response& res, const std::string& key, const std::s
   res.set_header(key, value);
 }
 
+// Set when this thread's current request leaves its body unread. cpp-httplib runs a request from
+// pre-routing to the logger on one thread, so access_log reads it for the same request.
+thread_local bool t_body_left_unread = false;
+
 // Answers this request, then closes the connection (access_log does it once the response is
-// written): used when the request body stays unread.
+// written, with a lingering close): used when the request body stays unread.
 void close_after_response(const httplib::Request&, httplib::Response& res) {
   replace_header(res, "Connection", "close");
+  t_body_left_unread = true;
 }
 
 // A header value must not carry CR/LF (response splitting) nor other control characters.
@@ -355,6 +361,7 @@ struct HttpService::Impl {
   }
 
   httplib::Server::HandlerResponse pre_routing(const httplib::Request& req, httplib::Response& res) {
+    t_body_left_unread = false;
     {
       std::lock_guard lock(start_mutex);
       request_start[std::this_thread::get_id()] = Clock::now();
@@ -454,8 +461,11 @@ struct HttpService::Impl {
   }
 
   void access_log(const httplib::Request& req, const httplib::Response& res) {
-    // Runs after the response was written: close connections whose body was left unread.
-    if (res.get_header_value("Connection") == "close" && req.get_header_value("Connection") != "close")
+    // Runs after the response was written: close connections whose body was left unread. Also
+    // when the client itself asked for "Connection: close": it may still be sending that body, and
+    // cpp-httplib's plain close would then reset the connection under it (its next write fails
+    // and it never reads the answer).
+    if (std::exchange(t_body_left_unread, false))
       if (auto probe = ConnectionProbe::find(req.local_port, req.remote_addr, req.remote_port))
         probe->linger_close(1000);
     const std::string route = route_name(req);
