@@ -114,12 +114,13 @@ TEST_F(HttpBadRequests, EachIsAnsweredWithTheRightProblemAndTheServerStaysHealth
     SCOPED_TRACE(row.name);
     if (row.send) {
       auto r = row.send(*c);
-      const json problem = expect_problem(r, row.status);
+      json problem = expect_problem(r, row.status);
+      if (!problem.is_object()) problem = json::object();  // reported; the health check still runs
       if (!row.type.empty()) {
-        EXPECT_EQ(problem.value("type", ""), "urn:meshdenoise:problem:" + row.type) << r->body;
+        EXPECT_EQ(problem.value("type", ""), "urn:meshdenoise:problem:" + row.type) << (r ? r->body : "");
       }
       if (!row.field.empty()) {
-        EXPECT_EQ(problem.value("field", ""), row.field) << r->body;
+        EXPECT_EQ(problem.value("field", ""), row.field) << (r ? r->body : "");
       }
       if (row.field == "alpha") {
         EXPECT_EQ(problem.value("minimum", -1.0), 0.0);
