@@ -1,0 +1,195 @@
+// Hostile inputs through the whole job path (decode, denoise, encode), as the server and the CLI
+// run it: valid files of every format, mutated thousands of times in deterministic, seeded ways
+// (bit flips, boundary integers over length and count fields, truncations, cut and repeated
+// slices, and in text formats numbers swapped for nan, inf, -1 or huge values). Every mutant must
+// either give a result that decodes again with finite coordinates, or throw one of the errors
+// the server answers with a 4xx. Anything else (another exception, a crash, a sanitizer report
+// in a sanitizer build) is a bug; the failure names the seed file and the mutant's number.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/errors.h"
+#include "core/io/document.h"
+#include "io/gltf_fixtures.h"
+#include "server/job_runner.h"
+#include "server/params_json.h"
+#include "support/noisy.h"
+#include "support/shapes.h"
+
+namespace mdn {
+namespace {
+
+struct Seed {
+  std::string name;
+  io::Format format;
+  std::string bytes;
+};
+
+std::string off_text(const TriMesh& m) {
+  std::string s = "OFF\n" + std::to_string(m.V.rows()) + " " + std::to_string(m.F.rows()) + " 0\n";
+  char buf[96];
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i) {
+    std::snprintf(buf, sizeof buf, "%.6f %.6f %.6f\n", m.V(i, 0), m.V(i, 1), m.V(i, 2));
+    s += buf;
+  }
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+    s += "3 " + std::to_string(m.F(f, 0)) + " " + std::to_string(m.F(f, 1)) + " " + std::to_string(m.F(f, 2)) + "\n";
+  return s;
+}
+
+// Valid files: a small noisy sphere in every format the service reads (converted by the io layer
+// itself), and the glTF fixture scene (two primitives, textures, instancing, quantized and sparse
+// variants).
+std::vector<Seed> seeds() {
+  const std::string off = off_text(test::with_noise(test::sphere(1), 0.2));  // 80 faces
+  std::vector<Seed> out = {{"sphere.off", io::Format::Off, off}};
+  const auto convert = [&](const char* name, io::Format format, bool draco) {
+    io::EncodeOptions options;
+    options.format = format;
+    options.draco = draco;
+    out.push_back({name, format, io::decode(off, io::Format::Off)->encode(options)});
+  };
+  convert("sphere.obj", io::Format::Obj, false);
+  convert("sphere.ply", io::Format::Ply, false);
+  convert("sphere.drc", io::Format::Drc, true);
+  convert("sphere.glb", io::Format::Glb, false);
+  convert("sphere-draco.glb", io::Format::Glb, true);
+  convert("sphere.gltf", io::Format::Gltf, false);
+  const test_io::SphereFixture fixture = test_io::make_sphere();
+  out.push_back({"scene.glb", io::Format::Glb, test_io::sphere_scene_glb(fixture)});
+  out.push_back({"scene-quantized.glb", io::Format::Glb, test_io::sphere_scene_glb(fixture, test_io::Variant::Quantized)});
+  out.push_back({"scene-sparse.glb", io::Format::Glb, test_io::sphere_scene_glb(fixture, test_io::Variant::Sparse)});
+  return out;
+}
+
+bool is_text(io::Format f) {
+  return f == io::Format::Off || f == io::Format::Obj || f == io::Format::Gltf;
+}
+
+// One deterministic mutant of `bytes`.
+std::string mutate(const std::string& bytes, bool text, std::mt19937_64& rng) {
+  std::string s = bytes;
+  const auto pos = [&](std::size_t n) { return n == 0 ? std::size_t{0} : std::size_t(rng() % n); };
+  static const std::uint32_t kWords[] = {0u,          1u,          2u,          3u,          0x7fu,       0x80u,
+                                         0xffu,       0x100u,      0x7fffu,     0x8000u,     0xffffu,     0x10000u,
+                                         0x7fffffffu, 0x80000000u, 0xfffffffeu, 0xffffffffu, 0x3f800000u, 0x7fc00000u};
+  static const char* kTokens[] = {"-1", "0", "nan", "inf", "-inf", "1e308", "4294967296", "99999999999", "-0", "1.5", "2147483648", ""};
+  const int steps = 1 + int(rng() % 3);
+  for (int step = 0; step < steps && !s.empty(); ++step) {
+    switch (rng() % (text ? 6 : 5)) {
+      case 0:  // flip bits
+        for (int k = 0, n = 1 + int(rng() % 4); k < n; ++k) s[pos(s.size())] ^= char(1u << (rng() % 8));
+        break;
+      case 1: {  // a boundary integer over 4 bytes (GLB lengths, Draco and accessor counts)
+        const std::uint32_t w = kWords[rng() % std::size(kWords)];
+        const std::size_t at = pos(s.size() > 4 ? s.size() - 4 : 1);
+        for (int k = 0; k < 4 && at + std::size_t(k) < s.size(); ++k) s[at + std::size_t(k)] = char((w >> (8 * k)) & 0xff);
+        break;
+      }
+      case 2:  // truncate
+        s.resize(pos(s.size()));
+        break;
+      case 3: {  // cut a slice
+        const std::size_t at = pos(s.size());
+        s.erase(at, 1 + rng() % 64);
+        break;
+      }
+      case 4: {  // repeat a slice
+        const std::size_t at = pos(s.size());
+        s.insert(at, s.substr(at, 1 + rng() % 64));
+        break;
+      }
+      default: {  // text: a number becomes a hostile token
+        std::vector<std::size_t> starts;
+        for (std::size_t i = 0; i < s.size(); ++i)
+          if ((std::isdigit(static_cast<unsigned char>(s[i])) || s[i] == '-') &&
+              (i == 0 || !std::isalnum(static_cast<unsigned char>(s[i - 1]))))
+            starts.push_back(i);
+        if (starts.empty()) break;
+        const std::size_t at = starts[pos(starts.size())];
+        std::size_t end = at + 1;
+        while (end < s.size() && (std::isalnum(static_cast<unsigned char>(s[end])) || s[end] == '.' || s[end] == '-' || s[end] == '+'))
+          ++end;
+        s.replace(at, end - at, kTokens[rng() % std::size(kTokens)]);
+        break;
+      }
+    }
+  }
+  return s;
+}
+
+// The outcome of one mutant.
+struct Outcome {
+  bool result = false;  // a result came back (else a client error was thrown)
+  std::string problem;  // "" when acceptable, else what went wrong
+};
+
+Outcome run_one(const std::string& bytes, io::Format format, const service::JobParams& params) {
+  io::Limits limits;
+  limits.max_faces = 200'000;
+  limits.max_vertices = 200'000;
+  limits.max_decoded_bytes = std::int64_t{256} << 20;
+  service::JobInput input{bytes, format, params, 1};
+  try {
+    const service::JobOutput out = service::run_job(input, limits);
+    // A result: it must read back, every coordinate finite.
+    const auto doc = io::decode(out.bytes, out.format, limits);
+    for (const TriMesh& m : doc->surfaces())
+      if (!m.V.allFinite()) return {true, "the result has a non-finite coordinate"};
+    return {true, ""};
+  } catch (const io::FormatError&) {  // 400
+  } catch (const InvalidMeshError&) {  // 400
+  } catch (const io::UnsupportedError&) {  // 422
+  } catch (const io::LimitError&) {  // 413
+  } catch (const SolverError&) {  // 422
+  } catch (const std::exception& e) {
+    return {false, std::string("unexpected exception (the server would answer 500): ") + e.what()};
+  } catch (...) {
+    return {false, "unexpected non-standard exception"};
+  }
+  return {false, ""};
+}
+
+TEST(HostileInput, MutatedFilesOfEveryFormatGiveAResultOrAClientError) {
+  // Auto mode measures the input; cheap iteration counts keep each run to about a millisecond.
+  const service::JobParams params = service::job_params_from_json({{"n_normal", 3}, {"n_vertex", 3}, {"n_aniso", 1}});
+  // MDN_HOSTILE_MUTANTS=N runs N per seed file instead (deeper local runs, sanitizer builds).
+  const char* env = std::getenv("MDN_HOSTILE_MUTANTS");
+  const int kMutantsPerSeed = env ? std::max(1, std::atoi(env)) : 400;
+  double slowest_ms = 0;
+  std::string slowest;
+  for (const Seed& seed : seeds()) {
+    SCOPED_TRACE(seed.name);
+    const Outcome original = run_one(seed.bytes, seed.format, params);
+    ASSERT_TRUE(original.result && original.problem.empty()) << original.problem;
+    std::mt19937_64 rng(std::hash<std::string>{}(seed.name));
+    int results = 0, refused = 0;
+    for (int i = 0; i < kMutantsPerSeed; ++i) {
+      const std::string bytes = mutate(seed.bytes, is_text(seed.format), rng);
+      const auto t0 = std::chrono::steady_clock::now();
+      const Outcome o = run_one(bytes, seed.format, params);
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      if (ms > slowest_ms) slowest_ms = ms, slowest = seed.name + " #" + std::to_string(i);
+      EXPECT_EQ(o.problem, "") << seed.name << " mutant #" << i << " (" << bytes.size() << " bytes)";
+      ++(o.result ? results : refused);
+    }
+    // Both kinds of outcome occur: the mutants reach past the first check and also break things.
+    EXPECT_GT(results, 0);
+    EXPECT_GT(refused, 0);
+    std::printf("%-20s %3d results, %3d refused\n", seed.name.c_str(), results, refused);
+  }
+  std::printf("slowest mutant: %s, %.1f ms\n", slowest.c_str(), slowest_ms);
+}
+
+}  // namespace
+}  // namespace mdn
