@@ -811,6 +811,18 @@ std::unique_ptr<MeshDocument> decode_gltf(std::string_view bytes, Format format,
     doc->model_ = load_tinygltf(container, true);
   }
   const tinygltf::Model& model = doc->model_;
+  // tinygltf 2.7 skips a primitive it cannot parse (no "attributes", say) instead of failing, so
+  // its primitive p would no longer be the JSON's primitive p, which the output is written to.
+  const Json meshes = doc->json_.value("meshes", Json::array());
+  for (std::size_t m = 0; m < model.meshes.size(); ++m) {
+    const std::size_t listed = m < meshes.size() && meshes[m].is_object() && meshes[m].contains("primitives") &&
+                                       meshes[m]["primitives"].is_array()
+                                   ? meshes[m]["primitives"].size()
+                                   : 0;
+    if (m >= meshes.size() || listed != model.meshes[m].primitives.size())
+      throw FormatError("glTF: mesh " + std::to_string(m) +
+                        " has an invalid primitive (each needs an \"attributes\" object of accessor indices)");
+  }
 
   Reader reader(model, limits);
   std::int64_t total_points = 0, total_faces = 0;

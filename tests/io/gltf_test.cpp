@@ -233,6 +233,18 @@ TEST(Gltf, MalformedAndUnsafeInputsGetTypedErrors) {
   Json bad_index = j;
   bad_index["meshes"][0]["primitives"][0]["indices"] = 99;
   EXPECT_THROW(decode(with(bad_index), Format::Glb), FormatError);
+  // A primitive without "attributes": tinygltf drops it and numbers the next one 0; accepting
+  // that wrote the first primitive's output into the wrong JSON primitive (found by
+  // hostile_input_test under AddressSanitizer).
+  Json no_attributes = j;
+  no_attributes["meshes"][0]["primitives"][0]["at|ributes"] = no_attributes["meshes"][0]["primitives"][0]["attributes"];
+  no_attributes["meshes"][0]["primitives"][0].erase("attributes");
+  try {
+    decode(with(no_attributes), Format::Glb);
+    FAIL() << "a primitive without attributes was accepted";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("mesh 0 has an invalid primitive"), std::string::npos) << e.what();
+  }
   Limits small;
   small.max_faces = 10;
   EXPECT_THROW(decode(good, Format::Glb, small), LimitError);
