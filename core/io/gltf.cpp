@@ -705,9 +705,7 @@ std::string GltfDocument::encode(const EncodeOptions& options) const {
     Json view = out.json["bufferViews"][i];
     std::string_view bytes;
     if (static_cast<std::int64_t>(i) < out.old_views) {
-      const auto& mv = model_.bufferViews[i];
-      const auto& data = model_.buffers[static_cast<std::size_t>(mv.buffer)].data;
-      bytes = std::string_view(reinterpret_cast<const char*>(data.data()) + mv.byteOffset, mv.byteLength);
+      bytes = Reader(model_, {}).view_bytes(static_cast<int>(i), "glTF");  // checked at decode too
     } else {
       bytes = out.new_views[i - static_cast<std::size_t>(out.old_views)];
     }
@@ -825,6 +823,12 @@ std::unique_ptr<MeshDocument> decode_gltf(std::string_view bytes, Format format,
   }
 
   Reader reader(model, limits);
+  // Every buffer view is copied into the output, used by a surface or not (images, animations):
+  // each must lie inside its buffer, and tinygltf's list must be the JSON's.
+  if (doc->json_.value("bufferViews", Json::array()).size() != model.bufferViews.size() ||
+      doc->json_.value("accessors", Json::array()).size() != model.accessors.size())
+    throw FormatError("glTF: a buffer view or an accessor is invalid");
+  for (std::size_t i = 0; i < model.bufferViews.size(); ++i) reader.view_bytes(static_cast<int>(i), "glTF");
   std::int64_t total_points = 0, total_faces = 0;
   bool dropped_tangent = false, kept_targets = false;
   for (std::size_t m = 0; m < model.meshes.size(); ++m) {

@@ -245,6 +245,18 @@ TEST(Gltf, MalformedAndUnsafeInputsGetTypedErrors) {
   } catch (const FormatError& e) {
     EXPECT_NE(std::string(e.what()).find("mesh 0 has an invalid primitive"), std::string::npos) << e.what();
   }
+  // A buffer view no surface reads (the PNG's) reaching past the end of the buffer: the output
+  // copies every view, so this read past the end of the input (found under AddressSanitizer).
+  Json long_view = j;
+  const int image_view = long_view["images"][0]["bufferView"].get<int>();
+  long_view["bufferViews"][image_view]["byteLength"] = 1 << 20;
+  try {
+    decode(with(long_view), Format::Glb);
+    FAIL() << "a buffer view past the end of its buffer was accepted";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("buffer view " + std::to_string(image_view) + " reaches past the end"),
+              std::string::npos) << e.what();
+  }
   Limits small;
   small.max_faces = 10;
   EXPECT_THROW(decode(good, Format::Glb, small), LimitError);
