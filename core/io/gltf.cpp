@@ -812,12 +812,10 @@ std::unique_ptr<MeshDocument> decode_gltf(std::string_view bytes, Format format,
   // tinygltf 2.7 skips a primitive it cannot parse (no "attributes", say) instead of failing, so
   // its primitive p would no longer be the JSON's primitive p, which the output is written to.
   const Json meshes = doc->json_.value("meshes", Json::array());
+  if (!meshes.is_array() || meshes.size() != model.meshes.size()) throw FormatError("glTF: a mesh is invalid");
   for (std::size_t m = 0; m < model.meshes.size(); ++m) {
-    const std::size_t listed = m < meshes.size() && meshes[m].is_object() && meshes[m].contains("primitives") &&
-                                       meshes[m]["primitives"].is_array()
-                                   ? meshes[m]["primitives"].size()
-                                   : 0;
-    if (m >= meshes.size() || listed != model.meshes[m].primitives.size())
+    const Json& listed = meshes[m].is_object() ? meshes[m].value("primitives", Json::array()) : Json::array();
+    if (!listed.is_array() || listed.size() != model.meshes[m].primitives.size())
       throw FormatError("glTF: mesh " + std::to_string(m) +
                         " has an invalid primitive (each needs an \"attributes\" object of accessor indices)");
   }

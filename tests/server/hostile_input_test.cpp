@@ -35,23 +35,11 @@ struct Seed {
   std::string bytes;
 };
 
-std::string off_text(const TriMesh& m) {
-  std::string s = "OFF\n" + std::to_string(m.V.rows()) + " " + std::to_string(m.F.rows()) + " 0\n";
-  char buf[96];
-  for (Eigen::Index i = 0; i < m.V.rows(); ++i) {
-    std::snprintf(buf, sizeof buf, "%.6f %.6f %.6f\n", m.V(i, 0), m.V(i, 1), m.V(i, 2));
-    s += buf;
-  }
-  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
-    s += "3 " + std::to_string(m.F(f, 0)) + " " + std::to_string(m.F(f, 1)) + " " + std::to_string(m.F(f, 2)) + "\n";
-  return s;
-}
-
 // Valid files: a small noisy sphere in every format the service reads (converted by the io layer
 // itself), and the glTF fixture scene (two primitives, textures, instancing, quantized and sparse
 // variants).
 std::vector<Seed> seeds() {
-  const std::string off = off_text(test::with_noise(test::sphere(1), 0.2));  // 80 faces
+  const std::string off = test::off_text(test::with_noise(test::sphere(1), 0.2));  // 80 faces
   std::vector<Seed> out = {{"sphere.off", io::Format::Off, off}};
   const auto convert = [&](const char* name, io::Format format, bool draco) {
     io::EncodeOptions options;
