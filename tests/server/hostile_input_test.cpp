@@ -179,5 +179,34 @@ TEST(HostileInput, MutatedFilesOfEveryFormatGiveAResultOrAClientError) {
   std::printf("slowest mutant: %s, %.1f ms\n", slowest.c_str(), slowest_ms);
 }
 
+// The parameters text (?params=, X-Denoise-Params, the form field, --params) mutated the same
+// way: each mutant parses to parameters that pass validate(), or throws InvalidParamsError naming
+// a field (a 400 problem with "field"), nothing else.
+TEST(HostileInput, MutatedParametersParseOrNameTheBadField) {
+  const std::string valid =
+      R"({"mode":"manual","alpha":0.2,"sigma_theta":40,"n_aniso":6,"sigma_gamma":30,"n_normal":50,"n_vertex":40,)"
+      R"("region_mode":"auto","output":{"format":"glb","draco":true,"position_bits":14,"normal_bits":10}})";
+  ASSERT_NO_THROW(service::job_params_from_text(valid));
+  std::mt19937_64 rng(20261123);
+  int parsed = 0, refused = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const std::string text = mutate(valid, /*text=*/true, rng);
+    try {
+      service::validate(service::job_params_from_text(text));
+      ++parsed;
+    } catch (const InvalidParamsError& e) {
+      // The field is named; "" only when the text has an empty key (an unknown field called "").
+      EXPECT_TRUE(!e.field().empty() || text.find("\"\":") != std::string::npos) << "mutant #" << i << ": " << text;
+      EXPECT_NE(std::string(e.what()), "") << "mutant #" << i;
+      ++refused;
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << "mutant #" << i << " threw " << e.what() << " (the server would answer 500): " << text;
+    }
+  }
+  EXPECT_GT(parsed, 0);
+  EXPECT_GT(refused, 0);
+  std::printf("parameters: %d parsed, %d refused\n", parsed, refused);
+}
+
 }  // namespace
 }  // namespace mdn
