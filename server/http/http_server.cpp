@@ -61,15 +61,17 @@ void replace_header(httplib::Response& res, const std::string& key, const std::s
   res.set_header(key, value);
 }
 
-// Set when this thread's current request leaves its body unread. cpp-httplib runs a request from
-// pre-routing to the logger on one thread, so access_log reads it for the same request.
-thread_local bool t_body_left_unread = false;
+// Set when this thread's current request leaves bytes unread on its connection. cpp-httplib runs
+// a request from pre-routing (or, for a request it cannot parse, the error handler) to the
+// logger on one thread, so access_log reads it for the same request.
+thread_local bool t_bytes_left_unread = false;
 
 // Answers this request, then closes the connection (access_log does it once the response is
-// written, with a lingering close): used when the request body stays unread.
+// written, with a lingering close): used when the request body stays unread, or when what
+// follows on the connection cannot be told apart from the rest of an unparseable request.
 void close_after_response(const httplib::Request&, httplib::Response& res) {
   replace_header(res, "Connection", "close");
-  t_body_left_unread = true;
+  t_bytes_left_unread = true;
 }
 
 // A header value must not carry CR/LF (response splitting) nor other control characters.
@@ -271,7 +273,7 @@ struct HttpService::Impl {
   // ---------------------------------------------------------------- wiring
   void install() {
     const int io_threads = config.io_threads;
-    svr.new_task_queue = [io_threads] { return new httplib::ThreadPool(std::size_t(io_threads)); };
+    svr.new_task_queue = [this, io_threads] { return new ConnectionTaskQueue(std::size_t(io_threads), listen_fd); };
     auto secs = [](double s) { return std::pair<time_t, time_t>(time_t(s), time_t((s - double(time_t(s))) * 1e6)); };
     svr.set_keep_alive_timeout(std::max<time_t>(1, time_t(config.keep_alive_timeout_s + 0.5)));
     svr.set_keep_alive_max_count(std::size_t(config.keep_alive_max));
@@ -361,7 +363,7 @@ struct HttpService::Impl {
   }
 
   httplib::Server::HandlerResponse pre_routing(const httplib::Request& req, httplib::Response& res) {
-    t_body_left_unread = false;
+    t_bytes_left_unread = false;
     {
       std::lock_guard lock(start_mutex);
       request_start[std::this_thread::get_id()] = Clock::now();
@@ -429,11 +431,20 @@ struct HttpService::Impl {
                          "the body exceeds the limit of " + std::to_string(config.max_body_bytes) + " bytes");
         close_after_response(req, res);
         break;
-      case 414: p = make_problem(414, "uri-too-long", "URI too long", "the request target is too long"); break;
+      case 414:
+        p = make_problem(414, "uri-too-long", "URI too long", "the request target is too long");
+        close_after_response(req, res);  // a body, if any, stays unread
+        break;
       case 416:
         p = make_problem(416, "range-not-satisfiable", "Range not satisfiable", "the Range header is invalid");
         break;
-      case 400: p = make_problem(400, "bad-request", "Bad request", "the HTTP request could not be parsed"); break;
+      case 400:
+        // cpp-httplib could not parse the request line, the headers or the body's framing: what
+        // follows on the connection is not a request we can find the start of (0.11.4 would
+        // parse each following line as a request of its own).
+        p = make_problem(400, "bad-request", "Bad request", "the HTTP request could not be parsed");
+        close_after_response(req, res);
+        break;
       default:
         p = make_problem(res.status, "http-error", "HTTP error", "the request failed with status " +
                                                                      std::to_string(res.status));
@@ -461,13 +472,12 @@ struct HttpService::Impl {
   }
 
   void access_log(const httplib::Request& req, const httplib::Response& res) {
-    // Runs after the response was written: close connections whose body was left unread. Also
-    // when the client itself asked for "Connection: close": it may still be sending that body, and
+    // Runs after the response was written: close connections that have bytes left unread. Also
+    // when the client itself asked for "Connection: close": it may still be sending, and
     // cpp-httplib's plain close would then reset the connection under it (its next write fails
     // and it never reads the answer).
-    if (std::exchange(t_body_left_unread, false))
-      if (auto probe = ConnectionProbe::find(req.local_port, req.remote_addr, req.remote_port))
-        probe->linger_close(1000);
+    if (std::exchange(t_bytes_left_unread, false))
+      if (auto probe = ConnectionProbe::current(req.remote_port)) probe->linger_close(1000);
     const std::string route = route_name(req);
     metrics.count_request(route, req.method, res.status);
     metrics.add_bytes_out(std::int64_t(res.body.size()));
@@ -781,7 +791,7 @@ struct HttpService::Impl {
   void denoise(Context& ctx) {
     service::JobInput input = read_job_input(ctx);
     std::shared_ptr<Job> job = queue.submit(std::move(input), false).job;
-    auto probe = ConnectionProbe::find(ctx.req.local_port, ctx.req.remote_addr, ctx.req.remote_port);
+    const auto probe = ConnectionProbe::current(ctx.req.remote_port);
     while (!job->wait_for(std::chrono::milliseconds(50))) {
       if (probe && probe->peer_gone()) {
         queue.cancel(job);

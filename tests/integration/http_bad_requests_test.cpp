@@ -2,10 +2,12 @@
 // server healthy afterwards. Runs against the real binary with small limits.
 #include <poll.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <thread>
 
 #include "http_fixture.h"
 
@@ -157,6 +159,81 @@ TEST_F(HttpBadRequests, AnUnreadBodyDoesNotBecomeTheNextRequest) {
                                 &response, /*read_until_close=*/true);
   EXPECT_EQ(status, 416);
   EXPECT_EQ(response.find("HTTP/1.1", 10), std::string::npos) << response;
+}
+
+// After a request it cannot parse (a garbage request line, a request target over the limit),
+// the server cannot tell where the next request would start: it answers once, says
+// "Connection: close", and closes. cpp-httplib 0.11.4 alone answers without closing and parses
+// each following line as a request of its own, so a request sent after the answer was served.
+TEST_F(HttpBadRequests, AnUnparseableRequestIsAnsweredOnceAndTheConnectionCloses) {
+  ASSERT_TRUE(server_->started()) << server_->log();
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"NOT-HTTP\r\n", "HTTP/1.1 400 "},
+      {"GET /" + std::string(9000, 'a') + " HTTP/1.1\r\nHost: x\r\n\r\n", "HTTP/1.1 414 "},
+  };
+  for (const auto& [request, status_line] : cases) {
+    SCOPED_TRACE(status_line);
+    const int fd = connect_loopback(server_->port());
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(send(fd, request.data(), request.size(), MSG_NOSIGNAL), ssize_t(request.size()));
+    pollfd p{fd, POLLIN, 0};
+    ASSERT_EQ(poll(&p, 1, 5000), 1) << "no answer";
+    // A well-formed request after the answer, on the same connection: it must not be served.
+    const std::string next = "GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n";
+    send(fd, next.data(), next.size(), MSG_NOSIGNAL);  // may fail once the server has closed
+    std::string response;
+    char buf[4096];
+    timeval tv{5, 0};
+    setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    const auto start = std::chrono::steady_clock::now();
+    for (ssize_t n; (n = recv(fd, buf, sizeof buf, 0)) > 0;) response.append(buf, std::size_t(n));
+    const double waited_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    close(fd);
+    EXPECT_EQ(response.rfind(status_line, 0), 0u) << response;
+    EXPECT_NE(response.find("Connection: close\r\n"), std::string::npos) << response;
+    EXPECT_NE(response.find("application/problem+json"), std::string::npos) << response;
+    EXPECT_EQ(response.find("HTTP/1.1", 10), std::string::npos) << "a second answer: " << response;
+    EXPECT_LT(waited_s, 1.5) << "the server kept the connection open";
+  }
+  auto c = server_->client();
+  auto health = c->Get("/healthz");
+  ASSERT_TRUE(health);
+  EXPECT_EQ(health->status, 200);
+}
+
+// Each connection closes only itself: garbage requests (each closed after its 400) arrive
+// while keep-alive clients go on using their connections. A close aimed at the wrong socket
+// would cut a keep-alive client off or cost a garbage request its answer.
+TEST_F(HttpBadRequests, ClosingAnUnparseableRequestsConnectionLeavesTheOthersAlone) {
+  ASSERT_TRUE(server_->started()) << server_->log();
+  std::atomic<bool> done{false};
+  std::atomic<int> served{0}, failed{0}, answered{0};
+  std::vector<std::thread> keep_alive;
+  for (int k = 0; k < 2; ++k)
+    keep_alive.emplace_back([&] {
+      auto c = server_->client(10);
+      c->set_keep_alive(true);
+      while (!done) {
+        auto r = c->Get("/healthz");
+        (r && r->status == 200 ? served : failed)++;
+      }
+    });
+  std::vector<std::thread> garbage;
+  for (int g = 0; g < 3; ++g)
+    garbage.emplace_back([&] {
+      for (int i = 0; i < 40; ++i) {
+        std::string response;
+        if (raw_status(server_->port(), "NOT-HTTP\r\n\r\n", &response, /*read_until_close=*/true) == 400 &&
+            response.find("Connection: close\r\n") != std::string::npos)
+          ++answered;
+      }
+    });
+  for (auto& t : garbage) t.join();
+  done = true;
+  for (auto& t : keep_alive) t.join();
+  EXPECT_EQ(answered, 120);
+  EXPECT_EQ(failed, 0) << served << " keep-alive requests served";
+  EXPECT_GT(served, 0);
 }
 
 // The server answers 413 part-way through a chunked upload from a client that sent
