@@ -23,9 +23,9 @@ namespace mdn::http {
 class ConnectionProbe {
  public:
   // The connection this thread serves now; nullopt outside a ConnectionTaskQueue task, if its
-  // socket could not be identified, or if `peer_port` (the request's remote port, 0 when
-  // cpp-httplib could not parse the request) differs from the socket's: a check that this is
-  // the request's own connection. Callers then fall back: a vanished client goes unnoticed
+  // socket could not be identified, or if `peer_port` (the request's remote port; not positive
+  // when cpp-httplib could not parse the request, and then not checked) differs from the
+  // socket's: a check that this is the request's own connection. Callers then fall back: a vanished client goes unnoticed
   // until its job ends, and a connection closes without lingering.
   static std::optional<ConnectionProbe> current(int peer_port);
   // True once the peer closed or reset the connection. Never blocks, never consumes bytes.
