@@ -206,9 +206,6 @@ inline std::string url_encode(const std::string& text) {
   return out;
 }
 
-// Sends raw bytes on a fresh connection and returns the status of the first response (0 if
-// none came), for requests cpp-httplib's client refuses to send. Reads the first response
-// (by its Content-Length), or everything until the server closes (at most 3 s).
 // A TCP socket connected to 127.0.0.1:port, or -1.
 inline int connect_loopback(int port) {
   const int fd = socket(AF_INET, SOCK_STREAM, 0);
@@ -220,12 +217,16 @@ inline int connect_loopback(int port) {
   return fd;
 }
 
+// Sends raw bytes on a fresh connection and returns the status of the first response (0 if
+// none came), for requests cpp-httplib's client refuses to send. Reads the first response
+// (by its Content-Length), or everything until the server closes; gives up on a read that
+// waits longer than timeout_s.
 inline int raw_status(int port, const std::string& bytes, std::string* response = nullptr,
-                      bool read_until_close = false) {
+                      bool read_until_close = false, int timeout_s = 3) {
   const int fd = connect_loopback(port);
   if (fd < 0) return 0;
   send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL);
-  timeval tv{3, 0};
+  timeval tv{timeout_s, 0};
   setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
   std::string out;
   char buf[4096];

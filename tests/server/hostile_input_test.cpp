@@ -23,6 +23,7 @@
 #include "io/gltf_fixtures.h"
 #include "server/job_runner.h"
 #include "server/params_json.h"
+#include "support/mutate.h"
 #include "support/noisy.h"
 #include "support/shapes.h"
 
@@ -64,58 +65,6 @@ bool is_text(io::Format f) {
   return f == io::Format::Off || f == io::Format::Obj || f == io::Format::Gltf;
 }
 
-// One deterministic mutant of `bytes`.
-std::string mutate(const std::string& bytes, bool text, std::mt19937_64& rng) {
-  std::string s = bytes;
-  const auto pos = [&](std::size_t n) { return n == 0 ? std::size_t{0} : std::size_t(rng() % n); };
-  static const std::uint32_t kWords[] = {0u,          1u,          2u,          3u,          0x7fu,       0x80u,
-                                         0xffu,       0x100u,      0x7fffu,     0x8000u,     0xffffu,     0x10000u,
-                                         0x7fffffffu, 0x80000000u, 0xfffffffeu, 0xffffffffu, 0x3f800000u, 0x7fc00000u};
-  static const char* kTokens[] = {"-1", "0", "nan", "inf", "-inf", "1e308", "4294967296", "99999999999", "-0", "1.5", "2147483648", ""};
-  const int steps = 1 + int(rng() % 3);
-  for (int step = 0; step < steps && !s.empty(); ++step) {
-    switch (rng() % (text ? 6 : 5)) {
-      case 0:  // flip bits
-        for (int k = 0, n = 1 + int(rng() % 4); k < n; ++k) s[pos(s.size())] ^= char(1u << (rng() % 8));
-        break;
-      case 1: {  // a boundary integer over 4 bytes (GLB lengths, Draco and accessor counts)
-        const std::uint32_t w = kWords[rng() % std::size(kWords)];
-        const std::size_t at = pos(s.size() > 4 ? s.size() - 4 : 1);
-        for (int k = 0; k < 4 && at + std::size_t(k) < s.size(); ++k) s[at + std::size_t(k)] = char((w >> (8 * k)) & 0xff);
-        break;
-      }
-      case 2:  // truncate
-        s.resize(pos(s.size()));
-        break;
-      case 3: {  // cut a slice
-        const std::size_t at = pos(s.size());
-        s.erase(at, 1 + rng() % 64);
-        break;
-      }
-      case 4: {  // repeat a slice
-        const std::size_t at = pos(s.size());
-        s.insert(at, s.substr(at, 1 + rng() % 64));
-        break;
-      }
-      default: {  // text: a number becomes a hostile token
-        std::vector<std::size_t> starts;
-        for (std::size_t i = 0; i < s.size(); ++i)
-          if ((std::isdigit(static_cast<unsigned char>(s[i])) || s[i] == '-') &&
-              (i == 0 || !std::isalnum(static_cast<unsigned char>(s[i - 1]))))
-            starts.push_back(i);
-        if (starts.empty()) break;
-        const std::size_t at = starts[pos(starts.size())];
-        std::size_t end = at + 1;
-        while (end < s.size() && (std::isalnum(static_cast<unsigned char>(s[end])) || s[end] == '.' || s[end] == '-' || s[end] == '+'))
-          ++end;
-        s.replace(at, end - at, kTokens[rng() % std::size(kTokens)]);
-        break;
-      }
-    }
-  }
-  return s;
-}
-
 // The outcome of one mutant.
 struct Outcome {
   bool result = false;  // a result came back (else a client error was thrown)
@@ -151,9 +100,7 @@ Outcome run_one(const std::string& bytes, io::Format format, const service::JobP
 TEST(HostileInput, MutatedFilesOfEveryFormatGiveAResultOrAClientError) {
   // Auto mode measures the input; cheap iteration counts keep each run to about a millisecond.
   const service::JobParams params = service::job_params_from_json({{"n_normal", 3}, {"n_vertex", 3}, {"n_aniso", 1}});
-  // MDN_HOSTILE_MUTANTS=N runs N per seed file instead (deeper local runs, sanitizer builds).
-  const char* env = std::getenv("MDN_HOSTILE_MUTANTS");
-  const int kMutantsPerSeed = env ? std::max(1, std::atoi(env)) : 400;
+  const int kMutantsPerSeed = test::mutants_per_seed(400);
   double slowest_ms = 0;
   std::string slowest;
   for (const Seed& seed : seeds()) {
@@ -163,7 +110,7 @@ TEST(HostileInput, MutatedFilesOfEveryFormatGiveAResultOrAClientError) {
     std::mt19937_64 rng(std::hash<std::string>{}(seed.name));
     int results = 0, refused = 0;
     for (int i = 0; i < kMutantsPerSeed; ++i) {
-      const std::string bytes = mutate(seed.bytes, is_text(seed.format), rng);
+      const std::string bytes = test::mutate(seed.bytes, is_text(seed.format), rng);
       const auto t0 = std::chrono::steady_clock::now();
       const Outcome o = run_one(bytes, seed.format, params);
       const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -190,7 +137,7 @@ TEST(HostileInput, MutatedParametersParseOrNameTheBadField) {
   std::mt19937_64 rng(20261123);
   int parsed = 0, refused = 0;
   for (int i = 0; i < 4000; ++i) {
-    const std::string text = mutate(valid, /*text=*/true, rng);
+    const std::string text = test::mutate(valid, /*text=*/true, rng);
     try {
       service::validate(service::job_params_from_text(text));
       ++parsed;
