@@ -186,12 +186,8 @@ TEST_F(HttpBadRequests, AnUnparseableRequestIsAnsweredOnceAndTheConnectionCloses
     // A well-formed request after the answer, on the same connection: it must not be served.
     const std::string next = "GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n";
     send(fd, next.data(), next.size(), MSG_NOSIGNAL);  // may fail once the server has closed
-    std::string response;
-    char buf[4096];
-    timeval tv{5, 0};
-    setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
     const auto start = std::chrono::steady_clock::now();
-    for (ssize_t n; (n = recv(fd, buf, sizeof buf, 0)) > 0;) response.append(buf, std::size_t(n));
+    const std::string response = read_until_close(fd, 5);
     const double waited_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     close(fd);
     EXPECT_EQ(response.rfind(status_line, 0), 0u) << response;
@@ -330,11 +326,7 @@ TEST_F(HttpBadRequests, AClientStillSendingWhenRefusedCanFinishAndReadTheAnswer)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   EXPECT_EQ(send(fd, "0\r\n\r\n", 5, MSG_NOSIGNAL), 5) << std::strerror(errno);
-  std::string response;
-  char buf[4096];
-  timeval tv{3, 0};
-  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
-  for (ssize_t n; (n = recv(fd, buf, sizeof buf, 0)) > 0;) response.append(buf, std::size_t(n));
+  const std::string response = read_until_close(fd, 3);
   close(fd);
   EXPECT_EQ(response.rfind("HTTP/1.1 413 ", 0), 0u) << response;
   EXPECT_NE(response.find("urn:meshdenoise:problem:too-large"), std::string::npos) << response;

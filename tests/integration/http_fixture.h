@@ -217,6 +217,17 @@ inline int connect_loopback(int port) {
   return fd;
 }
 
+// Everything the peer sends on fd until it closes; gives up on a read that waits longer than
+// timeout_s.
+inline std::string read_until_close(int fd, int timeout_s) {
+  timeval tv{timeout_s, 0};
+  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  std::string out;
+  char buf[4096];
+  for (ssize_t n; (n = recv(fd, buf, sizeof buf, 0)) > 0;) out.append(buf, std::size_t(n));
+  return out;
+}
+
 // Sends raw bytes on a fresh connection and returns the status of the first response (0 if
 // none came), for requests cpp-httplib's client refuses to send. Reads the first response
 // (by its Content-Length), or everything until the server closes; gives up on a read that

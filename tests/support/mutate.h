@@ -2,11 +2,11 @@
 // job path, raw requests through the live server).
 #pragma once
 
+#include <algorithm>
 #include <cctype>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
-#include <algorithm>
 #include <iterator>
 #include <random>
 #include <string>
