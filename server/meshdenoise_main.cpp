@@ -1,10 +1,13 @@
-// meshdenoise: the command-line tool. Denoises a mesh file with the shared job runner (the
-// same bytes as the HTTP server for the same input and parameters), adds synthetic noise for
-// experiments, and measures MSAE / E_v against a ground truth. See usage() for the shapes.
+// meshdenoise: the command-line tool. Denoises a mesh file, or a batch of them into a folder,
+// with the shared job runner (the same bytes as the HTTP server for the same input and
+// parameters), adds synthetic noise for experiments, and measures MSAE / E_v against a ground
+// truth. See usage() for the shapes.
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -12,6 +15,8 @@
 #include <fstream>
 #include <iostream>
 #include <iterator>
+#include <map>
+#include <mutex>
 #include <numbers>
 #include <optional>
 #include <sstream>
@@ -54,6 +59,43 @@ class FileError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+
+struct Failure {
+  int exit_code;
+  std::string message;
+};
+
+// The exit code and message for an exception; one mapping for the whole tool and for each
+// file of a batch.
+Failure describe_failure(const std::exception_ptr& error) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const UsageError& e) {
+    return {kExitUsage, std::string(e.what()) + "\n(run meshdenoise --help for usage)"};
+  } catch (const mdn::InvalidParamsError& e) {
+    return {kExitUsage, e.what()};
+  } catch (const mdn::CancelledError&) {
+    return {kExitCancelled, "cancelled"};
+  } catch (const FileError& e) {
+    return {kExitFile, e.what()};
+  } catch (const mdn::InvalidMeshError& e) {
+    return {kExitFile, e.what()};
+  } catch (const io::UnsupportedError& e) {
+    return {kExitFile, std::string("unsupported input: ") + e.what()};
+  } catch (const io::LimitError& e) {
+    return {kExitFile, std::string("input too large: ") + e.what()};
+  } catch (const mdn::SolverError& e) {
+    return {kExitInternal, std::string("solver failed: ") + e.what()};
+  } catch (const std::bad_alloc&) {
+    return {kExitInternal, "out of memory"};
+  } catch (const std::exception& e) {
+    return {kExitInternal, std::string("internal error: ") + e.what()};
+  } catch (...) {
+    return {kExitInternal, "internal error (unknown exception)"};
+  }
+}
+
+void print_error(const std::string& message) { std::cerr << "meshdenoise: error: " << message << "\n"; }
 
 // The only process-wide state: set by the SIGINT handler, polled by the progress observer.
 // A signal handler can do nothing else safely.
@@ -118,6 +160,7 @@ struct CliOptions {
   std::optional<std::string> add_noise;  // --add-noise: inline JSON or a file name
   std::optional<std::string> metrics;    // --metrics: ground-truth mesh file
   std::optional<std::string> tune;       // --tune: ground-truth mesh file
+  std::optional<std::string> out_dir;    // --out-dir: batch mode, every positional is an input
   int threads = 0;                       // 0: hardware concurrency
   bool report = false;
   bool progress = true;
@@ -129,6 +172,7 @@ std::string usage() {
   std::ostringstream out;
   out << R"(Usage:
   meshdenoise [options] IN OUT                 denoise IN, write OUT
+  meshdenoise [options] --out-dir DIR IN...    denoise every IN into the folder DIR
   meshdenoise --add-noise SPEC [options] IN OUT
                                                write a noisy copy of the clean mesh IN to OUT
   meshdenoise --metrics GT IN                  only measure IN against the ground truth GT
@@ -161,12 +205,20 @@ Options:
                        "start": {"params", "msae"}, "improvement": start/best, ...}; "params"
                        can be passed to --params as it is. --params sets the starting point
                        (default: what auto mode chooses). Minutes on large meshes.
+  --out-dir DIR        batch mode: DIR (created if missing) receives each IN under its own
+                       file name, with the extension of params.output.format if one is given.
+                       Files run side by side (--threads of them at once); a file that fails is
+                       reported and the others go on. Two inputs that would land on one output,
+                       or an output that would overwrite its input, are refused before any work.
   --report             print a JSON summary on stdout: effective parameters, per-stage timings
                        (ms), fold ratio and region pre-filter decision per surface; with
-                       --metrics the metrics go into it under "metrics".
+                       --metrics the metrics go into it under "metrics". With --out-dir:
+                       {"files": [one summary, or {"input", "output", "error"}, per IN, in
+                       order], "succeeded": N, "failed": N}.
   --threads N          worker threads, [1, 1024] (default: hardware concurrency); the output
                        does not depend on it.
-  --no-progress        no progress bar (it is drawn only when stderr is a terminal anyway).
+  --no-progress        no progress bar (it is drawn only when stderr is a terminal anyway); with
+                       --out-dir, no line per finished file on stderr (errors are still shown).
   --help, --version
 
 Parameters (--params). By default ("mode": "auto") the six parameters of Table 1 (alpha ...
@@ -204,7 +256,8 @@ and the defaults below (Table 1's Fandisk row) for the others. --report shows wh
 
 Exit codes: 0 ok; 2 bad command line or parameters; 3 a file cannot be read or written, is
 malformed or is not a valid mesh; 4 solver failure or internal error; 130 cancelled (Ctrl-C).
-On any error OUT is not written.
+On any error OUT is not written. With --out-dir: the code of the first IN (in the order given)
+that failed, 130 if cancelled; each OUT that was written is complete.
 )";
   return out.str();
 }
@@ -258,6 +311,8 @@ CliOptions parse_command_line(int argc, char** argv) {
       options.metrics = value();
     } else if (arg == "--tune") {
       options.tune = value();
+    } else if (arg == "--out-dir") {
+      options.out_dir = value();
     } else if (arg == "--threads") {
       options.threads = parse_threads(value());
     } else if (arg == "--report") {
@@ -427,6 +482,156 @@ json measure(const mdn::TriMesh& truth, const std::string& truth_path, const mdn
   return {{"msae", msae}, {"msae_deg2", msae * kDeg * kDeg}, {"ev", ev}};
 }
 
+// Denoises one input with the shared job runner; a problem with the input is blamed on its file.
+// The progress bar (if any) is cleared whatever happens.
+service::JobOutput denoise_input(const std::string& in_path, const std::string& in_bytes, io::Format in_format,
+                                 const service::JobParams& params, int threads, CliProgress& progress) {
+  const service::JobInput job{.bytes = in_bytes, .format = in_format, .params = params, .threads = threads};
+  try {
+    service::JobOutput output = blame_file(in_path, [&] { return service::run_job(job, cli_limits(), &progress); });
+    progress.clear();
+    return output;
+  } catch (...) {
+    progress.clear();
+    throw;
+  }
+}
+
+// Where a --report summary came from and went.
+void add_paths(json& summary, const std::string& in_path, io::Format in_format, const std::string& out_path) {
+  summary["input"] = {{"path", in_path}, {"format", std::string(io::to_string(in_format))}};
+  summary["output"] = out_path;
+}
+
+int default_threads(const CliOptions& options) {
+  return options.threads > 0 ? options.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+}
+
+// Where each input of a batch goes: DIR / its file name, with the extension of the requested
+// output format if there is one. Refused before any work: an input without a file name, two
+// inputs with one output, an output that is its own input (it would be overwritten).
+std::vector<std::string> batch_outputs(const std::vector<std::string>& inputs, const std::filesystem::path& dir,
+                                       const std::optional<io::Format>& format) {
+  namespace fs = std::filesystem;
+  auto key = [](const fs::path& path) {
+    std::error_code ec;
+    const fs::path canonical = fs::weakly_canonical(fs::absolute(path), ec);
+    return ec ? fs::absolute(path).lexically_normal() : canonical;
+  };
+  std::vector<std::string> outputs;
+  std::map<fs::path, std::string> taken;  // output -> the input that goes there
+  for (const std::string& in : inputs) {
+    fs::path name = fs::path(in).filename();
+    if (name.empty() || name == "." || name == "..") throw UsageError("--out-dir: the input \"" + in + "\" has no file name");
+    if (format) name.replace_extension(std::string(io::to_string(*format)));
+    const fs::path out = dir / name;
+    const fs::path out_key = key(out);
+    if (out_key == key(in)) {
+      throw UsageError("--out-dir: " + out.string() + " would overwrite its input " + in + "; choose another folder");
+    }
+    if (const auto [it, fresh] = taken.emplace(out_key, in); !fresh) {
+      throw UsageError("--out-dir: " + it->second + " and " + in + " would both be written to " + out.string());
+    }
+    outputs.push_back(out.string());
+  }
+  return outputs;
+}
+
+// meshdenoise --out-dir DIR [--params P] [--threads N] [--report] IN...
+// Files run side by side, one pipeline thread each while there are more files than threads
+// (the output never depends on the thread count). A file that fails is reported on stderr and
+// in the report, and the others go on; Ctrl-C cancels the running files and starts no more.
+int run_batch(const CliOptions& options) {
+  namespace fs = std::filesystem;
+  const std::vector<std::string>& inputs = options.positional;
+  if (inputs.empty()) throw UsageError("--out-dir DIR needs at least one input file");
+  if (options.add_noise || options.metrics || options.tune) {
+    throw UsageError("--out-dir cannot be combined with --add-noise, --metrics or --tune");
+  }
+  service::JobParams params;
+  if (options.params) params = service::job_params_from_text(json_argument("--params", *options.params));
+  const fs::path dir = *options.out_dir;
+  const std::vector<std::string> outputs = batch_outputs(inputs, dir, params.output.format);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (!fs::is_directory(dir)) {
+    throw FileError("cannot use " + dir.string() + " as the output folder: " +
+                    (ec ? ec.message() : std::string("it is not a directory")));
+  }
+
+  const std::size_t n = inputs.size();
+  const int threads = default_threads(options);
+  const int jobs = static_cast<int>(std::min<std::size_t>(n, static_cast<std::size_t>(threads)));
+  const int threads_per_job = std::max(1, threads / jobs);
+  std::vector<json> reports(n);
+  std::vector<int> codes(n, kExitCancelled);  // a file never started counts as cancelled
+  std::atomic<std::size_t> next{0};
+  std::mutex stderr_mutex;
+  std::size_t finished = 0;
+  install_sigint_handler();
+  auto work = [&] {
+    CliProgress cancel(false);  // no bar: several files run at once; Ctrl-C still cancels
+    for (std::size_t i = next++; i < n && !g_interrupted; i = next++) {
+      const auto start = std::chrono::steady_clock::now();
+      std::string line;
+      try {
+        const std::string in_bytes = read_file(inputs[i]);
+        const io::Format in_format = input_format(inputs[i], in_bytes);
+        service::JobOutput output = denoise_input(inputs[i], in_bytes, in_format, params, threads_per_job, cancel);
+        reports[i] = service::job_summary_json(output);
+        add_paths(reports[i], inputs[i], in_format, outputs[i]);
+        write_file(outputs[i], output.bytes);
+        codes[i] = kExitOk;
+        if (options.progress) {
+          const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+          std::ostringstream text;
+          text.precision(3);
+          text << inputs[i] << " -> " << outputs[i] << " (" << output.faces << " faces, " << seconds << " s)";
+          line = text.str();
+        }
+      } catch (...) {
+        const Failure failure = describe_failure(std::current_exception());
+        codes[i] = failure.exit_code;
+        // Most messages name the file already; the rest get it in front.
+        const std::string message =
+            failure.message.find(inputs[i]) == std::string::npos ? inputs[i] + ": " + failure.message : failure.message;
+        reports[i] = {{"input", {{"path", inputs[i]}}},
+                      {"output", outputs[i]},
+                      {"error", {{"exit_code", failure.exit_code}, {"message", message}}}};
+        line = "error: " + message;
+      }
+      const std::lock_guard lock(stderr_mutex);
+      ++finished;
+      if (!line.empty()) std::cerr << "meshdenoise: [" << finished << "/" << n << "] " << line << "\n";
+    }
+  };
+  std::vector<std::thread> helpers;
+  for (int j = 1; j < jobs; ++j) helpers.emplace_back(work);
+  work();
+  for (auto& t : helpers) t.join();
+
+  std::size_t failed = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (codes[i] == kExitOk) continue;
+    ++failed;
+    if (reports[i].is_null()) {
+      reports[i] = {{"input", {{"path", inputs[i]}}},
+                    {"output", outputs[i]},
+                    {"error", {{"exit_code", kExitCancelled}, {"message", "cancelled before it started"}}}};
+    }
+  }
+  if (options.report) {
+    std::cout << json{{"files", reports}, {"succeeded", n - failed}, {"failed", failed}}.dump(2) << "\n";
+  }
+  if (g_interrupted) {
+    print_error("cancelled");
+    return kExitCancelled;
+  }
+  for (int code : codes)
+    if (code != kExitOk) return code;
+  return kExitOk;
+}
+
 // meshdenoise --tune GT [--params START] [--threads N] NOISY
 int run_tune(const CliOptions& options) {
   if (options.positional.size() != 1)
@@ -434,8 +639,7 @@ int run_tune(const CliOptions& options) {
   if (options.add_noise || options.metrics) throw UsageError("--tune cannot be combined with --add-noise or --metrics");
   service::JobParams start;
   if (options.params) start = service::job_params_from_text(json_argument("--params", *options.params));
-  const int threads =
-      options.threads > 0 ? options.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const int threads = default_threads(options);
   const std::string& in_path = options.positional[0];
   const std::string in_bytes = read_file(in_path);
   const mdn::TriMesh truth = load_truth(*options.tune);
@@ -475,6 +679,7 @@ int run(int argc, char** argv) {
     return kExitOk;
   }
   const auto& pos = options.positional;
+  if (options.out_dir) return run_batch(options);
   if (options.tune) return run_tune(options);
   const bool measure_only = pos.size() == 1 && options.metrics;
   if (!(pos.size() == 2 || measure_only)) {
@@ -484,8 +689,7 @@ int run(int argc, char** argv) {
   if (measure_only && (options.params || options.add_noise)) {
     throw UsageError("--params and --add-noise need an OUT file");
   }
-  const int threads =
-      options.threads > 0 ? options.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const int threads = default_threads(options);
 
   // Parse everything the user typed before touching any mesh.
   service::JobParams params;
@@ -552,21 +756,12 @@ int run(int argc, char** argv) {
   } else {
     install_sigint_handler();
     CliProgress progress(options.progress && ::isatty(STDERR_FILENO));
-    service::JobInput job{.bytes = in_bytes, .format = in_format, .params = params, .threads = threads};
-    service::JobOutput output;
-    try {
-      output = blame_file(in_path, [&] { return service::run_job(job, cli_limits(), &progress); });
-    } catch (...) {
-      progress.clear();
-      throw;
-    }
-    progress.clear();
+    service::JobOutput output = denoise_input(in_path, in_bytes, in_format, params, threads, progress);
     summary = service::job_summary_json(output);  // before the bytes move out
     out_bytes = std::move(output.bytes);
     if (truth) result = merge_surfaces(output.surfaces);
   }
-  summary["input"] = {{"path", in_path}, {"format", std::string(io::to_string(in_format))}};
-  summary["output"] = out_path;
+  add_paths(summary, in_path, in_format, out_path);
 
   // Metrics before writing: a failed comparison leaves no OUT behind (non-zero exit, no file).
   // They measure the computed surface, so every output format gives the same figures; the
@@ -587,41 +782,11 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  auto error = [](const std::string& message) { std::cerr << "meshdenoise: error: " << message << "\n"; };
   try {
     return run(argc, argv);
-  } catch (const UsageError& e) {
-    error(std::string(e.what()) + "\n(run meshdenoise --help for usage)");
-    return kExitUsage;
-  } catch (const mdn::InvalidParamsError& e) {
-    error(e.what());
-    return kExitUsage;
-  } catch (const mdn::CancelledError& e) {
-    error("cancelled");
-    return kExitCancelled;
-  } catch (const FileError& e) {
-    error(e.what());
-    return kExitFile;
-  } catch (const mdn::InvalidMeshError& e) {
-    error(e.what());
-    return kExitFile;
-  } catch (const io::UnsupportedError& e) {
-    error(std::string("unsupported input: ") + e.what());
-    return kExitFile;
-  } catch (const io::LimitError& e) {
-    error(std::string("input too large: ") + e.what());
-    return kExitFile;
-  } catch (const mdn::SolverError& e) {
-    error(std::string("solver failed: ") + e.what());
-    return kExitInternal;
-  } catch (const std::bad_alloc&) {
-    error("out of memory");
-    return kExitInternal;
-  } catch (const std::exception& e) {
-    error(std::string("internal error: ") + e.what());
-    return kExitInternal;
   } catch (...) {
-    error("internal error (unknown exception)");
-    return kExitInternal;
+    const Failure failure = describe_failure(std::current_exception());
+    print_error(failure.message);
+    return failure.exit_code;
   }
 }

@@ -363,19 +363,25 @@ TEST_F(Cli, BadInputFilesExitThree) {
 
 // SIGINT cancels cooperatively: exit 130, no output file. The signal is sent only once the
 // process has installed its handler (read from /proc), so the test does not depend on timing.
-TEST_F(Cli, SigintCancelsWithExit130) {
-  write_text(path("big.off"), test::off_text(test::sphere(5)));
-  const std::string params = R"({"n_aniso": 100, "n_normal": 1000, "n_vertex": 1000})";
-  const std::string out = path("never.off"), err = path("stderr.txt");
-  const std::string bin = binary(), p = path("big.off");
+// Starts meshdenoise with `args` (stderr to `err`), sends SIGINT once the process has
+// installed its handler (read from /proc, so the test does not depend on timing) and returns
+// its exit code; -1 (with a test failure) if it never got that far or was killed.
+int interrupted_run(const std::vector<std::string>& args, const std::string& err) {
+  std::vector<std::string> argv_text = {binary()};
+  argv_text.insert(argv_text.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : argv_text) argv.push_back(a.data());
+  argv.push_back(nullptr);
   const pid_t pid = ::fork();
-  ASSERT_GE(pid, 0);
+  if (pid < 0) {
+    ADD_FAILURE() << "fork failed";
+    return -1;
+  }
   if (pid == 0) {
     // Only async-signal-safe calls between fork and exec.
     const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     ::dup2(fd, 2);
-    ::execl(bin.c_str(), bin.c_str(), "--threads", "1", "--params", params.c_str(), p.c_str(), out.c_str(),
-            static_cast<char*>(nullptr));
+    ::execv(argv[0], argv.data());
     ::_exit(127);
   }
   // Wait (up to a generous bound) until SIGINT (signal 2 -> bit 1 of SigCgt) is caught.
@@ -390,12 +396,25 @@ TEST_F(Cli, SigintCancelsWithExit130) {
     }
     if (!caught) std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
-  ASSERT_TRUE(caught) << "meshdenoise never installed its SIGINT handler";
+  if (!caught) ADD_FAILURE() << "meshdenoise never installed its SIGINT handler";
   ::kill(pid, SIGINT);
   int status = 0;
   ::waitpid(pid, &status, 0);
-  ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
-  EXPECT_EQ(WEXITSTATUS(status), 130) << read_text(err);
+  if (!caught || !WIFEXITED(status)) {
+    if (WIFSIGNALED(status)) ADD_FAILURE() << "killed by signal " << WTERMSIG(status);
+    return -1;
+  }
+  return WEXITSTATUS(status);
+}
+
+// Parameters that keep a level-5 sphere busy for many seconds.
+constexpr const char* kSlowParams = R"({"n_aniso": 100, "n_normal": 1000, "n_vertex": 1000})";
+
+TEST_F(Cli, SigintCancelsWithExit130) {
+  write_text(path("big.off"), test::off_text(test::sphere(5)));
+  const std::string out = path("never.off"), err = path("stderr.txt");
+  EXPECT_EQ(interrupted_run({"--threads", "1", "--params", kSlowParams, path("big.off"), out}, err), 130)
+      << read_text(err);
   EXPECT_NE(read_text(err).find("cancelled"), std::string::npos) << read_text(err);
   EXPECT_FALSE(fs::exists(out));
 }
@@ -466,6 +485,144 @@ TEST_F(Cli, TuneRefusesBadArguments) {
   EXPECT_EQ(mismatch.code, 3);
   EXPECT_NE(mismatch.err.find("same vertices and faces"), std::string::npos) << mismatch.err;
   EXPECT_EQ(run("--tune " + quote(path("missing.off")) + " " + quote(path("noisy.off"))).code, 3);
+}
+
+}  // namespace
+}  // namespace mdn
+
+namespace mdn {
+namespace {
+
+// --out-dir: every input lands in the folder under its own name, byte for byte what a single
+// run gives, whatever the number of files at once.
+TEST_F(Cli, BatchWritesEachInputAsASingleRunWould) {
+  write_sphere_pair(2);
+  ASSERT_EQ(run("--add-noise '{\"kind\": \"per_coordinate\", \"sigma\": 0.2, \"seed\": 4}' " + quote(path("clean.off")) +
+                " " + quote(path("b.off")))
+                .code,
+            0);
+  ASSERT_EQ(run("--add-noise '{\"kind\": \"along_normal\", \"sigma\": 0.1, \"seed\": 5}' " + quote(path("clean.off")) +
+                " " + quote(path("c.glb")))
+                .code,
+            0);
+  const std::vector<std::string> inputs = {"noisy.off", "b.off", "c.glb"};
+  std::string args = "--threads 2 --report --out-dir " + quote(path("out"));
+  for (const auto& in : inputs) args += " " + quote(path(in));
+  const Result batch = run(args);
+  ASSERT_EQ(batch.code, 0) << batch.err;
+  const json report = parse_stdout(batch);
+  EXPECT_EQ(report["succeeded"], 3);
+  EXPECT_EQ(report["failed"], 0);
+  ASSERT_EQ(report["files"].size(), 3u);
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    const json& file = report["files"][i];
+    EXPECT_EQ(file["input"]["path"], path(inputs[i]));  // in the order given
+    EXPECT_EQ(file["output"], (dir_ / "out" / inputs[i]).string());
+    EXPECT_EQ(file["params"]["mode"], "auto");
+    ASSERT_EQ(run("--threads 1 " + quote(path(inputs[i])) + " " + quote(path("single_" + inputs[i]))).code, 0);
+    const std::string single = read_text(path("single_" + inputs[i]));
+    EXPECT_FALSE(single.empty());
+    EXPECT_EQ(read_text(dir_ / "out" / inputs[i]), single) << inputs[i];
+  }
+  // One line per finished file on stderr, counted.
+  EXPECT_NE(batch.err.find("[3/3]"), std::string::npos) << batch.err;
+  EXPECT_NE(batch.err.find(path("c.glb") + " -> "), std::string::npos) << batch.err;
+
+  // output.format renames the outputs to its extension; --no-progress silences the lines.
+  const Result glb = run("--no-progress --params '{\"output\": {\"format\": \"glb\"}}' --out-dir " +
+                         quote(path("glb")) + " " + quote(path("noisy.off")) + " " + quote(path("b.off")));
+  ASSERT_EQ(glb.code, 0) << glb.err;
+  EXPECT_EQ(glb.err, "");
+  ASSERT_EQ(run("--params '{\"output\": {\"format\": \"glb\"}}' " + quote(path("noisy.off")) + " " +
+                quote(path("single.glb")))
+                .code,
+            0);
+  EXPECT_EQ(read_text(dir_ / "glb" / "noisy.glb"), read_text(path("single.glb")));
+  EXPECT_TRUE(fs::exists(dir_ / "glb" / "b.glb"));
+  EXPECT_FALSE(fs::exists(dir_ / "glb" / "noisy.off"));
+}
+
+// A file that fails is reported, with its own message and code, and the others still run;
+// the exit code is the first failure's in the order given.
+TEST_F(Cli, BatchGoesOnPastBadFilesAndExitsWithTheFirstFailure) {
+  write_sphere_pair(1);
+  write_text(path("nonsense.off"), "this is not a mesh at all\n");
+  const Result r = run("--no-progress --report --out-dir " + quote(path("out")) + " " + quote(path("noisy.off")) + " " +
+                       quote(path("nonsense.off")) + " " + quote(path("missing.off")) + " " + quote(path("clean.off")));
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "noisy.off"));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "clean.off"));
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "nonsense.off"));
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "missing.off"));
+  for (const auto& entry : fs::directory_iterator(dir_ / "out")) {
+    EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
+  }
+  // stderr: one error line per bad file, each naming it; nothing for the good ones.
+  EXPECT_NE(r.err.find("error: " + path("nonsense.off")), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(path("missing.off")), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find(path("noisy.off")), std::string::npos) << r.err;
+  const json report = parse_stdout(r);
+  EXPECT_EQ(report["succeeded"], 2);
+  EXPECT_EQ(report["failed"], 2);
+  ASSERT_EQ(report["files"].size(), 4u);
+  EXPECT_FALSE(report["files"][0].contains("error"));
+  EXPECT_EQ(report["files"][1]["error"]["exit_code"], 3);
+  EXPECT_EQ(report["files"][2]["error"]["exit_code"], 3);
+  EXPECT_NE(report["files"][2]["error"]["message"].get<std::string>().find("missing.off"), std::string::npos);
+  EXPECT_FALSE(report["files"][3].contains("error"));
+
+  // Bad parameters are a usage error before any file is read.
+  const Result params = run("--params '{\"n_normal\": -1}' --out-dir " + quote(path("out2")) + " " + quote(path("noisy.off")));
+  EXPECT_EQ(params.code, 2) << params.err;
+  EXPECT_NE(params.err.find("n_normal"), std::string::npos) << params.err;
+  EXPECT_FALSE(fs::exists(path("out2")));
+}
+
+// Arguments that cannot work are refused before any work: nothing is created or written.
+TEST_F(Cli, BatchRefusesCollisionsOverwritesAndOtherModes) {
+  write_sphere_pair(1);
+  fs::create_directories(dir_ / "other");
+  fs::copy_file(path("noisy.off"), dir_ / "other" / "noisy.off");
+  const std::string fresh = quote(path("fresh"));
+  const std::vector<std::string> usage_cases = {
+      "--out-dir " + fresh,                                                                      // no input
+      "--out-dir " + fresh + " " + quote(path("noisy.off")) + " " + quote(path("other/noisy.off")),  // one output
+      "--params '{\"output\": {\"format\": \"off\"}}' --out-dir " + fresh + " " + quote(path("noisy.off")) + " " +
+          quote(path("other/noisy.ply")),                                                       // same after renaming
+      "--out-dir " + quote(dir_.string()) + " " + quote(path("noisy.off")),                      // its own input
+      "--out-dir " + quote(path("other/..")) + " " + quote(path("noisy.off")),                   // the same, spelt otherwise
+      "--metrics " + quote(path("clean.off")) + " --out-dir " + fresh + " " + quote(path("noisy.off")),
+      "--tune " + quote(path("clean.off")) + " --out-dir " + fresh + " " + quote(path("noisy.off")),
+      "--add-noise '{\"sigma\": 0.1}' --out-dir " + fresh + " " + quote(path("noisy.off")),
+  };
+  for (const auto& args : usage_cases) {
+    const Result r = run(args);
+    EXPECT_EQ(r.code, 2) << args << "\nstderr: " << r.err;
+    EXPECT_EQ(r.err.rfind("meshdenoise: error: ", 0), 0u) << args << "\nstderr: " << r.err;
+    EXPECT_FALSE(fs::exists(path("fresh"))) << args;
+  }
+  const std::string before = read_text(path("noisy.off"));
+  EXPECT_EQ(read_text(path("other/noisy.off")), before);  // no input was overwritten
+
+  // An output folder that is a file cannot be used (exit 3, like any unwritable output).
+  const Result file = run("--out-dir " + quote(path("clean.off")) + " " + quote(path("noisy.off")));
+  EXPECT_EQ(file.code, 3) << file.err;
+  EXPECT_NE(file.err.find("output folder"), std::string::npos) << file.err;
+}
+
+// Ctrl-C cancels the running file and starts no other: exit 130, no output written.
+TEST_F(Cli, BatchSigintCancelsEveryFile) {
+  write_text(path("big1.off"), test::off_text(test::sphere(5)));
+  fs::copy_file(path("big1.off"), path("big2.off"));
+  const std::string err = path("stderr.txt");
+  EXPECT_EQ(interrupted_run({"--threads", "1", "--params", kSlowParams, "--out-dir", path("out"), path("big1.off"),
+                             path("big2.off")},
+                            err),
+            130)
+      << read_text(err);
+  EXPECT_NE(read_text(err).find("cancelled"), std::string::npos) << read_text(err);
+  ASSERT_TRUE(fs::is_directory(path("out")));
+  EXPECT_TRUE(fs::is_empty(path("out"))) << "a cancelled batch left files behind";
 }
 
 }  // namespace
