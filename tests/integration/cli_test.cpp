@@ -361,8 +361,6 @@ TEST_F(Cli, BadInputFilesExitThree) {
   EXPECT_NE(missing.err.find("missing.off"), std::string::npos) << missing.err;  // names the file
 }
 
-// SIGINT cancels cooperatively: exit 130, no output file. The signal is sent only once the
-// process has installed its handler (read from /proc), so the test does not depend on timing.
 // Starts meshdenoise with `args` (stderr to `err`), sends SIGINT once the process has
 // installed its handler (read from /proc, so the test does not depend on timing) and returns
 // its exit code; -1 (with a test failure) if it never got that far or was killed.
@@ -410,6 +408,7 @@ int interrupted_run(const std::vector<std::string>& args, const std::string& err
 // Parameters that keep a level-5 sphere busy for many seconds.
 constexpr const char* kSlowParams = R"({"n_aniso": 100, "n_normal": 1000, "n_vertex": 1000})";
 
+// SIGINT cancels cooperatively: exit 130, no output file.
 TEST_F(Cli, SigintCancelsWithExit130) {
   write_text(path("big.off"), test::off_text(test::sphere(5)));
   const std::string out = path("never.off"), err = path("stderr.txt");
