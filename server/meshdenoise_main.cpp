@@ -21,6 +21,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -182,7 +183,8 @@ std::string usage() {
 
 Robust mesh denoising via vertex pre-filtering and L1-median normal filtering (Lu, Chen,
 Schaefer). Formats: off, obj, ply, drc, glb, gltf, chosen by file extension, else by content.
-OUT's format is its extension's, else params.output.format, else IN's.
+OUT's format is its extension's, else params.output.format, else IN's. "-" as IN (or GT, or a
+--params file) reads standard input, and as OUT writes standard output; "./-" is a file.
 
 Options:
   --params JSON|FILE   parameters as a JSON object (inline, or the name of a file holding it),
@@ -334,7 +336,26 @@ CliOptions parse_command_line(int argc, char** argv) {
   return options;
 }
 
+// "-" names standard input where a file is read (IN, GT, a --params file) and standard output
+// where OUT is written, as Unix filters do; a file called "-" is "./-".
+constexpr std::string_view kStdio = "-";
+
+std::string read_stdin() {
+  std::string bytes;
+  char buffer[1 << 16];
+  for (;;) {
+    const ssize_t n = ::read(STDIN_FILENO, buffer, sizeof buffer);
+    if (n == 0) return bytes;
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw FileError(std::string("cannot read standard input: ") + std::strerror(errno));
+    }
+    bytes.append(buffer, static_cast<std::size_t>(n));
+  }
+}
+
 std::string read_file(const std::string& path) {
+  if (path == kStdio) return read_stdin();
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) throw FileError("cannot read " + path + ": it is a directory");
   std::ifstream in(path, std::ios::binary);
@@ -361,6 +382,12 @@ void write_bytes(const std::string& path, const std::string& bytes, const std::s
 // (/dev/stdout, pipes) and symbolic links are written in place.
 void write_file(const std::string& path, const std::string& bytes) {
   namespace fs = std::filesystem;
+  if (path == kStdio) {
+    std::cout.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    std::cout.flush();
+    if (!std::cout) throw FileError("cannot write standard output");
+    return;
+  }
   std::error_code ec;
   const fs::file_status status = fs::symlink_status(path, ec);
   if (fs::exists(status) && !fs::is_regular_file(status)) {
@@ -405,7 +432,7 @@ io::Limits cli_limits() {
 io::Format input_format(const std::string& path, const std::string& bytes) {
   if (auto format = io::format_from_extension(path)) return *format;
   if (auto format = io::sniff_format(bytes)) return *format;
-  throw FileError("cannot tell the format of " + path +
+  throw FileError("cannot tell the format of " + (path == kStdio ? std::string("standard input") : path) +
                   " from its extension or its contents (supported: off, obj, ply, drc, glb, gltf)");
 }
 
@@ -521,6 +548,7 @@ std::vector<std::string> batch_outputs(const std::vector<std::string>& inputs, c
   std::vector<std::string> outputs;
   std::map<fs::path, std::string> taken;  // output -> the input that goes there
   for (const std::string& in : inputs) {
+    if (in == kStdio) throw UsageError("--out-dir: standard input (-) cannot be part of a batch");
     fs::path name = fs::path(in).filename();
     if (name.empty() || name == "." || name == "..") throw UsageError("--out-dir: the input \"" + in + "\" has no file name");
     if (format) name.replace_extension(std::string(io::to_string(*format)));
@@ -679,6 +707,10 @@ int run(int argc, char** argv) {
     return kExitOk;
   }
   const auto& pos = options.positional;
+  int stdin_reads = !options.out_dir && !pos.empty() && pos[0] == kStdio ? 1 : 0;
+  for (const auto* file : {&options.params, &options.add_noise, &options.metrics, &options.tune})
+    if (*file && **file == kStdio) ++stdin_reads;
+  if (stdin_reads > 1) throw UsageError("standard input (-) can be read only once");
   if (options.out_dir) return run_batch(options);
   if (options.tune) return run_tune(options);
   const bool measure_only = pos.size() == 1 && options.metrics;
@@ -722,6 +754,9 @@ int run(int argc, char** argv) {
   }
 
   const std::string& out_path = pos[1];
+  if (out_path == kStdio && (options.report || options.metrics)) {
+    throw UsageError("OUT is standard output (-): --report and --metrics would print into the mesh");
+  }
   if (auto by_extension = io::format_from_extension(out_path)) {
     if (params.output.format && *params.output.format != *by_extension) {
       throw UsageError("output.format is \"" + std::string(io::to_string(*params.output.format)) + "\" but " +

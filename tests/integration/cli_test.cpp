@@ -79,9 +79,10 @@ class Cli : public ::testing::Test {
 
   // Runs meshdenoise with the given (already quoted) arguments; stderr is not a terminal,
   // so no progress bar is drawn.
-  Result run(const std::string& args) const {
+  Result run(const std::string& args, const std::string& stdin_path = "/dev/null") const {
     const std::string out = path("stdout.txt"), err = path("stderr.txt");
-    const std::string command = quote(binary()) + " " + args + " >" + quote(out) + " 2>" + quote(err) + " </dev/null";
+    const std::string command =
+        quote(binary()) + " " + args + " >" + quote(out) + " 2>" + quote(err) + " <" + quote(stdin_path);
     const int status = std::system(command.c_str());
     Result r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
@@ -622,6 +623,59 @@ TEST_F(Cli, BatchSigintCancelsEveryFile) {
   EXPECT_NE(read_text(err).find("cancelled"), std::string::npos) << read_text(err);
   ASSERT_TRUE(fs::is_directory(path("out")));
   EXPECT_TRUE(fs::is_empty(path("out"))) << "a cancelled batch left files behind";
+}
+
+}  // namespace
+}  // namespace mdn
+
+namespace mdn {
+namespace {
+
+// "-" is standard input for IN (and GT, and a --params file) and standard output for OUT, as
+// in Unix filters; the bytes are those of a run on files.
+TEST_F(Cli, DashReadsStandardInputAndWritesStandardOutput) {
+  write_sphere_pair(2);
+  ASSERT_EQ(run(quote(path("noisy.off")) + " " + quote(path("file.off"))).code, 0);
+  const Result piped = run("- -", path("noisy.off"));
+  ASSERT_EQ(piped.code, 0) << piped.err;
+  EXPECT_EQ(piped.out, read_text(path("file.off")));
+  EXPECT_EQ(piped.err, "");
+
+  // OUT's format then comes from output.format, else from IN (found by its contents).
+  ASSERT_EQ(run("--params '{\"output\": {\"format\": \"glb\"}}' " + quote(path("noisy.off")) + " " +
+                quote(path("file.glb")))
+                .code,
+            0);
+  const Result glb = run("--params '{\"output\": {\"format\": \"glb\"}}' - -", path("noisy.off"));
+  ASSERT_EQ(glb.code, 0) << glb.err;
+  EXPECT_EQ(glb.out, read_text(path("file.glb")));
+  const Result from_glb = run("--report - " + quote(path("back.off")), path("file.glb"));
+  ASSERT_EQ(from_glb.code, 0) << from_glb.err;
+  EXPECT_EQ(parse_stdout(from_glb)["input"]["format"], "glb");
+
+  // Parameters from standard input; the ground truth too.
+  write_text(path("params.json"), R"({"mode": "manual", "n_normal": 5})");
+  ASSERT_EQ(run("--params " + quote(path("params.json")) + " " + quote(path("noisy.off")) + " " + quote(path("p1.off"))).code, 0);
+  ASSERT_EQ(run("--params - " + quote(path("noisy.off")) + " " + quote(path("p2.off")), path("params.json")).code, 0);
+  EXPECT_EQ(read_text(path("p1.off")), read_text(path("p2.off")));
+  const Result metrics = run("--metrics - " + quote(path("noisy.off")), path("clean.off"));
+  ASSERT_EQ(metrics.code, 0) << metrics.err;
+  EXPECT_GT(parse_stdout(metrics)["msae"].get<double>(), 0);
+
+  // Refused: stdin read twice, JSON printed into the mesh, stdin in a batch (exit 2); and
+  // content that is no mesh (exit 3, naming standard input).
+  for (const std::string& args : {std::string("--metrics - -  ") + quote(path("out.off")), std::string("--params - - ") + quote(path("out.off")),
+                                  std::string("--report - -"), "--metrics " + quote(path("clean.off")) + " - -",
+                                  "--out-dir " + quote(path("batch")) + " -"}) {
+    const Result r = run(args, path("noisy.off"));
+    EXPECT_EQ(r.code, 2) << args << "\nstderr: " << r.err;
+    EXPECT_EQ(r.out, "") << args;
+  }
+  EXPECT_FALSE(fs::exists(path("out.off")));
+  write_text(path("garbage.txt"), "garbage\n");
+  const Result garbage = run("- " + quote(path("out.off")), path("garbage.txt"));
+  EXPECT_EQ(garbage.code, 3) << garbage.err;
+  EXPECT_NE(garbage.err.find("standard input"), std::string::npos) << garbage.err;
 }
 
 }  // namespace
