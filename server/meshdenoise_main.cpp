@@ -596,6 +596,12 @@ int run_batch(const CliOptions& options) {
   std::atomic<std::size_t> next{0};
   std::mutex stderr_mutex;
   std::size_t finished = 0;
+  // The report entry of a file that failed (or never started).
+  auto error_report = [&](std::size_t i, int exit_code, const std::string& message) {
+    return json{{"input", {{"path", inputs[i]}}},
+                {"output", outputs[i]},
+                {"error", {{"exit_code", exit_code}, {"message", message}}}};
+  };
   install_sigint_handler();
   auto work = [&] {
     CliProgress cancel(false);  // no bar: several files run at once; Ctrl-C still cancels
@@ -623,9 +629,7 @@ int run_batch(const CliOptions& options) {
         // Most messages name the file already; the rest get it in front.
         const std::string message =
             failure.message.find(inputs[i]) == std::string::npos ? inputs[i] + ": " + failure.message : failure.message;
-        reports[i] = {{"input", {{"path", inputs[i]}}},
-                      {"output", outputs[i]},
-                      {"error", {{"exit_code", failure.exit_code}, {"message", message}}}};
+        reports[i] = error_report(i, failure.exit_code, message);
         line = "error: " + message;
       }
       const std::lock_guard lock(stderr_mutex);
@@ -643,9 +647,7 @@ int run_batch(const CliOptions& options) {
     if (codes[i] == kExitOk) continue;
     ++failed;
     if (reports[i].is_null()) {
-      reports[i] = {{"input", {{"path", inputs[i]}}},
-                    {"output", outputs[i]},
-                    {"error", {{"exit_code", kExitCancelled}, {"message", "cancelled before it started"}}}};
+      reports[i] = error_report(i, kExitCancelled, "cancelled before it started");
     }
   }
   if (options.report) {
