@@ -151,6 +151,13 @@ const std::vector<Setting>& settings() {
       {"cors-origin", "MDN_CORS_ORIGIN", "Access-Control-Allow-Origin for browser clients; empty disables CORS",
        [](ServerConfig& c, const std::string&, const std::string& v) { c.cors_origin = v; },
        [](const ServerConfig& c) { return c.cors_origin.empty() ? std::string("(disabled)") : c.cors_origin; }},
+      {"web", "MDN_WEB", "on or off: serve the web page at / (off for API-only deployments)",
+       [](ServerConfig& c, const std::string& n, const std::string& v) {
+         if (v == "on" || v == "true" || v == "1") c.web = true;
+         else if (v == "off" || v == "false" || v == "0") c.web = false;
+         else throw ConfigError(n + ": expected on or off, got '" + v + "'");
+       },
+       [](const ServerConfig& c) { return std::string(c.web ? "on" : "off"); }},
       {"log-format", "MDN_LOG_FORMAT", "text or json (one JSON object per line)",
        [](ServerConfig& c, const std::string& n, const std::string& v) {
          if (v == "text") c.log_format = LogFormat::Text;

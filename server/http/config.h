@@ -52,6 +52,7 @@ struct ServerConfig {
   double drain_grace_s = 30;     // --drain-grace; on SIGTERM, time for queued+running jobs
   std::string auth_token;        // --auth-token / MDN_AUTH_TOKEN; empty = no auth (prefer the env)
   std::string cors_origin = "*"; // --cors-origin; Access-Control-Allow-Origin; empty = no CORS
+  bool web = true;               // --web / MDN_WEB on|off; the web page at / (off: API only)
   LogFormat log_format = LogFormat::Text;  // --log-format text|json
   std::string log_level = "info";          // --log-level trace|debug|info|warn|error|off
 

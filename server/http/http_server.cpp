@@ -24,6 +24,7 @@
 #include "server/http/metrics.h"
 #include "server/http/problem.h"
 #include "server/http/redis_queue.h"
+#include "server/http/web_routes.h"
 #include "server/params_json.h"
 
 namespace mdn::http {
@@ -254,6 +255,8 @@ struct HttpService::Impl {
         {"GET", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", &Impl::get_job, false, {}},
         {"DELETE", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", &Impl::delete_job, false, {}},
         {"GET", "/v1/jobs/([^/]+)/result", "/v1/jobs/{id}/result", &Impl::get_result, false, {}},
+        {"GET", "/", "/", &Impl::web_page, false, {}},
+        {"GET", "/web/(.+)", "/web/{path}", &Impl::web_page, false, {}},
     };
   }
 
@@ -872,6 +875,13 @@ struct HttpService::Impl {
         ctx.res.status = 204;
         return;
     }
+  }
+
+  // GET / and GET /web/{path}: the web page (web_routes.h), unless --web off.
+  void web_page(Context& ctx) {
+    if (!config.web)
+      throw HttpError(make_problem(404, "not-found", "Not found", "no route GET " + ctx.req.path + " (--web off)"));
+    serve_web_file(ctx.req, ctx.res, ctx.req.matches.size() > 1 ? ctx.req.matches[1].str() : "index.html");
   }
 
   // ---------------------------------------------------------------- state
