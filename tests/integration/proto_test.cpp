@@ -192,6 +192,14 @@ TEST(Proto, OpenApiDocumentsExactlyTheServersRoutesAndStatuses) {
       observe(seen, "GET", route, c->Get(route));
       observe(seen, "GET", route, c->Get(route, two_ranges));
     }
+    // The web page: a file, the same again (304), an unknown file (404).
+    for (const auto& [route, path] : {std::pair{"/", "/"}, {"/web/{path}", "/web/app.js"}}) {
+      auto file = c->Get(path);
+      observe(seen, "GET", route, file);
+      observe(seen, "GET", route, c->Get(path, {{"If-None-Match", file->get_header_value("ETag")}}));
+      observe(seen, "GET", route, c->Get(path, two_ranges));
+    }
+    observe(seen, "GET", "/web/{path}", c->Get("/web/no-such-file.js"));
     // The served contract is the file, byte for byte.
     EXPECT_EQ(c->Get("/openapi.yaml")->body, read_file(proto_dir() + "/openapi.yaml"));
     EXPECT_EQ(c->Get("/v1/params/schema")->body, read_file(proto_dir() + "/params.schema.json"));
@@ -232,6 +240,13 @@ TEST(Proto, OpenApiDocumentsExactlyTheServersRoutesAndStatuses) {
     observe(seen, "DELETE", "/v1/jobs/{id}", c->Delete(running->get_header_value("Location")));  // 202
     wait_job(*c, parse_json(running->body)["id"]);
     observe(seen, "POST", "/v1/denoise", c->Post("/v1/denoise", heavy_params, heavy, "model/x-off"));  // 504
+  }
+
+  {
+    // An API-only server (--web off): no page.
+    ServerProcess server({"--workers", "1", "--web", "off"});
+    ASSERT_TRUE(server.started()) << server.log();
+    observe(seen, "GET", "/", server.client()->Get("/"));  // 404
   }
 
   {

@@ -1,0 +1,276 @@
+// The web page (server/web/) against the real server on loopback: its routes and headers over
+// HTTP, then the page itself in headless Chromium (Debian's package) driven by puppeteer-core
+// (pinned in tests/tools) through tests/tools/check_web_page.mjs: a noisy mesh uploaded through
+// the file input, the job awaited, the canvas and the legend read, the download compared byte for
+// byte with POST /v1/denoise, refused files' errors read, every request and console message
+// checked. Screenshots are written to <build>/artifacts/web/ (not compared). Needs `npm install`
+// in tests/tools and the Debian package `chromium` (scripts/install-deps.sh build test).
+#include <algorithm>
+#include <map>
+#include <regex>
+#include <set>
+
+#include "http_fixture.h"
+
+namespace mdn::test {
+namespace {
+
+using nlohmann::json;
+
+// A noisy cube (creases and flat faces show what the method keeps and what it removes).
+std::string noisy_cube_off() {
+  TriMesh mesh = cube(16);
+  NoiseSpec spec;
+  spec.sigma = 0.25;
+  spec.seed = 19;
+  mesh.V = add_noise(mesh, spec);
+  return off_text(mesh);
+}
+
+// Every field of GET /v1/params' schema, output fields as "output.<name>": what the form must list.
+std::vector<std::string> schema_fields(const json& params) {
+  std::vector<std::string> out;
+  for (const auto& [name, prop] : params.at("schema").at("properties").items()) {
+    if (name == "output" && prop.value("type", "") == "object") {
+      for (const auto& [sub, p] : prop.at("properties").items()) out.push_back("output." + sub);
+    } else {
+      out.push_back(name);
+    }
+  }
+  return out;
+}
+
+std::string artifacts_dir() {
+  const fs::path dir = fs::path(build_dir()) / "artifacts" / "web";
+  fs::create_directories(dir);
+  return dir.string();
+}
+
+// Runs the browser driver on a plan; returns its report (the last line of its output).
+json run_page(const json& plan, const std::string& dir) {
+  write_file(dir + "/plan.json", plan.dump());
+  const std::string tools = source_dir() + "/tests/tools";
+  const auto [code, out] = run_command("cd " + shell_quote(tools) + " && node check_web_page.mjs " +
+                                       shell_quote(dir + "/plan.json") + " 2>&1");
+  const std::size_t line = out.rfind("\n{");
+  json report = parse_json(out.substr(line == std::string::npos ? 0 : line + 1));
+  EXPECT_EQ(code, 0) << out.substr(0, 4000);
+  EXPECT_TRUE(report.is_object()) << out.substr(0, 4000);
+  if (!report.is_object()) return json::object();
+  EXPECT_FALSE(report.contains("failure")) << report.value("failure", "");
+  return report;
+}
+
+void check_tools() {
+  ASSERT_TRUE(fs::exists(source_dir() + "/tests/tools/node_modules/puppeteer-core/package.json"))
+      << "tests/tools/node_modules/puppeteer-core is missing: run `npm install` in tests/tools "
+         "(scripts/install-deps.sh build test does it)";
+  const std::string chromium = std::getenv("MDN_CHROMIUM") ? std::getenv("MDN_CHROMIUM") : "/usr/bin/chromium";
+  ASSERT_TRUE(fs::exists(chromium)) << chromium << " is missing: install the Debian package `chromium` (scripts/deps/apt-test.txt)";
+}
+
+// Requests the page made: all to this server (or data:/blob: URLs it made itself).
+void expect_loopback_only(const json& report, int port) {
+  const std::string origin = "http://127.0.0.1:" + std::to_string(port) + "/";
+  ASSERT_FALSE(report.at("requests").empty());
+  for (const auto& url : report.at("requests")) {
+    const std::string u = url.get<std::string>();
+    EXPECT_TRUE(u.rfind(origin, 0) == 0 || u.rfind("data:", 0) == 0 || u.rfind("blob:" + origin.substr(0, origin.size() - 1), 0) == 0)
+        << "a request left the server: " << u;
+  }
+  EXPECT_TRUE(report.at("failed_requests").empty()) << report.at("failed_requests");
+  EXPECT_TRUE(report.at("page_errors").empty()) << report.at("page_errors");
+}
+
+// Console errors: none, except the browser's own line for an answer the step expects (a refused
+// file's 415, the first 401 with auth on).
+void expect_no_console_errors(const json& report, const std::map<std::string, int>& expected_status_by_phase) {
+  for (const auto& m : report.at("console")) {
+    if (m.at("type") != "error") continue;
+    const std::string phase = m.at("phase"), text = m.at("text");
+    const auto it = expected_status_by_phase.find(phase);
+    const bool expected = it != expected_status_by_phase.end() &&
+                          text.find("status of " + std::to_string(it->second)) != std::string::npos;
+    EXPECT_TRUE(expected) << "console error in phase " << phase << ": " << text;
+  }
+}
+
+TEST(WebPage, ServesThePageAndItsFilesWithTypesCachingAndPolicy) {
+  ServerProcess server({"--workers", "1"});
+  ASSERT_TRUE(server.started()) << server.log();
+  auto c = server.client();
+  auto page = c->Get("/");
+  ASSERT_TRUE(page);
+  EXPECT_EQ(page->status, 200);
+  EXPECT_EQ(page->get_header_value("Content-Type"), "text/html; charset=utf-8");
+  EXPECT_EQ(page->get_header_value("Cache-Control"), "no-cache");
+  EXPECT_EQ(page->get_header_value("X-Content-Type-Options"), "nosniff");
+  const std::string csp = page->get_header_value("Content-Security-Policy");
+  EXPECT_NE(csp.find("default-src 'self'"), std::string::npos) << csp;
+  EXPECT_NE(csp.find("script-src 'self' 'wasm-unsafe-eval';"), std::string::npos) << csp;
+  EXPECT_EQ(csp.find("unsafe-inline"), std::string::npos) << csp;
+  EXPECT_EQ(csp.find("http"), std::string::npos) << "no other origin may be allowed: " << csp;
+  EXPECT_EQ(page->body, c->Get("/web/index.html")->body);
+
+  // Revalidation: the same ETag gives 304 with no body; another one the file.
+  const std::string etag = page->get_header_value("ETag");
+  ASSERT_FALSE(etag.empty());
+  auto again = c->Get("/", {{"If-None-Match", etag}});
+  EXPECT_EQ(again->status, 304);
+  EXPECT_TRUE(again->body.empty());
+  EXPECT_EQ(c->Get("/", {{"If-None-Match", "\"other\""}})->status, 200);
+
+  // Every module the page imports, transitively, is served by this server with its media type.
+  std::set<std::string> seen;
+  std::vector<std::string> pending = {"/web/app.js"};
+  // Import statements start a line ("import ... from '...'" or "} from '...'" ending a
+  // multi-line one); examples in comments do not.
+  const std::regex import_re(R"(^(?:import\s[^'"]*?|\} )from\s*'([^']+)')", std::regex::ECMAScript | std::regex::multiline);
+  while (!pending.empty()) {
+    const std::string url = pending.back();
+    pending.pop_back();
+    if (!seen.insert(url).second) continue;
+    auto r = c->Get(url);
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 200) << url;
+    EXPECT_EQ(r->get_header_value("Content-Type"), "text/javascript; charset=utf-8") << url;
+    for (std::sregex_iterator m(r->body.begin(), r->body.end(), import_re), end; m != end; ++m) {
+      const std::string spec = (*m)[1];
+      ASSERT_EQ(spec.rfind(".", 0), 0u) << url << " imports the bare specifier '" << spec << "'";
+      fs::path target = fs::path(url).parent_path() / spec;
+      pending.push_back(target.lexically_normal().string());
+    }
+  }
+  EXPECT_TRUE(seen.count("/web/vendor/three/build/three.core.js"));
+  EXPECT_TRUE(seen.count("/web/vendor/three/examples/jsm/loaders/DRACOLoader.js"));
+  auto wasm = c->Get("/web/vendor/three/examples/jsm/libs/draco/draco_decoder.wasm");
+  EXPECT_EQ(wasm->status, 200);
+  EXPECT_EQ(wasm->get_header_value("Content-Type"), "application/wasm");
+  EXPECT_EQ(wasm->body.substr(0, 4), std::string("\0asm", 4));
+  EXPECT_EQ(c->Get("/web/style.css")->get_header_value("Content-Type"), "text/css; charset=utf-8");
+
+  expect_problem(c->Get("/web/nope.js"), 404);
+  expect_problem(c->Get("/web/../proto/openapi.yaml"), 404);
+  expect_problem(c->Post("/", "x", "text/plain"), 405);
+
+  // --web off: an API-only server; the page is a 404, the API unchanged.
+  ServerProcess api_only({"--workers", "1", "--web", "off"});
+  ASSERT_TRUE(api_only.started()) << api_only.log();
+  auto a = api_only.client();
+  expect_problem(a->Get("/"), 404);
+  expect_problem(a->Get("/web/app.js"), 404);
+  EXPECT_EQ(a->Get("/v1/params")->status, 200);
+}
+
+TEST(WebPage, DenoisesAnUploadedMeshAndShowsBeforeAndAfter) {
+  check_tools();
+  ServerProcess server({"--workers", "2"});
+  ASSERT_TRUE(server.started()) << server.log();
+  auto c = server.client();
+  const std::string dir = temp_dir("web");
+  const std::string mesh = noisy_cube_off();
+  write_file(dir + "/noisy-cube.off", mesh);
+  const std::string png = std::string("\x89PNG\r\n\x1a\n", 8) + std::string(64, 'x');
+  write_file(dir + "/photo.png", png);
+  const std::string broken = "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";  // a vertex and a face short
+  write_file(dir + "/broken.off", broken);
+
+  // Pinned in the form: one method parameter and the output container (Draco glTF: the page
+  // must read it back through DRACOLoader's worker).
+  const json plan = {{"url", "http://127.0.0.1:" + std::to_string(server.port()) + "/"},
+                     {"out", artifacts_dir()},
+                     {"mesh", dir + "/noisy-cube.off"},
+                     {"set", {{"n_normal", "12"}, {"output.format", "\"glb\""}}},
+                     {"refused", {dir + "/photo.png", dir + "/broken.off"}},
+                     {"screenshots", true}};
+  const json report = run_page(plan, dir);
+  ASSERT_TRUE(report.contains("state")) << report.dump(1);
+  ASSERT_EQ(report.at("state"), "done") << report.value("error_text", "");
+
+  // The form lists exactly the fields of /v1/params, each once.
+  const json params = parse_json(c->Get("/v1/params")->body);
+  std::vector<std::string> form = report.at("form_fields"), expected = schema_fields(params);
+  std::sort(form.begin(), form.end());
+  std::sort(expected.begin(), expected.end());
+  EXPECT_EQ(form, expected);
+  for (const auto& p : params.at("parameters"))
+    EXPECT_TRUE(std::count(form.begin(), form.end(), p.at("name").get<std::string>())) << p.at("name");
+
+  // Both halves of the canvas show a mesh (not just the background).
+  const json& canvas = report.at("canvas");
+  const double area = canvas.at("width").get<double>() * canvas.at("height").get<double>() / 2;
+  EXPECT_GT(canvas.at("before_pixels").get<double>(), 0.05 * area) << canvas;
+  EXPECT_GT(canvas.at("after_pixels").get<double>(), 0.05 * area) << canvas;
+  // The displacement legend has a range > 0, in edge lengths and model units; sigma was 0.25 edge
+  // lengths, so the vertices moved by a fraction of an edge, not by many edges.
+  const json& legend = report.at("legend");
+  EXPECT_FALSE(legend.at("hidden").get<bool>());
+  EXPECT_GT(legend.at("edge_lengths").get<double>(), 0.02) << legend;
+  EXPECT_LT(legend.at("edge_lengths").get<double>(), 2.0) << legend;
+  EXPECT_GT(legend.at("model_units").get<double>(), 0) << legend;
+
+  // The CLI command carries the run's parameters; the file downloaded in the browser is what
+  // POST /v1/denoise returns for the same input and parameters, byte for byte.
+  const std::string params_text = R"({"n_normal":12,"output":{"format":"glb"}})";
+  EXPECT_NE(report.value("cli", "").find("--params '" + params_text + "'"), std::string::npos) << report.value("cli", "");
+  EXPECT_NE(report.value("curl", "").find("/v1/denoise"), std::string::npos) << report.value("curl", "");
+  EXPECT_EQ(report.at("download_state"), "completed");
+  ASSERT_EQ(report.at("downloads").size(), 1u) << report.at("downloads");
+  const std::string downloaded = read_file(report.at("downloads")[0].get<std::string>());
+  auto direct = c->Post("/v1/denoise", {{"X-Denoise-Params", params_text}}, mesh, "model/x-off");
+  ASSERT_TRUE(direct && direct->status == 200);
+  EXPECT_EQ(downloaded.size(), direct->body.size());
+  EXPECT_TRUE(downloaded == direct->body) << "the page's download differs from POST /v1/denoise";
+  EXPECT_EQ(downloaded.substr(0, 4), "glTF");
+
+  // Refused files: the page shows the problem the API gives for the same bytes.
+  ASSERT_EQ(report.at("refused").size(), 2u);
+  const std::pair<std::string, std::string> bodies[] = {{png, "application/octet-stream"}, {broken, "model/x-off"}};
+  for (std::size_t i = 0; i < 2; ++i) {
+    const json& shown = report.at("refused")[i];
+    auto r = c->Post("/v1/denoise", bodies[i].first, bodies[i].second.c_str());
+    ASSERT_TRUE(r && r->status >= 400 && r->status < 500) << shown;
+    const json problem = parse_json(r->body);
+    EXPECT_EQ(shown.at("state"), "failed") << shown;
+    EXPECT_TRUE(shown.at("visible").get<bool>()) << shown;
+    EXPECT_EQ(shown.at("title"), problem.at("title")) << shown;
+    EXPECT_EQ(shown.at("detail"), problem.at("detail")) << shown;
+  }
+
+  // Keyboard: the controls a person needs are reached with Tab.
+  const json& tabs = report.at("tab_order");
+  for (const char* id : {"file", "run", "canvas", "download", "copy-curl", "copy-cli"})
+    EXPECT_NE(std::find(tabs.begin(), tabs.end(), id), tabs.end()) << id << " is not reachable with Tab: " << tabs;
+  EXPECT_FALSE(report.value("narrow_overflow", true)) << "the page scrolls sideways at 420 px";
+
+  expect_loopback_only(report, server.port());
+  expect_no_console_errors(report, {{"refused:photo.png", 415}});
+  fs::remove_all(dir);
+}
+
+TEST(WebPage, AsksForTheTokenOnceWhenAuthIsOn) {
+  check_tools();
+  ServerProcess server({"--workers", "1"}, {"MDN_AUTH_TOKEN=s3cret"});
+  ASSERT_TRUE(server.started()) << server.log();
+  const std::string dir = temp_dir("web_auth");
+  write_file(dir + "/sphere.off", noisy_sphere_off(2, 5));
+  const json plan = {{"url", "http://127.0.0.1:" + std::to_string(server.port()) + "/"},
+                     {"out", dir},
+                     {"mesh", dir + "/sphere.off"},
+                     {"token", "s3cret"}};
+  const json report = run_page(plan, dir);
+  ASSERT_TRUE(report.contains("state")) << report.dump(1);
+  EXPECT_EQ(report.at("state"), "done") << report.value("error_text", "");
+  // One 401 (the page's first API call), then every API call carried the token.
+  int unauthorized = 0;
+  for (const auto& s : report.at("statuses")) unauthorized += s.at("status") == 401;
+  EXPECT_EQ(unauthorized, 1) << report.at("statuses");
+  EXPECT_NE(report.value("curl", "").find("Authorization: Bearer $MDN_TOKEN"), std::string::npos) << report.value("curl", "");
+  EXPECT_EQ(report.value("curl", "").find("s3cret"), std::string::npos) << "the token must not be shown";
+  expect_loopback_only(report, server.port());
+  expect_no_console_errors(report, {{"auth", 401}, {"load", 401}});
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace mdn::test

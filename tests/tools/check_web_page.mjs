@@ -1,0 +1,189 @@
+// Drives the server's web page in headless Chromium (Debian's package) with puppeteer-core, as a
+// person would, and prints one JSON line of what it saw; the caller (tests/integration/
+// web_page_test.cpp) judges it.
+//   usage: node check_web_page.mjs PLAN.json
+// PLAN: {"url": "http://127.0.0.1:PORT/", "out": DIR, "mesh": FILE, "set": {"field": "value"},
+//        "refused": [FILE...], "token": "..." (the server wants one), "screenshots": true}
+// Steps: open the page (typing the token into its dialog if asked), list the form's fields, fill
+// `set`, upload `mesh` through the file input, wait for the job, measure the canvas, read the
+// legend, take screenshots (side by side, displacement, swipe, narrow window), download the
+// result into DIR/download/, read the curl and CLI commands, walk the page with Tab, then upload
+// each `refused` file and read the error shown. Every request, console message and page error is
+// recorded. Exit status 0 when the report was written, 1 when the browser failed or a step timed
+// out (then the report so far, with "failure", is printed). Bounded: 120 s in all.
+import { readFileSync, mkdirSync, readdirSync, rmSync, statSync } from 'node:fs';
+import path from 'node:path';
+import puppeteer from 'puppeteer-core';
+
+const TIME_LIMIT_MS = 120_000;
+const STEP_MS = 60_000;
+const plan = JSON.parse(readFileSync(process.argv[2], 'utf8'));
+const report = { requests: [], console: [], page_errors: [], failed_requests: [], statuses: [], phase: 'load', step_ms: {} };
+const t0 = Date.now();
+let last = t0;
+const step = (name) => { const now = Date.now(); report.step_ms[name] = now - last; last = now; };
+const killer = setTimeout(() => {
+  console.log(JSON.stringify({ ...report, failure: `no result within ${TIME_LIMIT_MS / 1000} s` }));
+  process.exit(1);
+}, TIME_LIMIT_MS);
+
+const executablePath = process.env.MDN_CHROMIUM ?? '/usr/bin/chromium';
+let browser;
+try {
+  browser = await puppeteer.launch({
+    executablePath,
+    headless: true,
+    // --no-sandbox: CI containers run as root. WebGL without a GPU: SwiftShader through ANGLE.
+    // The rest keeps the browser from doing background work or reaching the network; the
+    // resolver rule makes every host name but the loopback address unresolvable.
+    args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-quic',
+           '--no-first-run', '--no-default-browser-check', '--disable-background-networking',
+           '--disable-component-update', '--disable-sync', '--disable-extensions', '--disable-dev-shm-usage',
+           '--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE 127.0.0.1'],
+    defaultViewport: { width: 1280, height: 720 },
+  });
+  report.browser = await browser.version();
+  step('launch');
+  const page = await browser.newPage();
+  page.setDefaultTimeout(STEP_MS);
+  page.on('request', (r) => report.requests.push(r.url()));
+  page.on('response', (r) => report.statuses.push({ url: r.url(), status: r.status(), phase: report.phase }));
+  page.on('requestfailed', (r) => report.failed_requests.push({ url: r.url(), error: r.failure()?.errorText, phase: report.phase }));
+  page.on('console', (m) => {
+    if (['error', 'warn', 'warning'].includes(m.type())) report.console.push({ type: m.type(), text: m.text(), phase: report.phase });
+  });
+  page.on('pageerror', (e) => report.page_errors.push(String(e)));
+
+  // Open; with auth on, the page asks for the token before it can build its form.
+  await page.goto(plan.url, { waitUntil: 'load' });
+  if (plan.token) {
+    report.phase = 'auth';
+    await page.waitForSelector('#token-dialog[open]');
+    await page.type('#token', plan.token);
+    await page.keyboard.press('Enter');
+  }
+  await page.waitForSelector('body[data-form="ready"]');
+  step('open');
+  report.phase = 'form';
+  report.form_fields = await page.$$eval('[data-field]', (rows) => rows.map((r) => r.dataset.field));
+  for (const [field, value] of Object.entries(plan.set ?? {})) {
+    const selector = `[data-field="${field}"] input, [data-field="${field}"] select`;
+    if (await page.$eval(selector, (c) => c.tagName) === 'SELECT') await page.select(selector, value);
+    else await page.type(selector, value);
+  }
+
+  // The job, through the file input.
+  report.phase = 'job';
+  const started = Date.now();
+  await (await page.$('#file')).uploadFile(plan.mesh);
+  await page.waitForSelector('body[data-state="done"], body[data-state="failed"], body[data-state="cancelled"]');
+  report.job_ms = Date.now() - started;
+  step('job');
+  report.state = await page.$eval('body', (b) => b.dataset.state);
+  report.error_text = await page.$eval('#error', (e) => (e.hidden ? '' : e.innerText));
+  if (report.state === 'done') {
+    // Pixels of each half of the canvas that differ from the background: the meshes were drawn.
+    report.canvas = await page.$eval('#canvas', (c) => {
+      const copy = document.createElement('canvas');
+      copy.width = c.width;
+      copy.height = c.height;
+      const ctx = copy.getContext('2d');
+      ctx.drawImage(c, 0, 0);
+      const { data } = ctx.getImageData(0, 0, c.width, c.height);
+      const bg = [0x1d, 0x23, 0x2c];
+      const drawn = [0, 0];
+      for (let y = 0; y < c.height; ++y) for (let x = 0; x < c.width; ++x) {
+        const i = 4 * (y * c.width + x);
+        if (Math.abs(data[i] - bg[0]) + Math.abs(data[i + 1] - bg[1]) + Math.abs(data[i + 2] - bg[2]) > 24) ++drawn[x < c.width / 2 ? 0 : 1];
+      }
+      return { width: c.width, height: c.height, before_pixels: drawn[0], after_pixels: drawn[1] };
+    });
+    report.legend = await page.$eval('#legend', (l) => ({
+      hidden: l.hidden, text: l.innerText,
+      edge_lengths: Number(l.querySelector('#legend-max').dataset.edgeLengths),
+      model_units: Number(l.querySelector('#legend-max').dataset.modelUnits),
+    }));
+    report.summary = await page.$eval('#summary', (s) => s.innerText);
+
+    if (plan.screenshots) {
+      report.screenshots = [];
+      const shot = async (name) => {
+        const file = path.join(plan.out, name);
+        await page.screenshot({ path: file });
+        report.screenshots.push(file);
+      };
+      await shot('web-side-by-side.png');
+      await page.click('input[name=colour][value=heat]');
+      await shot('web-displacement.png');
+      await page.click('input[name=layout][value=swipe]');
+      await shot('web-swipe.png');
+      await page.click('input[name=layout][value=side]');
+      await page.evaluate(() => window.scrollTo(0, 0));
+      await page.screenshot({ path: path.join(plan.out, 'web-report.png'), fullPage: true });
+      await page.setViewport({ width: 420, height: 900 });
+      await page.click('#reset-view');
+      await shot('web-narrow.png');
+      report.narrow_overflow = await page.evaluate(() => document.documentElement.scrollWidth > window.innerWidth);
+      await page.setViewport({ width: 1280, height: 720 });
+      step('screenshots');
+    }
+
+    // Download through the browser's own download path.
+    const downloads = path.join(plan.out, 'download');
+    rmSync(downloads, { recursive: true, force: true });  // an earlier run's file would be renamed "(1)"
+    mkdirSync(downloads, { recursive: true });
+    const cdp = await browser.target().createCDPSession();
+    await cdp.send('Browser.setDownloadBehavior', { behavior: 'allow', downloadPath: downloads, eventsEnabled: true });
+    const done = new Promise((resolve) => cdp.on('Browser.downloadProgress', (e) => {
+      if (e.state === 'completed' || e.state === 'canceled') resolve(e.state);
+    }));
+    await page.click('#download');
+    report.download_state = await Promise.race([done, new Promise((r) => setTimeout(() => r('timeout'), STEP_MS))]);
+    step('download');
+    report.downloads = readdirSync(downloads).map((f) => path.join(downloads, f)).filter((f) => statSync(f).isFile());
+
+    await page.click('#copy-curl');
+    report.curl = await page.$eval('#command', (c) => c.textContent);
+    await page.click('#copy-cli');
+    report.cli = await page.$eval('#command', (c) => c.textContent);
+
+    // Keyboard: what Tab reaches, in order (ids, or name=value for radio buttons).
+    await page.focus('body');
+    report.tab_order = [];
+    for (let i = 0; i < 120; ++i) {
+      await page.keyboard.press('Tab');
+      const id = await page.evaluate(() => {
+        const a = document.activeElement;
+        return a === document.body ? '' : a.id || `${a.name}=${a.value}`;
+      });
+      if (id === report.tab_order[0]) break;
+      report.tab_order.push(id);
+    }
+  }
+
+  step('keyboard');
+  // Files the service refuses: the page shows the problem's title and detail.
+  report.refused = [];
+  for (const file of plan.refused ?? []) {
+    report.phase = `refused:${path.basename(file)}`;
+    await page.$eval('body', (b) => { b.dataset.state = 'loading'; });
+    await (await page.$('#file')).uploadFile(file);
+    await page.waitForSelector('body[data-state="failed"], body[data-state="done"]');
+    report.refused.push({
+      file: path.basename(file),
+      state: await page.$eval('body', (b) => b.dataset.state),
+      title: await page.$eval('#error-title', (e) => e.textContent),
+      detail: await page.$eval('#error-detail', (e) => e.textContent),
+      visible: await page.$eval('#error', (e) => !e.hidden && e.getBoundingClientRect().height > 0),
+    });
+  }
+  step('refused');
+  report.phase = 'end';
+} catch (e) {
+  report.failure = String(e?.stack ?? e);
+} finally {
+  await browser?.close().catch(() => {});
+  clearTimeout(killer);
+}
+console.log(JSON.stringify(report));
+process.exit(report.failure ? 1 : 0);
