@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Installs the Debian packages listed in scripts/deps/apt-<list>.txt (and, for tests, the npm
-# tools of tests/tools). Idempotent; needs root on a Debian bookworm machine.
+# Installs the Debian packages listed in scripts/deps/apt-<list>.txt, then the npm packages: for
+# a build, the web page's three.js (server/web, `npm ci` from its lock file); for tests, the npm
+# tools of tests/tools. Idempotent; needs root on a Debian bookworm machine.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/.." && pwd)"
@@ -25,6 +26,13 @@ if [ "${#missing[@]}" -gt 0 ]; then
   export DEBIAN_FRONTEND=noninteractive
   apt-get update -qq
   apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# The web page's three.js, exactly as locked (the build embeds it): for every build.
+if [[ " $* " == *" build "* ]] && [ -f "$root/server/web/package-lock.json" ]; then
+  if [ ! -d "$root/server/web/node_modules" ] || [ "$root/server/web/package-lock.json" -nt "$root/server/web/node_modules" ]; then
+    (cd "$root/server/web" && npm ci --no-audit --no-fund --loglevel=error && touch node_modules)
+  fi
 fi
 
 if [[ " $* " == *" test "* ]] && [ -f "$root/tests/tools/package.json" ]; then
