@@ -166,7 +166,7 @@ async function showResult(job, bytes) {
     ...(legend ? [['Moved', `mean ${num(legend.mean / legend.edge)} · max ${num(legend.max / legend.edge)} edge lengths`]] : []),
     ...result.notes.map((n) => ['Note', n]),
   ].flatMap(([k, v]) => [Object.assign(document.createElement('dt'), { textContent: k }), Object.assign(document.createElement('dd'), { textContent: v })]));
-  showReports(result.reports);
+  showReports(result.reports, result.params);
   showTimings(result.timings_ms);
   $('download').textContent = `Download ${state.resultName}`;
   showCommand('curl');
@@ -201,19 +201,28 @@ function table(rows, head) {
 }
 
 // Per surface: what auto measured and what ran (chosen or pinned).
-function showReports(reports) {
+function showReports(reports, pinned) {
   const box = $('reports');
   box.replaceChildren();
   reports.forEach((r, i) => {
     const title = document.createElement('h3');
     title.textContent = `${reports.length > 1 ? `Surface ${i + 1} · ` : ''}mode ${r.mode}${r.region_prefilter_applied ? ` · region pre-filter on ${r.region_vertices} vertices` : ''}`;
-    box.append(title, table(Object.entries(r.params).map(([k, v]) => [k, typeof v === 'number' ? num(v) : String(v)]), ['Parameter', 'Ran with']));
+    // report.params is what ran, in the shape of a manual-mode request; the run's own echo
+    // (result.params) holds the fields that were pinned.
+    const rows = Object.entries(r.params).filter(([k]) => k !== 'mode')
+      .map(([k, v]) => [k, typeof v === 'number' ? num(v) : String(v), r.mode === 'auto' && !(k in pinned) ? 'auto' : 'given']);
+    box.append(title, table(rows, ['Parameter', 'Ran with', 'Set by']));
     if (r.measures) box.append(table(Object.entries(r.measures).map(([k, v]) => [k, num(v)]), ['Measured', 'Value']));
   });
 }
 
+// The stages in the order they run; any stage the server adds later follows them.
+const STAGE_ORDER = ['decode', 'setup', 'measure', 'initial_prefilter', 'region_prefilter', 'anisotropic_prefilter',
+                     'normal_filter', 'vertex_update', 'encode'];
+
 function showTimings(ms) {
-  const stages = Object.entries(ms).filter(([k]) => k !== 'denoise');
+  const rank = (k) => (STAGE_ORDER.includes(k) ? STAGE_ORDER.indexOf(k) : STAGE_ORDER.length);
+  const stages = Object.entries(ms).filter(([k]) => k !== 'denoise').sort(([a], [b]) => rank(a) - rank(b));
   const total = stages.reduce((a, [, v]) => a + v, 0) || 1;
   const t = $('timings');
   t.replaceChildren();

@@ -104,7 +104,10 @@ export class Viewer {
     mesh.geometry.computeBoundingSphere();
     const { center, radius } = mesh.geometry.boundingSphere;
     const r = radius > 0 ? radius : 1;
-    const distance = r / Math.sin(THREE.MathUtils.degToRad(this.camera.fov / 2)) * 1.05;
+    // The sphere fits the narrower of the two fields of view (a tall viewport is narrow).
+    const half = THREE.MathUtils.degToRad(this.camera.fov / 2);
+    const fit = Math.min(half, Math.atan(Math.tan(half) * this.camera.aspect));
+    const distance = r / Math.sin(fit) * 1.05;
     this.camera.near = distance / 100;
     this.camera.far = distance * 10;
     this.camera.position.copy(center).add(new THREE.Vector3(0.35, 0.3, 1).normalize().multiplyScalar(distance));
