@@ -110,7 +110,7 @@ export class Viewer {
     const distance = r / Math.sin(fit) * 1.05;
     this.camera.near = distance / 100;
     this.camera.far = distance * 10;
-    this.camera.position.copy(center).add(new THREE.Vector3(0.35, 0.3, 1).normalize().multiplyScalar(distance));
+    this.camera.position.copy(center).add(new THREE.Vector3(0.6, 0.55, 1).normalize().multiplyScalar(distance));
     this.controls.target.copy(center);
     this.camera.updateProjectionMatrix();
     this.controls.update();

@@ -112,6 +112,8 @@ try {
         await page.screenshot({ path: file });
         report.screenshots.push(file);
       };
+      // As a person sees the page after the run: nothing focused, the panel at its top.
+      await page.evaluate(() => { document.activeElement?.blur(); document.querySelector('.panel').scrollTop = 0; });
       await shot('web-side-by-side.png');
       await page.click('input[name=colour][value=heat]');
       await shot('web-displacement.png');
