@@ -72,24 +72,21 @@ foreach(f IN LISTS MDN_WEB_PAGE_FILES)
   list(APPEND mdn_page_paths /web/${base})
 endforeach()
 
-# Two generated sources: the page changes often and is small; three.js (2.4 MB) rarely.
-set(MDN_WEB_EMBEDDED_CPP ${CMAKE_CURRENT_BINARY_DIR}/embedded_web_page.cpp
-                         ${CMAKE_CURRENT_BINARY_DIR}/embedded_web_vendor.cpp)
-add_custom_command(
-  OUTPUT ${CMAKE_CURRENT_BINARY_DIR}/embedded_web_page.cpp
-  COMMAND ${CMAKE_COMMAND} -DOUTPUT=${CMAKE_CURRENT_BINARY_DIR}/embedded_web_page.cpp
-          "-DINPUTS=${MDN_WEB_PAGE_FILES}" "-DNAMES=${mdn_page_names}"
-          -DTABLE=web_page_files "-DPATHS=${mdn_page_paths}"
-          -P ${PROJECT_SOURCE_DIR}/server/http/embed_files.cmake
-  DEPENDS ${MDN_WEB_PAGE_FILES} ${PROJECT_SOURCE_DIR}/server/http/embed_files.cmake
-  COMMENT "Embedding the web page (server/web/)"
-  VERBATIM)
-add_custom_command(
-  OUTPUT ${CMAKE_CURRENT_BINARY_DIR}/embedded_web_vendor.cpp
-  COMMAND ${CMAKE_COMMAND} -DOUTPUT=${CMAKE_CURRENT_BINARY_DIR}/embedded_web_vendor.cpp
-          "-DINPUTS=${mdn_vendor_outputs}" "-DNAMES=${mdn_vendor_names}"
-          -DTABLE=web_vendor_files "-DPATHS=${mdn_vendor_paths}"
-          -P ${PROJECT_SOURCE_DIR}/server/http/embed_files.cmake
-  DEPENDS ${mdn_vendor_outputs} ${PROJECT_SOURCE_DIR}/server/http/embed_files.cmake
-  COMMENT "Embedding three.js ${mdn_three_locked} for the web page"
-  VERBATIM)
+# Two generated sources: the page changes often and is small; three.js (2.8 MB) rarely.
+function(mdn_embed_web table comment)
+  cmake_parse_arguments(ARG "" "" "INPUTS;NAMES;PATHS" ${ARGN})
+  set(out ${CMAKE_CURRENT_BINARY_DIR}/embedded_${table}.cpp)
+  add_custom_command(
+    OUTPUT ${out}
+    COMMAND ${CMAKE_COMMAND} -DOUTPUT=${out} "-DINPUTS=${ARG_INPUTS}" "-DNAMES=${ARG_NAMES}"
+            -DTABLE=${table} "-DPATHS=${ARG_PATHS}" -P ${PROJECT_SOURCE_DIR}/server/http/embed_files.cmake
+    DEPENDS ${ARG_INPUTS} ${PROJECT_SOURCE_DIR}/server/http/embed_files.cmake
+    COMMENT "${comment}"
+    VERBATIM)
+endfunction()
+mdn_embed_web(web_page_files "Embedding the web page (server/web/)"
+  INPUTS ${MDN_WEB_PAGE_FILES} NAMES ${mdn_page_names} PATHS ${mdn_page_paths})
+mdn_embed_web(web_vendor_files "Embedding three.js ${mdn_three_locked} for the web page"
+  INPUTS ${mdn_vendor_outputs} NAMES ${mdn_vendor_names} PATHS ${mdn_vendor_paths})
+set(MDN_WEB_EMBEDDED_CPP ${CMAKE_CURRENT_BINARY_DIR}/embedded_web_page_files.cpp
+                         ${CMAKE_CURRENT_BINARY_DIR}/embedded_web_vendor_files.cpp)

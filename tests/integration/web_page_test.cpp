@@ -2,10 +2,12 @@
 // HTTP, then the page itself in headless Chromium (Debian's package) driven by puppeteer-core
 // (pinned in tests/tools) through tests/tools/check_web_page.mjs: a noisy mesh uploaded through
 // the file input, the job awaited, the canvas and the legend read, the download compared byte for
-// byte with POST /v1/denoise, refused files' errors read, every request and console message
-// checked. Screenshots are written to <build>/artifacts/web/ (not compared). Needs `npm install`
-// in tests/tools and the Debian package `chromium` (scripts/install-deps.sh build test).
+// byte with POST /v1/denoise, refused files' errors read, every other input format drawn, a long
+// job cancelled, every request and console message checked. Screenshots are written to
+// <build>/artifacts/web/ (not compared). Needs `npm install` in tests/tools and the Debian
+// package `chromium` (scripts/install-deps.sh build test).
 #include <algorithm>
+#include <iostream>
 #include <map>
 #include <regex>
 #include <set>
@@ -58,6 +60,7 @@ json run_page(const json& plan, const std::string& dir) {
   EXPECT_TRUE(report.is_object()) << out.substr(0, 4000);
   if (!report.is_object()) return json::object();
   EXPECT_FALSE(report.contains("failure")) << report.value("failure", "");
+  std::cout << "browser steps (ms): " << report.value("step_ms", json::object()).dump() << "\n";
   return report;
 }
 
@@ -175,6 +178,24 @@ TEST(WebPage, DenoisesAnUploadedMeshAndShowsBeforeAndAfter) {
   const std::string broken = "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";  // a vertex and a face short
   write_file(dir + "/broken.off", broken);
 
+  // The noisy cube in every other container the service reads (its own output is one), for the
+  // page to draw as inputs.
+  json formats = json::array();
+  for (const std::string format_params : {R"({"format":"glb"})", R"({"format":"gltf","draco":false})",
+                                          R"({"format":"drc"})", R"({"format":"obj"})", R"({"format":"ply"})"}) {
+    const json p = {{"mode", "manual"}, {"n_normal", 0}, {"n_vertex", 0}, {"output", json::parse(format_params)}};
+    auto r = c->Post("/v1/denoise", {{"X-Denoise-Params", p.dump()}}, mesh, "model/x-off");
+    ASSERT_TRUE(r && r->status == 200) << format_params;
+    const std::string name = dir + "/noisy-cube." + json::parse(format_params).at("format").get<std::string>();
+    write_file(name, r->body);
+    formats.push_back(name);
+  }
+  // A long job to cancel while it runs (seconds: 20k faces with heavy parameters).
+  write_file(dir + "/big.off", noisy_sphere_off(5, 3));
+  const json heavy_params = json::parse(kHeavyParams);
+  json heavy = json::object();
+  for (const auto& [k, v] : heavy_params.items()) heavy[k] = std::to_string(v.get<int>());
+
   // Pinned in the form: one method parameter and the output container (Draco glTF: the page
   // must read it back through DRACOLoader's worker).
   const json plan = {{"url", "http://127.0.0.1:" + std::to_string(server.port()) + "/"},
@@ -182,7 +203,9 @@ TEST(WebPage, DenoisesAnUploadedMeshAndShowsBeforeAndAfter) {
                      {"mesh", dir + "/noisy-cube.off"},
                      {"set", {{"n_normal", "12"}, {"output.format", "\"glb\""}}},
                      {"refused", {dir + "/photo.png", dir + "/broken.off"}},
-                     {"screenshots", true}};
+                     {"formats", formats},
+                     {"cancel", {{"mesh", dir + "/big.off"}, {"set", heavy}}},
+                     {"full", true}};
   const json report = run_page(plan, dir);
   ASSERT_TRUE(report.contains("state")) << report.dump(1);
   ASSERT_EQ(report.at("state"), "done") << report.value("error_text", "");
@@ -236,6 +259,21 @@ TEST(WebPage, DenoisesAnUploadedMeshAndShowsBeforeAndAfter) {
     EXPECT_EQ(shown.at("title"), problem.at("title")) << shown;
     EXPECT_EQ(shown.at("detail"), problem.at("detail")) << shown;
   }
+
+  // Every input format is drawn, before and after, with its heat map.
+  ASSERT_EQ(report.at("formats").size(), formats.size());
+  for (const json& f : report.at("formats")) {
+    EXPECT_EQ(f.at("state"), "done") << f;
+    EXPECT_GT(f.at("canvas").at("before_pixels").get<double>(), 0.05 * area) << f;
+    EXPECT_GT(f.at("canvas").at("after_pixels").get<double>(), 0.05 * area) << f;
+    EXPECT_FALSE(f.at("legend_hidden").get<bool>()) << f;
+  }
+
+  // Cancel: the page showed the stage and fraction while the job ran, then its end.
+  const json& cancelled = report.at("cancel");
+  EXPECT_EQ(cancelled.at("running").at("state"), "running") << cancelled;
+  EXPECT_NE(cancelled.at("running").at("stage").get<std::string>().find(" %"), std::string::npos) << cancelled;
+  EXPECT_EQ(cancelled.at("state"), "cancelled") << cancelled;
 
   // Keyboard: the controls a person needs are reached with Tab.
   const json& tabs = report.at("tab_order");

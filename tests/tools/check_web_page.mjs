@@ -3,14 +3,17 @@
 // web_page_test.cpp) judges it.
 //   usage: node check_web_page.mjs PLAN.json
 // PLAN: {"url": "http://127.0.0.1:PORT/", "out": DIR, "mesh": FILE, "set": {"field": "value"},
-//        "refused": [FILE...], "token": "..." (the server wants one), "screenshots": true}
+//        "refused": [FILE...], "formats": [FILE...], "cancel": {"mesh": FILE, "set": {...}},
+//        "token": "..." (the server wants one), "full": true (screenshots, download, Tab walk)}
 // Steps: open the page (typing the token into its dialog if asked), list the form's fields, fill
 // `set`, upload `mesh` through the file input, wait for the job, measure the canvas, read the
-// legend, take screenshots (side by side, displacement, swipe, narrow window), download the
-// result into DIR/download/, read the curl and CLI commands, walk the page with Tab, then upload
-// each `refused` file and read the error shown. Every request, console message and page error is
-// recorded. Exit status 0 when the report was written, 1 when the browser failed or a step timed
-// out (then the report so far, with "failure", is printed). Bounded: 120 s in all.
+// legend and the curl and CLI commands; with `full`, take screenshots (side by side,
+// displacement, swipe, narrow window), download the result into DIR/download/ and walk the page
+// with Tab; then upload each `refused` file and read the error shown, each of `formats` and
+// measure the canvas, and run `cancel` (a long job) and press Cancel while it runs. Every
+// request, console message and page error is recorded. Exit status 0 when the report was
+// written, 1 when the browser failed or a step timed out (then the report so far, with
+// "failure", is printed). Bounded: 120 s in all.
 import { readFileSync, mkdirSync, readdirSync, rmSync, statSync } from 'node:fs';
 import path from 'node:path';
 import puppeteer from 'puppeteer-core';
@@ -23,9 +26,35 @@ const t0 = Date.now();
 let last = t0;
 const step = (name) => { const now = Date.now(); report.step_ms[name] = now - last; last = now; };
 const killer = setTimeout(() => {
-  console.log(JSON.stringify({ ...report, failure: `no result within ${TIME_LIMIT_MS / 1000} s` }));
-  process.exit(1);
+  process.stdout.write(`${JSON.stringify({ ...report, failure: `no result within ${TIME_LIMIT_MS / 1000} s` })}\n`,
+                       () => process.exit(1));
 }, TIME_LIMIT_MS);
+
+// Pixels of each half of the canvas that differ from the background: the meshes were drawn.
+const measureCanvas = (page) => page.$eval('#canvas', (c) => {
+  const copy = document.createElement('canvas');
+  copy.width = c.width;
+  copy.height = c.height;
+  const ctx = copy.getContext('2d');
+  ctx.drawImage(c, 0, 0);
+  const { data } = ctx.getImageData(0, 0, c.width, c.height);
+  const bg = [0x1d, 0x23, 0x2c];
+  const drawn = [0, 0];
+  for (let y = 0; y < c.height; ++y) for (let x = 0; x < c.width; ++x) {
+    const i = 4 * (y * c.width + x);
+    if (Math.abs(data[i] - bg[0]) + Math.abs(data[i + 1] - bg[1]) + Math.abs(data[i + 2] - bg[2]) > 24) ++drawn[x < c.width / 2 ? 0 : 1];
+  }
+  return { width: c.width, height: c.height, before_pixels: drawn[0], after_pixels: drawn[1] };
+});
+
+// Uploads a file through the file input and waits for the job's end; the state marker is reset
+// first so that the previous run's end does not count.
+async function upload(page, file) {
+  await page.$eval('body', (b) => { b.dataset.state = 'loading'; });
+  await (await page.$('#file')).uploadFile(file);
+  await page.waitForSelector('body[data-state="done"], body[data-state="failed"], body[data-state="cancelled"]');
+  return page.$eval('body', (b) => b.dataset.state);
+}
 
 const executablePath = process.env.MDN_CHROMIUM ?? '/usr/bin/chromium';
 let browser;
@@ -46,9 +75,9 @@ try {
   step('launch');
   const page = await browser.newPage();
   page.setDefaultTimeout(STEP_MS);
-  page.on('request', (r) => report.requests.push(r.url()));
-  page.on('response', (r) => report.statuses.push({ url: r.url(), status: r.status(), phase: report.phase }));
-  page.on('requestfailed', (r) => report.failed_requests.push({ url: r.url(), error: r.failure()?.errorText, phase: report.phase }));
+  page.on('request', (r) => report.requests.push(r.url().slice(0, 200)));  // data: URLs can be long
+  page.on('response', (r) => report.statuses.push({ url: r.url().slice(0, 200), status: r.status(), phase: report.phase }));
+  page.on('requestfailed', (r) => report.failed_requests.push({ url: r.url().slice(0, 200), error: r.failure()?.errorText, phase: report.phase }));
   page.on('console', (m) => {
     if (['error', 'warn', 'warning'].includes(m.type())) report.console.push({ type: m.type(), text: m.text(), phase: report.phase });
   });
@@ -75,29 +104,12 @@ try {
   // The job, through the file input.
   report.phase = 'job';
   const started = Date.now();
-  await (await page.$('#file')).uploadFile(plan.mesh);
-  await page.waitForSelector('body[data-state="done"], body[data-state="failed"], body[data-state="cancelled"]');
+  report.state = await upload(page, plan.mesh);
   report.job_ms = Date.now() - started;
   step('job');
-  report.state = await page.$eval('body', (b) => b.dataset.state);
   report.error_text = await page.$eval('#error', (e) => (e.hidden ? '' : e.innerText));
   if (report.state === 'done') {
-    // Pixels of each half of the canvas that differ from the background: the meshes were drawn.
-    report.canvas = await page.$eval('#canvas', (c) => {
-      const copy = document.createElement('canvas');
-      copy.width = c.width;
-      copy.height = c.height;
-      const ctx = copy.getContext('2d');
-      ctx.drawImage(c, 0, 0);
-      const { data } = ctx.getImageData(0, 0, c.width, c.height);
-      const bg = [0x1d, 0x23, 0x2c];
-      const drawn = [0, 0];
-      for (let y = 0; y < c.height; ++y) for (let x = 0; x < c.width; ++x) {
-        const i = 4 * (y * c.width + x);
-        if (Math.abs(data[i] - bg[0]) + Math.abs(data[i + 1] - bg[1]) + Math.abs(data[i + 2] - bg[2]) > 24) ++drawn[x < c.width / 2 ? 0 : 1];
-      }
-      return { width: c.width, height: c.height, before_pixels: drawn[0], after_pixels: drawn[1] };
-    });
+    report.canvas = await measureCanvas(page);
     report.legend = await page.$eval('#legend', (l) => ({
       hidden: l.hidden, text: l.innerText,
       edge_lengths: Number(l.querySelector('#legend-max').dataset.edgeLengths),
@@ -105,7 +117,7 @@ try {
     }));
     report.summary = await page.$eval('#summary', (s) => s.innerText);
 
-    if (plan.screenshots) {
+    if (plan.full) {
       report.screenshots = [];
       const shot = async (name) => {
         const file = path.join(plan.out, name);
@@ -130,6 +142,12 @@ try {
       step('screenshots');
     }
 
+    await page.click('#copy-curl');
+    report.curl = await page.$eval('#command', (c) => c.textContent);
+    await page.click('#copy-cli');
+    report.cli = await page.$eval('#command', (c) => c.textContent);
+  }
+  if (report.state === 'done' && plan.full) {
     // Download through the browser's own download path.
     const downloads = path.join(plan.out, 'download');
     rmSync(downloads, { recursive: true, force: true });  // an earlier run's file would be renamed "(1)"
@@ -140,14 +158,12 @@ try {
       if (e.state === 'completed' || e.state === 'canceled') resolve(e.state);
     }));
     await page.click('#download');
-    report.download_state = await Promise.race([done, new Promise((r) => setTimeout(() => r('timeout'), STEP_MS))]);
+    let timer;
+    report.download_state = await Promise.race([done, new Promise((r) => { timer = setTimeout(() => r('timeout'), STEP_MS); })]);
+    clearTimeout(timer);
     step('download');
     report.downloads = readdirSync(downloads).map((f) => path.join(downloads, f)).filter((f) => statSync(f).isFile());
 
-    await page.click('#copy-curl');
-    report.curl = await page.$eval('#command', (c) => c.textContent);
-    await page.click('#copy-cli');
-    report.cli = await page.$eval('#command', (c) => c.textContent);
 
     // Keyboard: what Tab reaches, in order (ids, or name=value for radio buttons).
     await page.focus('body');
@@ -168,18 +184,42 @@ try {
   report.refused = [];
   for (const file of plan.refused ?? []) {
     report.phase = `refused:${path.basename(file)}`;
-    await page.$eval('body', (b) => { b.dataset.state = 'loading'; });
-    await (await page.$('#file')).uploadFile(file);
-    await page.waitForSelector('body[data-state="failed"], body[data-state="done"]');
+    const state = await upload(page, file);
     report.refused.push({
       file: path.basename(file),
-      state: await page.$eval('body', (b) => b.dataset.state),
+      state,
       title: await page.$eval('#error-title', (e) => e.textContent),
       detail: await page.$eval('#error-detail', (e) => e.textContent),
       visible: await page.$eval('#error', (e) => !e.hidden && e.getBoundingClientRect().height > 0),
     });
   }
   step('refused');
+
+  // Every other input format: drawn before and after, with a heat map.
+  report.formats = [];
+  for (const file of plan.formats ?? []) {
+    report.phase = `format:${path.basename(file)}`;
+    const state = await upload(page, file);
+    report.formats.push({ file: path.basename(file), state, canvas: await measureCanvas(page),
+                          legend_hidden: await page.$eval('#legend', (l) => l.hidden),
+                          error: await page.$eval('#error', (e) => (e.hidden ? '' : e.innerText)) });
+  }
+  step('formats');
+
+  // Cancel: a long job, its progress while it runs, then the Cancel button.
+  if (plan.cancel) {
+    report.phase = 'cancel';
+    await page.click('#reset');
+    for (const [field, value] of Object.entries(plan.cancel.set)) await page.type(`[data-field="${field}"] input`, value);
+    await page.$eval('body', (b) => { b.dataset.state = 'loading'; });
+    await (await page.$('#file')).uploadFile(plan.cancel.mesh);
+    await page.waitForFunction(() => Number(document.getElementById('progress').value) > 0);
+    const running = { state: await page.$eval('body', (b) => b.dataset.state), stage: await page.$eval('#stage', (e) => e.textContent) };
+    await page.click('#cancel');
+    await page.waitForSelector('body[data-state="cancelled"], body[data-state="done"], body[data-state="failed"]');
+    report.cancel = { running, state: await page.$eval('body', (b) => b.dataset.state), stage: await page.$eval('#stage', (e) => e.textContent) };
+  }
+  step('cancel');
   report.phase = 'end';
 } catch (e) {
   report.failure = String(e?.stack ?? e);
@@ -187,5 +227,5 @@ try {
   await browser?.close().catch(() => {});
   clearTimeout(killer);
 }
-console.log(JSON.stringify(report));
-process.exit(report.failure ? 1 : 0);
+// Exit once the report is written: a plain process.exit() could cut it short on a pipe.
+process.stdout.write(`${JSON.stringify(report)}\n`, () => process.exit(report.failure ? 1 : 0));
