@@ -26,6 +26,7 @@ export class Viewer {
     this.camera = new THREE.PerspectiveCamera(35, 1, 0.01, 100);
     this.controls = new OrbitControls(this.camera, canvas);
     this.controls.enableDamping = false;
+    this.controls.listenToKeyEvents(canvas);  // arrow keys pan while the canvas has focus
     this.controls.addEventListener('change', () => this.draw());
     this.layout = 'side';
     this.split = 0.5;

@@ -66,6 +66,15 @@ def check_build_context(dockerfile, source_dir):
                                         ignore=shutil.ignore_patterns("build", "node_modules"))
                     else:
                         shutil.copy2(m, to)
+        # A RUN of install-deps.sh build also installs the web page's npm packages (npm ci from
+        # server/web/package-lock.json, copied above): take this checkout's, installed by the same
+        # script, rather than fetch them again.
+        if any("install-deps.sh build" in r for r in build.other_runs):
+            npm = os.path.join("server", "web", "node_modules")
+            check(os.path.isdir(os.path.join(source_dir, npm)), "%s is missing: run scripts/install-deps.sh build" % npm)
+            check(os.path.exists(os.path.join(work, "server", "web", "package-lock.json")),
+                  "the build stage runs install-deps.sh build but copies no server/web/package-lock.json")
+            shutil.copytree(os.path.join(source_dir, npm), os.path.join(work, npm), dirs_exist_ok=True)
         # Ninja here (the image uses CMake's default generator; the files needed are the same) so
         # that `ninja -t inputs` can list every source file of the two executables.
         env = dict(os.environ, CMAKE_GENERATOR="Ninja")
