@@ -56,11 +56,11 @@ export async function getJson(path, options) {
 // POST /v1/jobs as a multipart form (mesh + params). The part is sent as application/octet-stream
 // with its file name: the server recognises the format from the name, else from the bytes, so any
 // format it reads works here without the page knowing it.
-export async function submitJob(file, paramsText) {
+export async function submitJob(file, paramsText, signal) {
   const form = new FormData();
   form.append('mesh', new Blob([file], { type: 'application/octet-stream' }), file.name);
   form.append('params', paramsText);
-  return getJson('/v1/jobs', { method: 'POST', body: form });
+  return getJson('/v1/jobs', { method: 'POST', body: form, signal });
 }
 
 // Long poll: answers when the job finishes or after `seconds` with its progress.

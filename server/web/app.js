@@ -80,9 +80,16 @@ async function chooseFile(file) {
 async function run() {
   if (!state.file || !form.valid()) return;
   showError(null);
+  // A job still running for an earlier file or earlier parameters is not wanted any more.
   state.abort?.abort();
+  if (state.job && document.body.dataset.state === 'running') cancelJob(state.job.id).catch(() => {});
   const abort = state.abort = new AbortController();
   const paramsText = form.paramsText();
+  state.job = null;
+  state.result = null;
+  viewer.setMesh('after', null);
+  $('results').hidden = true;
+  $('legend').hidden = true;
   state.started = performance.now();
   setState('running');
   $('run').disabled = true;
@@ -90,7 +97,7 @@ async function run() {
   setStage('Uploading…', undefined);
   let job;
   try {
-    job = await submitJob(state.file, paramsText);
+    job = await submitJob(state.file, paramsText, abort.signal);
     state.job = { id: job.id, paramsText, name: state.file.name };
     while (job.state === 'queued' || job.state === 'running') {
       const stage = job.state === 'queued' ? 'Queued' : `${job.progress.stage || 'running'}`;
@@ -104,9 +111,15 @@ async function run() {
       return;
     }
     const bytes = await jobResult(job.id);
-    await showResult(job, bytes);
+    if (state.abort === abort) await showResult(job, bytes);  // unless another run took over
   } catch (e) {
-    if (e.name === 'AbortError') return;
+    if (e.name === 'AbortError') {
+      if (state.abort === abort) {  // Cancel before the job existed: the upload was dropped
+        setState('cancelled');
+        setStage('Cancelled.', 0);
+      }
+      return;
+    }
     setState('failed');
     setStage('Refused.', 0);
     showError(problemOf(e));
@@ -119,7 +132,10 @@ async function run() {
 }
 
 async function cancel() {
-  if (!state.job) return;
+  if (!state.job) {
+    state.abort?.abort();  // still uploading
+    return;
+  }
   $('cancel').disabled = true;
   setStage('Cancelling…', undefined);
   try {
