@@ -38,7 +38,7 @@ struct WebFile {
   WebFile(std::string_view b, const char* type, std::string tag) : bytes(b), media_type(type), etag(std::move(tag)) {}
   std::string_view bytes;
   const char* media_type;
-  std::string etag;
+  std::string etag;  // hash of the bytes
   // Compressed once, on the first request that accepts gzip (most servers never serve the page).
   std::string_view gzipped() const {
     std::call_once(gzip_once, [this] { gzip_bytes = gzip(bytes); });
@@ -74,19 +74,19 @@ const char* media_type_of(std::string_view path) {
   static constexpr std::pair<std::string_view, const char*> kTypes[] = {
       {".html", "text/html; charset=utf-8"},   {".css", "text/css; charset=utf-8"},
       {".js", "text/javascript; charset=utf-8"}, {".svg", "image/svg+xml"},
-      {".wasm", "application/wasm"},           {".png", "image/png"},
+      {".wasm", "application/wasm"},
   };
   for (const auto& [ext, type] : kTypes)
     if (path.size() > ext.size() && path.substr(path.size() - ext.size()) == ext) return type;
   return "text/plain; charset=utf-8";  // three's LICENSE
 }
 
-// 64-bit FNV-1a of the bytes, as a strong ETag: it changes whenever a build changes the file.
+// 64-bit FNV-1a of the bytes, in hex: the ETags' base, changed whenever a build changes the file.
 std::string etag_of(std::string_view bytes) {
   std::uint64_t h = 1469598103934665603ull;
   for (unsigned char c : bytes) h = (h ^ c) * 1099511628211ull;
   char buf[24];
-  std::snprintf(buf, sizeof buf, "\"%016llx\"", static_cast<unsigned long long>(h));
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
   return buf;
 }
 
@@ -106,8 +106,9 @@ const std::map<std::string, WebFile, std::less<>>& web_files() {
   return files;
 }
 
-// If-None-Match: "*" or a comma-separated list of (possibly weak, W/"...") entity tags.
-bool etag_matches(const std::string& header, const std::string& etag) {
+// If-None-Match: "*" or a comma-separated list of (possibly weak, W/"...") entity tags; either
+// representation of the file (identity or gzip) counts.
+bool etag_matches(const std::string& header, const std::string& identity, const std::string& gzip) {
   std::size_t pos = 0;
   while (pos < header.size()) {
     std::size_t end = header.find(',', pos);
@@ -116,7 +117,7 @@ bool etag_matches(const std::string& header, const std::string& etag) {
     while (!tag.empty() && (tag.front() == ' ' || tag.front() == '\t')) tag.remove_prefix(1);
     while (!tag.empty() && (tag.back() == ' ' || tag.back() == '\t')) tag.remove_suffix(1);
     if (tag.substr(0, 2) == "W/") tag.remove_prefix(2);
-    if (tag == "*" || tag == etag) return true;
+    if (tag == "*" || tag == identity || tag == gzip) return true;
     pos = end + 1;
   }
   return false;
@@ -130,19 +131,22 @@ void serve_web_file(const httplib::Request& req, httplib::Response& res, std::st
   if (it == files.end())
     throw HttpError(make_problem(404, "not-found", "Not found", "no page file /web/" + std::string(name)));
   const WebFile& file = it->second;
-  res.set_header("ETag", file.etag);
+  // Strong ETags, one per representation (RFC 9110 8.8.3: the gzip bytes are another one).
+  const std::string identity_tag = "\"" + file.etag + "\"", gzip_tag = "\"" + file.etag + "-gzip\"";
+  const bool gzip = accepts_gzip(req.get_header_value("Accept-Encoding"));
+  res.set_header("ETag", gzip ? gzip_tag : identity_tag);
+  res.set_header("Vary", "Accept-Encoding");
   res.set_header("Cache-Control", "no-cache");
   res.set_header("Content-Security-Policy", kWebContentSecurityPolicy);
   res.set_header("X-Content-Type-Options", "nosniff");
   res.set_header("Referrer-Policy", "no-referrer");
-  if (etag_matches(req.get_header_value("If-None-Match"), file.etag)) {
+  if (etag_matches(req.get_header_value("If-None-Match"), identity_tag, gzip_tag)) {
     res.status = 304;
     return;
   }
-  res.set_header("Vary", "Accept-Encoding");
   res.status = 200;
   std::string_view body = file.bytes;
-  if (file.media_type != std::string_view("image/png") && accepts_gzip(req.get_header_value("Accept-Encoding"))) {
+  if (gzip) {
     body = file.gzipped();
     res.set_header("Content-Encoding", "gzip");
   }

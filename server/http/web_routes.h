@@ -21,10 +21,11 @@ inline constexpr const char* kWebContentSecurityPolicy =
     "base-uri 'none'; form-action 'none'; frame-ancestors 'none'";
 
 // Answers GET of one page file: `name` is "index.html" for GET / and the {path} of GET /web/{path}.
-// Sets the body, its media type, an ETag (a hash of the bytes), Cache-Control: no-cache (a
-// browser revalidates and gets 304 while the build is the same), the CSP and nosniff; answers
-// 304 with no body when If-None-Match names the ETag. Throws HttpError (404) for a name that
-// is not embedded.
+// Sets the body (gzip-encoded, compressed once, when Accept-Encoding allows), its media type, a
+// strong ETag per representation (a hash of the bytes), Vary: Accept-Encoding, Cache-Control:
+// no-cache (a browser revalidates and gets 304 while the build is the same), the CSP and nosniff;
+// answers 304 with no body when If-None-Match names an ETag of the file. Throws HttpError (404)
+// for a name that is not embedded.
 void serve_web_file(const httplib::Request& req, httplib::Response& res, std::string_view name);
 
 }  // namespace mdn::http

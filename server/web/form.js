@@ -90,9 +90,8 @@ export class ParamForm {
       const fallback = prop.default === undefined ? '' : prop.default === null ? 'same as input'
         : typeof prop.default === 'boolean' ? (prop.default ? 'on' : 'off')
         : typeof prop.default === 'number' ? formatNumber(prop.default) : String(prop.default);
-      const text = chosen ? 'auto' : `default: ${fallback}`;
-      if (kind === 'enum') control.options[0].textContent = chosen ? 'auto (chosen per surface)' : text;
-      else control.placeholder = text;
+      if (kind === 'enum') control.options[0].textContent = chosen ? 'auto (chosen per surface)' : `${fallback} (default)`;
+      else control.placeholder = chosen ? 'auto' : `default: ${fallback}`;
     }
   }
 

@@ -152,6 +152,21 @@ TEST(WebPage, ServesThePageAndItsFilesWithTypesCachingAndPolicy) {
   EXPECT_EQ(wasm->body.substr(0, 4), std::string("\0asm", 4));
   EXPECT_EQ(c->Get("/web/style.css")->get_header_value("Content-Type"), "text/css; charset=utf-8");
 
+  // gzip-encoded for clients that accept it: another representation with its own strong ETag,
+  // the same bytes once decoded (cpp-httplib's client decodes), much smaller on the wire.
+  const std::string core = "/web/vendor/three/build/three.core.js";
+  auto plain = c->Get(core, {{"Accept-Encoding", "identity"}});
+  auto gz = c->Get(core, {{"Accept-Encoding", "gzip, deflate, br"}});
+  ASSERT_TRUE(plain && gz);
+  EXPECT_EQ(plain->get_header_value("Content-Encoding"), "");
+  EXPECT_EQ(gz->get_header_value("Content-Encoding"), "gzip");
+  EXPECT_EQ(gz->get_header_value("Vary"), "Accept-Encoding");
+  EXPECT_EQ(gz->body, plain->body);
+  EXPECT_LT(std::stoll(gz->get_header_value("Content-Length")) * 3, std::stoll(plain->get_header_value("Content-Length")));
+  EXPECT_NE(gz->get_header_value("ETag"), plain->get_header_value("ETag"));
+  EXPECT_EQ(c->Get(core, {{"Accept-Encoding", "gzip"}, {"If-None-Match", gz->get_header_value("ETag")}})->status, 304);
+  EXPECT_EQ(c->Get(core, {{"Accept-Encoding", "gzip;q=0"}})->get_header_value("Content-Encoding"), "");
+
   expect_problem(c->Get("/web/nope.js"), 404);
   expect_problem(c->Get("/web/../proto/openapi.yaml"), 404);
   expect_problem(c->Post("/", "x", "text/plain"), 405);
