@@ -53,6 +53,7 @@ onTokenNeeded((wrong) => new Promise((resolve) => {
 async function chooseFile(file) {
   if (!file) return;
   setState('loading');
+  setStage(`Reading ${file.name}…`, undefined);
   showError(null);
   state.file = file;
   state.bytes = await file.arrayBuffer();
@@ -81,8 +82,9 @@ async function run() {
   if (!state.file || !form.valid()) return;
   showError(null);
   // A job still running for an earlier file or earlier parameters is not wanted any more.
+  const previous = state.job;
   state.abort?.abort();
-  if (state.job && document.body.dataset.state === 'running') cancelJob(state.job.id).catch(() => {});
+  if (previous?.running) cancelJob(previous.id).catch(() => {});
   const abort = state.abort = new AbortController();
   const paramsText = form.paramsText();
   state.job = null;
@@ -98,12 +100,13 @@ async function run() {
   let job;
   try {
     job = await submitJob(state.file, paramsText, abort.signal);
-    state.job = { id: job.id, paramsText, name: state.file.name };
+    state.job = { id: job.id, paramsText, name: state.file.name, running: true };
     while (job.state === 'queued' || job.state === 'running') {
       const stage = job.state === 'queued' ? 'Queued' : `${job.progress.stage || 'running'}`;
       setStage(`${stage} · ${(100 * job.progress.fraction).toFixed(0)} % · ${seconds((performance.now() - state.started) / 1000)}`, job.progress.fraction);
       job = await pollJob(job.id, POLL_S, abort.signal);
     }
+    state.job.running = false;
     if (job.state !== 'succeeded') {
       setState(job.state === 'cancelled' ? 'cancelled' : 'failed');
       setStage(job.state === 'cancelled' ? 'Cancelled.' : 'The job failed.', 0);
@@ -300,7 +303,11 @@ async function showCommand(kind, copy = false) {
 async function main() {
   viewer = new Viewer($('canvas'));
   const drop = $('drop');
-  $('file').addEventListener('change', () => chooseFile($('file').files[0]));
+  $('file').addEventListener('change', () => {
+    const file = $('file').files[0];
+    $('file').value = '';  // choosing the same file again (edited, or after a cancel) runs it again
+    chooseFile(file);
+  });
   for (const type of ['dragenter', 'dragover']) {
     document.addEventListener(type, (e) => { e.preventDefault(); drop.classList.add('over'); });
   }

@@ -3,17 +3,17 @@
 // web_page_test.cpp) judges it.
 //   usage: node check_web_page.mjs PLAN.json
 // PLAN: {"url": "http://127.0.0.1:PORT/", "out": DIR, "mesh": FILE, "set": {"field": "value"},
-//        "refused": [FILE...], "formats": [FILE...], "cancel": {"mesh": FILE, "set": {...}},
+//        "refused": [FILE...], "formats": [FILE...], "cancel": {"mesh": FILE, "set": {...}, "then": FILE},
 //        "token": "..." (the server wants one), "full": true (screenshots, download, Tab walk)}
 // Steps: open the page (typing the token into its dialog if asked), list the form's fields, fill
 // `set`, upload `mesh` through the file input, wait for the job, measure the canvas, read the
 // legend and the curl and CLI commands; with `full`, take screenshots (side by side,
 // displacement, swipe, narrow window), download the result into DIR/download/ and walk the page
 // with Tab; then upload each `refused` file and read the error shown, each of `formats` and
-// measure the canvas, and run `cancel` (a long job) and press Cancel while it runs. Every
-// request, console message and page error is recorded. Exit status 0 when the report was
-// written, 1 when the browser failed or a step timed out (then the report so far, with
-// "failure", is printed). Bounded: 120 s in all.
+// measure the canvas, run `cancel` (a long job) and press Cancel while it runs, then run it again
+// and choose the file `then` while it runs. Every request, console message and page error is
+// recorded. Exit status 0 when the report was written, 1 when the browser failed or a step timed
+// out (then the report so far, with "failure", is printed). Bounded: 120 s in all.
 import { readFileSync, mkdirSync, readdirSync, rmSync, statSync } from 'node:fs';
 import path from 'node:path';
 import puppeteer from 'puppeteer-core';
@@ -47,6 +47,9 @@ const measureCanvas = (page) => page.$eval('#canvas', (c) => {
   return { width: c.width, height: c.height, before_pixels: drawn[0], after_pixels: drawn[1] };
 });
 
+// In the page: a job runs and its progress has passed 0.
+const jobProgressed = () => document.body.dataset.state === 'running' && Number(document.getElementById('progress').value) > 0;
+
 // Uploads a file through the file input and waits for the job's end; the state marker is reset
 // first so that the previous run's end does not count.
 async function upload(page, file) {
@@ -77,6 +80,12 @@ try {
   page.setDefaultTimeout(STEP_MS);
   page.on('request', (r) => report.requests.push(r.url().slice(0, 200)));  // data: URLs can be long
   page.on('response', (r) => report.statuses.push({ url: r.url().slice(0, 200), status: r.status(), phase: report.phase }));
+  report.job_ids = [];  // every job the page created, in order
+  page.on('response', async (r) => {
+    if (r.request().method() === 'POST' && new URL(r.url()).pathname === '/v1/jobs' && r.status() === 202) {
+      report.job_ids.push((await r.json()).id);
+    }
+  });
   page.on('requestfailed', (r) => report.failed_requests.push({ url: r.url().slice(0, 200), error: r.failure()?.errorText, phase: report.phase }));
   page.on('console', (m) => {
     if (['error', 'warn', 'warning'].includes(m.type())) report.console.push({ type: m.type(), text: m.text(), phase: report.phase });
@@ -213,11 +222,19 @@ try {
     for (const [field, value] of Object.entries(plan.cancel.set)) await page.type(`[data-field="${field}"] input`, value);
     await page.$eval('body', (b) => { b.dataset.state = 'loading'; });
     await (await page.$('#file')).uploadFile(plan.cancel.mesh);
-    await page.waitForFunction(() => Number(document.getElementById('progress').value) > 0);
+    await page.waitForFunction(jobProgressed);
     const running = { state: await page.$eval('body', (b) => b.dataset.state), stage: await page.$eval('#stage', (e) => e.textContent) };
     await page.click('#cancel');
     await page.waitForSelector('body[data-state="cancelled"], body[data-state="done"], body[data-state="failed"]');
     report.cancel = { running, state: await page.$eval('body', (b) => b.dataset.state), stage: await page.$eval('#stage', (e) => e.textContent) };
+
+    // Another file chosen while a job runs: the page cancels that job and runs the new one.
+    await page.$eval('body', (b) => { b.dataset.state = 'loading'; });
+    await (await page.$('#file')).uploadFile(plan.cancel.mesh);
+    await page.waitForFunction(jobProgressed);
+    const replaced = report.job_ids.length;
+    report.cancel.replaced_state = await upload(page, plan.cancel.then);
+    report.cancel.replaced_job = report.job_ids[replaced - 1];
   }
   step('cancel');
   report.phase = 'end';
