@@ -223,6 +223,7 @@ TEST(WebPage, DenoisesAnUploadedMeshAndShowsBeforeAndAfter) {
                      {"set", {{"n_normal", "12"}, {"output.format", "\"glb\""}}},
                      {"refused", {dir + "/photo.png", dir + "/broken.off"}},
                      {"formats", formats},
+                     {"drop", formats[0]},
                      {"cancel", {{"mesh", dir + "/big.off"}, {"set", heavy}, {"then", dir + "/noisy-cube.off"}}},
                      {"full", true}};
   const json report = run_page(plan, dir);
@@ -287,6 +288,12 @@ TEST(WebPage, DenoisesAnUploadedMeshAndShowsBeforeAndAfter) {
     EXPECT_GT(f.at("canvas").at("after_pixels").get<double>(), 0.05 * area) << f;
     EXPECT_FALSE(f.at("legend_hidden").get<bool>()) << f;
   }
+
+  // A file dropped on the page runs like a chosen one.
+  const json& dropped = report.at("drop");
+  EXPECT_EQ(dropped.at("state"), "done") << dropped;
+  EXPECT_NE(dropped.at("file").get<std::string>().find("noisy-cube.glb"), std::string::npos) << dropped;
+  EXPECT_GT(dropped.at("canvas").at("after_pixels").get<double>(), 0.05 * area) << dropped;
 
   // Cancel: the page showed the stage and fraction while the job ran, then its end.
   const json& cancelled = report.at("cancel");

@@ -3,17 +3,19 @@
 // web_page_test.cpp) judges it.
 //   usage: node check_web_page.mjs PLAN.json
 // PLAN: {"url": "http://127.0.0.1:PORT/", "out": DIR, "mesh": FILE, "set": {"field": "value"},
-//        "refused": [FILE...], "formats": [FILE...], "cancel": {"mesh": FILE, "set": {...}, "then": FILE},
+//        "refused": [FILE...], "formats": [FILE...], "drop": FILE,
+//        "cancel": {"mesh": FILE, "set": {...}, "then": FILE},
 //        "token": "..." (the server wants one), "full": true (screenshots, download, Tab walk)}
 // Steps: open the page (typing the token into its dialog if asked), list the form's fields, fill
 // `set`, upload `mesh` through the file input, wait for the job, measure the canvas, read the
 // legend and the curl and CLI commands; with `full`, take screenshots (side by side,
 // displacement, swipe, narrow window), download the result into DIR/download/ and walk the page
 // with Tab; then upload each `refused` file and read the error shown, each of `formats` and
-// measure the canvas, run `cancel` (a long job) and press Cancel while it runs, then run it again
-// and choose the file `then` while it runs. Every request, console message and page error is
-// recorded. Exit status 0 when the report was written, 1 when the browser failed or a step timed
-// out (then the report so far, with "failure", is printed). Bounded: 120 s in all.
+// measure the canvas, drop `drop` on the page, run `cancel` (a long job) and press Cancel while
+// it runs, then run it again and choose the file `then` while it runs. Every request, console
+// message and page error is recorded. Exit status 0 when the report was written, 1 when the
+// browser failed or a step timed out (then the report so far, with "failure", is printed).
+// Bounded: 120 s in all.
 import { readFileSync, mkdirSync, readdirSync, rmSync, statSync } from 'node:fs';
 import path from 'node:path';
 import puppeteer from 'puppeteer-core';
@@ -214,6 +216,25 @@ try {
                           error: await page.$eval('#error', (e) => (e.hidden ? '' : e.innerText)) });
   }
   step('formats');
+
+  // Drag and drop: a file dropped on the page (a synthetic drop event carrying the file's bytes,
+  // as the browser builds one for a drag from the desktop) runs like a chosen one.
+  if (plan.drop) {
+    report.phase = 'drop';
+    await page.$eval('body', (b) => { b.dataset.state = 'loading'; });
+    await page.evaluate((name, base64) => {
+      const bytes = Uint8Array.from(atob(base64), (c) => c.charCodeAt(0));
+      const data = new DataTransfer();
+      data.items.add(new File([bytes], name));
+      const target = document.getElementById('drop');
+      for (const type of ['dragenter', 'dragover', 'drop']) {
+        target.dispatchEvent(new DragEvent(type, { bubbles: true, cancelable: true, dataTransfer: data }));
+      }
+    }, path.basename(plan.drop), readFileSync(plan.drop).toString('base64'));
+    await page.waitForSelector('body[data-state="done"], body[data-state="failed"], body[data-state="cancelled"]');
+    report.drop = { state: await page.$eval('body', (b) => b.dataset.state), file: await page.$eval('#file-name', (e) => e.textContent),
+                    canvas: await measureCanvas(page) };
+  }
 
   // Cancel: a long job, its progress while it runs, then the Cancel button.
   if (plan.cancel) {
