@@ -48,6 +48,7 @@ struct ShapingSolver::Impl {
   std::vector<int> edge_slot;               // #E x 16, slot of (row a, col b) for a, b in 0..3
   Eigen::SimplicialLDLT<SparseMatrix> ldlt;
   bool analyzed = false;
+  int last_iterations = 0;
 
   Impl(const Topology& t, LinearSolver k, double tol, Executor* ex)
       : kind(k), cg_tolerance(tol), topo(&t), executor(ex) {
@@ -208,6 +209,7 @@ struct ShapingSolver::Impl {
     for (int it = 0; it < max_iterations; ++it) {
       // A converged column is frozen (step 0) so that 0/0 never appears.
       const Eigen::Array3d active = (r_norm2 > threshold).cast<double>();
+      last_iterations = it;
       if ((active == 0).all()) return x;
       apply(p, alpha, weights, s, Ap);
       const Eigen::Array3d pAp = dot3(p, Ap);
@@ -246,6 +248,7 @@ ShapingSolver::~ShapingSolver() = default;
 Vertices ShapingSolver::solve(const Vertices& P, double alpha, const Eigen::VectorXd& weights) {
   return impl_->solve(P, alpha, weights);
 }
+int ShapingSolver::last_iterations() const { return impl_->last_iterations; }
 
 // Eq. 1: argmin sum ||p~_i - p_i||^2 + alpha sum_e ||S(e)||^2  <=>  (I + alpha D^T D) P~ = P.
 Vertices initial_prefilter(const Vertices& P, const Topology& topo, double alpha, LinearSolver kind) {

@@ -1,0 +1,282 @@
+// Cost per face from ten thousand to five million faces: denoise() (ParamMode::Manual, so the
+// figures do not move with the automatic rule) on CGAL meshes subdivided 1-to-4 and given
+// along-normal noise 0.2 l (seed 1), with two fixed parameter sets at 1 and 2 threads. Prints
+// one row per run: per-stage ns per face per iteration, whole-run time, peak RSS and MSAE.
+// Asserts nothing (never part of ctest). Compare figures only within one run on one machine.
+//
+//   scale_bench [--data DIR] [--meshes LIST] [--params LIST] [--threads LIST] [--runs N] [--cg]
+//
+//   --meshes LIST   comma-separated NAME:LEVELS (a CGAL demo mesh, subdivided LEVELS times);
+//                   default fandisk:0,bunny00:0,bunny00:2,bunny00:3 (13k, 75k, 1.2M, 4.8M faces)
+//   --params LIST   paper (DenoiseParams{}, Table 1's Fandisk row) and/or cad (the heavy CAD
+//                   prototype: alpha 0.06, sigma_theta 70, n_aniso 2, sigma_gamma 60,
+//                   n_normal 100, n_vertex 80); default paper,cad
+//   --threads LIST  default 1,2
+//   --runs N        runs per configuration, round-robin over the configurations of a mesh;
+//                   medians printed (default 3)
+//   --cg            also print the pre-filter's CG iteration counts (Eq. 1 and each Eq. 3 step)
+//
+// Each run is a forked child that holds only the noisy input, so its peak RSS (VmHWM, reset
+// through /proc/self/clear_refs before denoise()) is that of a process that read the mesh and
+// denoises it: input, every internal array and the output.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "bench_stats.h"
+#include "cgal_data.h"
+#include "core/metrics.h"
+#include "core/noise.h"
+#include "core/parallel.h"
+#include "core/pipeline.h"
+#include "core/prefilter.h"
+#include "core/topology.h"
+#include "subdivide.h"
+
+namespace fs = std::filesystem;
+using namespace mdn;
+
+namespace {
+
+struct Options {
+  fs::path data;
+  std::vector<std::pair<std::string, int>> meshes = {{"fandisk", 0}, {"bunny00", 0}, {"bunny00", 2}, {"bunny00", 3}};
+  std::vector<std::string> params = {"paper", "cad"};
+  std::vector<int> threads = {1, 2};
+  int runs = 3;
+  bool cg = false;
+};
+
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  for (std::string item; std::getline(in, item, ',');)
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+[[noreturn]] void usage(const char* argv0, int code) {
+  std::fprintf(code ? stderr : stdout,
+               "usage: %s [--data DIR] [--meshes NAME:LEVELS,...] [--params paper,cad] [--threads 1,2] [--runs N] [--cg]\n",
+               argv0);
+  std::exit(code);
+}
+
+Options parse(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) usage(argv[0], 2);
+      return argv[++i];
+    };
+    if (a == "--data") {
+      o.data = value();
+    } else if (a == "--meshes") {
+      o.meshes.clear();
+      for (const std::string& m : split(value())) {
+        const auto colon = m.find(':');
+        o.meshes.emplace_back(m.substr(0, colon), colon == std::string::npos ? 0 : std::stoi(m.substr(colon + 1)));
+      }
+    } else if (a == "--params") {
+      o.params = split(value());
+      for (const std::string& p : o.params)
+        if (p != "paper" && p != "cad") usage(argv[0], 2);
+    } else if (a == "--threads") {
+      o.threads.clear();
+      for (const std::string& t : split(value())) o.threads.push_back(std::max(1, std::stoi(t)));
+    } else if (a == "--runs") {
+      o.runs = std::max(1, std::stoi(value()));
+    } else if (a == "--cg") {
+      o.cg = true;
+    } else if (a == "--help" || a == "-h") {
+      usage(argv[0], 0);
+    } else {
+      usage(argv[0], 2);
+    }
+  }
+  if (o.data.empty()) o.data = bench::default_cgal_data();
+  return o;
+}
+
+DenoiseParams params_named(const std::string& name) {
+  DenoiseParams p;  // "paper": Table 1's Fandisk row (0.1, 30, 2, 30, 20, 10)
+  p.mode = ParamMode::Manual;
+  if (name == "cad") {
+    p.alpha = 0.06;
+    p.sigma_theta = 70;
+    p.n_aniso = 2;
+    p.sigma_gamma = 60;
+    p.n_normal = 100;
+    p.n_vertex = 80;
+  }
+  return p;
+}
+
+// VmHWM / VmRSS of this process in MiB (Linux).
+double proc_status_mib(const char* key) {
+  std::ifstream in("/proc/self/status");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind(key, 0) == 0) return std::strtod(line.c_str() + std::strlen(key), nullptr) / 1024.0;
+  return 0;
+}
+
+struct RunFigures {
+  StageTimings t;
+  double rss_before_mib = 0, peak_mib = 0;
+  bool peak_reset = false;
+};
+
+// Runs denoise() in a forked child that drops everything but the noisy input; the child sends
+// back its figures and the output positions.
+RunFigures run_child(std::unique_ptr<TriMesh>& truth, std::unique_ptr<TriMesh>& noisy, const DenoiseParams& params,
+                     int threads, Vertices& output) {
+  int pipe_fd[2];
+  if (pipe(pipe_fd) != 0) throw std::runtime_error("pipe failed");
+  std::fflush(stdout);
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error("fork failed");
+  if (pid == 0) {
+    close(pipe_fd[0]);
+    truth.reset();  // unmapped in the child only: its RSS is the noisy input's
+    RunFigures fig;
+    fig.rss_before_mib = proc_status_mib("VmRSS:");
+    {
+      std::ofstream clear("/proc/self/clear_refs");
+      clear << "5";  // resets VmHWM to the current RSS
+      clear.flush();
+      fig.peak_reset = static_cast<bool>(clear);
+    }
+    DenoiseResult r = denoise(*noisy, params, {threads, nullptr});
+    fig.peak_mib = proc_status_mib("VmHWM:");
+    fig.t = r.report.timings;
+    auto write_all = [&](const void* data, std::size_t bytes) {
+      const char* p = static_cast<const char*>(data);
+      while (bytes > 0) {
+        const ssize_t n = write(pipe_fd[1], p, bytes);
+        if (n <= 0) _exit(3);
+        p += n;
+        bytes -= static_cast<std::size_t>(n);
+      }
+    };
+    write_all(&fig, sizeof fig);
+    write_all(r.mesh.V.data(), sizeof(double) * static_cast<std::size_t>(r.mesh.V.size()));
+    close(pipe_fd[1]);
+    _exit(0);
+  }
+  close(pipe_fd[1]);
+  RunFigures fig;
+  output.resize(noisy->V.rows(), 3);
+  auto read_all = [&](void* data, std::size_t bytes) {
+    char* p = static_cast<char*>(data);
+    while (bytes > 0) {
+      const ssize_t n = read(pipe_fd[0], p, bytes);
+      if (n <= 0) throw std::runtime_error("the benchmark's child process failed");
+      p += n;
+      bytes -= static_cast<std::size_t>(n);
+    }
+  };
+  read_all(&fig, sizeof fig);
+  read_all(output.data(), sizeof(double) * static_cast<std::size_t>(output.size()));
+  close(pipe_fd[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) throw std::runtime_error("the benchmark's child process failed");
+  return fig;
+}
+
+// CG iteration counts of the pre-filter (Eq. 1, then each Eq. 3 step) at this size.
+void cg_section(const TriMesh& noisy, const DenoiseParams& params, int threads) {
+  const UnitBox box = UnitBox::of(noisy.V);
+  const Vertices P0 = box.apply(noisy.V);
+  const Topology topo = Topology::build(noisy.F, static_cast<std::int32_t>(P0.rows()));
+  Executor executor(threads);
+  ShapingSolver solver(topo, LinearSolver::ConjugateGradient, params.cg_tolerance, &executor);
+  auto t0 = bench::Clock::now();
+  Vertices P = solver.solve(P0, params.alpha, {});
+  std::printf("    cg: Eq. 1 %d iterations %.0f ms", solver.last_iterations(), bench::ms_since(t0));
+  for (int it = 0; it < params.n_aniso; ++it) {
+    const Eigen::VectorXd w = anisotropic_edge_weights(P, noisy.F, topo, params.sigma_theta, params.b);
+    t0 = bench::Clock::now();
+    P = solver.solve(P, params.alpha, w);
+    std::printf(", Eq. 3 #%d %d iterations %.0f ms", it + 1, solver.last_iterations(), bench::ms_since(t0));
+  }
+  std::printf(" (%d rows, %lld edges)\n", topo.num_vertices, static_cast<long long>(topo.num_interior_edges()));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options o = parse(argc, argv);
+  double load[3] = {0, 0, 0};
+  getloadavg(load, 3);
+  std::printf("machine: %u hardware threads, load average %.2f %.2f %.2f; along_normal noise 0.2 l seed 1; "
+              "%d runs per configuration (round-robin), medians\n",
+              std::thread::hardware_concurrency(), load[0], load[1], load[2], o.runs);
+  std::printf("%-12s %9s %-5s %3s | %7s %7s %7s | %8s %8s | %8s %8s %8s | %10s\n", "mesh", "faces", "param", "thr",
+              "setup", "eq1", "eq3", "normal", "vertex", "total", "peak", "per MF", "MSAE");
+  std::printf("%-12s %9s %-5s %3s | %7s %7s %7s | %8s %8s | %8s %8s %8s | %10s\n", "", "", "", "", "ms", "ms", "ms",
+              "ns/f/it", "ns/f/it", "s", "MiB", "MiB", "x1e-2");
+  try {
+    const fs::path dir = bench::cgal_meshes(o.data);
+    for (const auto& [name, levels] : o.meshes) {
+      auto truth = std::make_unique<TriMesh>(bench::load_off(dir / (name + ".off")));
+      for (int l = 0; l < levels; ++l) *truth = bench::midpoint_subdivide(*truth);
+      auto noisy = std::make_unique<TriMesh>(TriMesh{add_noise(*truth, {NoiseKind::AlongNormal, 0.2, 1, 0}), truth->F});
+      const std::string label = name + (levels ? "x" + std::to_string(levels) : "");
+      const double nf = static_cast<double>(noisy->num_faces());
+
+      struct Config {
+        std::string params_name;
+        DenoiseParams params;
+        int threads;
+        std::vector<RunFigures> runs;
+        Vertices output;
+      };
+      std::vector<Config> configs;
+      for (const std::string& p : o.params)
+        for (const int t : o.threads) configs.push_back({p, params_named(p), t, {}, {}});
+      for (int run = 0; run < o.runs; ++run)
+        for (Config& c : configs) c.runs.push_back(run_child(truth, noisy, c.params, c.threads, c.output));
+
+      for (const Config& c : configs) {
+        auto med = [&](double (*get)(const RunFigures&)) {
+          std::vector<double> v;
+          for (const RunFigures& r : c.runs) v.push_back(get(r));
+          return bench::median(v);
+        };
+        const double normal_ns = med([](const RunFigures& r) { return r.t.normal_ms; }) * 1e6 /
+                                 (nf * std::max(1, c.params.n_normal));
+        const double vertex_ns = med([](const RunFigures& r) { return r.t.vertex_ms; }) * 1e6 /
+                                 (nf * std::max(1, c.params.n_vertex));
+        const double peak = med([](const RunFigures& r) { return r.peak_mib; });
+        const TriMesh out{c.output, truth->F};
+        std::printf("%-12s %9.0f %-5s %3d | %7.1f %7.1f %7.1f | %8.1f %8.1f | %8.3f %8.1f %8.1f | %10.6f%s\n",
+                    label.c_str(), nf, c.params_name.c_str(), c.threads,
+                    med([](const RunFigures& r) { return r.t.setup_ms; }),
+                    med([](const RunFigures& r) { return r.t.initial_ms; }),
+                    med([](const RunFigures& r) { return r.t.anisotropic_ms; }), normal_ns, vertex_ns,
+                    med([](const RunFigures& r) { return r.t.total_ms; }) / 1e3, peak, peak / (nf / 1e6),
+                    msae(out, *truth) * 1e2, c.runs.front().peak_reset ? "" : " (peak not reset)");
+      }
+      if (o.cg)
+        for (const std::string& p : o.params) cg_section(*noisy, params_named(p), o.threads.back());
+      std::fflush(stdout);
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "scale_bench: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
