@@ -4,7 +4,7 @@
 // one row per run: per-stage ns per face per iteration, whole-run time, peak RSS and MSAE.
 // Asserts nothing (never part of ctest). Compare figures only within one run on one machine.
 //
-//   scale_bench [--data DIR] [--meshes LIST] [--params LIST] [--threads LIST] [--runs N] [--cg]
+//   scale_bench [--data DIR] [--meshes LIST] [--params LIST] [--threads LIST] [--order LIST] [--runs N] [--cg]
 //
 //   --meshes LIST   comma-separated NAME:LEVELS (a CGAL demo mesh, subdivided LEVELS times);
 //                   default fandisk:0,bunny00:0,bunny00:2,bunny00:3 (13k, 75k, 1.2M, 4.8M faces)
@@ -12,6 +12,7 @@
 //                   prototype: alpha 0.06, sigma_theta 70, n_aniso 2, sigma_gamma 60,
 //                   n_normal 100, n_vertex 80); default paper,cad
 //   --threads LIST  default 1,2
+//   --order LIST    RunOptions::order: input, curve (the default) and/or bfs (decision 16)
 //   --runs N        runs per configuration, round-robin over the configurations of a mesh;
 //                   medians printed (default 3)
 //   --cg            also print the pre-filter's CG iteration counts (Eq. 1 and each Eq. 3 step)
@@ -19,6 +20,7 @@
 // Each run is a forked child that holds only the noisy input, so its peak RSS (VmHWM, reset
 // through /proc/self/clear_refs before denoise()) is that of a process that read the mesh and
 // denoises it: input, every internal array and the output.
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -54,6 +56,7 @@ struct Options {
   std::vector<std::pair<std::string, int>> meshes = {{"fandisk", 0}, {"bunny00", 0}, {"bunny00", 2}, {"bunny00", 3}};
   std::vector<std::string> params = {"paper", "cad"};
   std::vector<int> threads = {1, 2};
+  std::vector<std::string> orders = {"curve"};
   int runs = 3;
   bool cg = false;
 };
@@ -68,7 +71,8 @@ std::vector<std::string> split(const std::string& s) {
 
 [[noreturn]] void usage(const char* argv0, int code) {
   std::fprintf(code ? stderr : stdout,
-               "usage: %s [--data DIR] [--meshes NAME:LEVELS,...] [--params paper,cad] [--threads 1,2] [--runs N] [--cg]\n",
+               "usage: %s [--data DIR] [--meshes NAME:LEVELS,...] [--params paper,cad] [--threads 1,2]\n"
+               "          [--order input,curve,bfs] [--runs N] [--cg]\n",
                argv0);
   std::exit(code);
 }
@@ -96,6 +100,10 @@ Options parse(int argc, char** argv) {
     } else if (a == "--threads") {
       o.threads.clear();
       for (const std::string& t : split(value())) o.threads.push_back(std::max(1, std::stoi(t)));
+    } else if (a == "--order") {
+      o.orders = split(value());
+      for (const std::string& k : o.orders)
+        if (k != "input" && k != "curve" && k != "bfs") usage(argv[0], 2);
     } else if (a == "--runs") {
       o.runs = std::max(1, std::stoi(value()));
     } else if (a == "--cg") {
@@ -132,16 +140,23 @@ double proc_status_mib(const char* key) {
   return 0;
 }
 
+double cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
 struct RunFigures {
   StageTimings t;
   double rss_before_mib = 0, peak_mib = 0;
+  double cpu_s = 0;  // user + system CPU time of denoise(), all threads
   bool peak_reset = false;
 };
 
 // Runs denoise() in a forked child that drops everything but the noisy input; the child sends
 // back its figures and the output positions.
 RunFigures run_child(std::unique_ptr<TriMesh>& truth, std::unique_ptr<TriMesh>& noisy, const DenoiseParams& params,
-                     int threads, Vertices& output) {
+                     const RunOptions& options, Vertices& output) {
   int pipe_fd[2];
   if (pipe(pipe_fd) != 0) throw std::runtime_error("pipe failed");
   std::fflush(stdout);
@@ -158,7 +173,9 @@ RunFigures run_child(std::unique_ptr<TriMesh>& truth, std::unique_ptr<TriMesh>& 
       clear.flush();
       fig.peak_reset = static_cast<bool>(clear);
     }
-    DenoiseResult r = denoise(*noisy, params, {threads, nullptr});
+    const double cpu0 = cpu_seconds();
+    DenoiseResult r = denoise(*noisy, params, options);
+    fig.cpu_s = cpu_seconds() - cpu0;
     fig.peak_mib = proc_status_mib("VmHWM:");
     fig.t = r.report.timings;
     auto write_all = [&](const void* data, std::size_t bytes) {
@@ -197,17 +214,19 @@ RunFigures run_child(std::unique_ptr<TriMesh>& truth, std::unique_ptr<TriMesh>& 
 }
 
 // CG iteration counts of the pre-filter (Eq. 1, then each Eq. 3 step) at this size.
-void cg_section(const TriMesh& noisy, const DenoiseParams& params, int threads) {
+void cg_section(const TriMesh& noisy, const DenoiseParams& params, const RunOptions& options) {
   const UnitBox box = UnitBox::of(noisy.V);
-  const Vertices P0 = box.apply(noisy.V);
-  const Topology topo = Topology::build(noisy.F, static_cast<std::int32_t>(P0.rows()));
+  const LocalityOrder order = LocalityOrder::of(noisy, options.order);  // as denoise() does
+  const Vertices P0 = box.apply(order.to_order(noisy.V));
+  const Topology topo = Topology::build(order.faces(), static_cast<std::int32_t>(P0.rows()));
+  const int threads = options.threads;
   Executor executor(threads);
   ShapingSolver solver(topo, LinearSolver::ConjugateGradient, params.cg_tolerance, &executor);
   auto t0 = bench::Clock::now();
   Vertices P = solver.solve(P0, params.alpha, {});
   std::printf("    cg: Eq. 1 %d iterations %.0f ms", solver.last_iterations(), bench::ms_since(t0));
   for (int it = 0; it < params.n_aniso; ++it) {
-    const Eigen::VectorXd w = anisotropic_edge_weights(P, noisy.F, topo, params.sigma_theta, params.b);
+    const Eigen::VectorXd w = anisotropic_edge_weights(P, order.faces(), topo, params.sigma_theta, params.b);
     t0 = bench::Clock::now();
     P = solver.solve(P, params.alpha, w);
     std::printf(", Eq. 3 #%d %d iterations %.0f ms", it + 1, solver.last_iterations(), bench::ms_since(t0));
@@ -224,10 +243,10 @@ int main(int argc, char** argv) {
   std::printf("machine: %u hardware threads, load average %.2f %.2f %.2f; along_normal noise 0.2 l seed 1; "
               "%d runs per configuration (round-robin), medians\n",
               std::thread::hardware_concurrency(), load[0], load[1], load[2], o.runs);
-  std::printf("%-12s %9s %-5s %3s | %7s %7s %7s | %8s %8s | %8s %8s %8s | %10s\n", "mesh", "faces", "param", "thr",
-              "setup", "eq1", "eq3", "normal", "vertex", "total", "peak", "per MF", "MSAE");
-  std::printf("%-12s %9s %-5s %3s | %7s %7s %7s | %8s %8s | %8s %8s %8s | %10s\n", "", "", "", "", "ms", "ms", "ms",
-              "ns/f/it", "ns/f/it", "s", "MiB", "MiB", "x1e-2");
+  std::printf("%-12s %9s %-5s %-5s %3s | %7s %7s %7s | %8s %8s | %8s %7s %8s %8s | %10s\n", "mesh", "faces", "param", "order", "thr",
+              "setup", "eq1", "eq3", "normal", "vertex", "total", "cpu", "peak", "per MF", "MSAE");
+  std::printf("%-12s %9s %-5s %-5s %3s | %7s %7s %7s | %8s %8s | %8s %7s %8s %8s | %10s\n", "", "", "", "", "", "ms", "ms", "ms",
+              "ns/f/it", "ns/f/it", "s", "cpu s", "MiB", "MiB", "x1e-2");
   try {
     const fs::path dir = bench::cgal_meshes(o.data);
     for (const auto& [name, levels] : o.meshes) {
@@ -238,17 +257,23 @@ int main(int argc, char** argv) {
       const double nf = static_cast<double>(noisy->num_faces());
 
       struct Config {
-        std::string params_name;
+        std::string params_name, order_name;
         DenoiseParams params;
-        int threads;
+        RunOptions options;
         std::vector<RunFigures> runs;
         Vertices output;
       };
       std::vector<Config> configs;
       for (const std::string& p : o.params)
-        for (const int t : o.threads) configs.push_back({p, params_named(p), t, {}, {}});
+        for (const std::string& k : o.orders)
+          for (const int t : o.threads) {
+            RunOptions options;
+            options.threads = t;
+            options.order = k == "input" ? OrderKind::Input : k == "bfs" ? OrderKind::BreadthFirst : OrderKind::SpaceFillingCurve;
+            configs.push_back({p, k, params_named(p), options, {}, {}});
+          }
       for (int run = 0; run < o.runs; ++run)
-        for (Config& c : configs) c.runs.push_back(run_child(truth, noisy, c.params, c.threads, c.output));
+        for (Config& c : configs) c.runs.push_back(run_child(truth, noisy, c.params, c.options, c.output));
 
       for (const Config& c : configs) {
         auto med = [&](double (*get)(const RunFigures&)) {
@@ -262,16 +287,17 @@ int main(int argc, char** argv) {
                                  (nf * std::max(1, c.params.n_vertex));
         const double peak = med([](const RunFigures& r) { return r.peak_mib; });
         const TriMesh out{c.output, truth->F};
-        std::printf("%-12s %9.0f %-5s %3d | %7.1f %7.1f %7.1f | %8.1f %8.1f | %8.3f %8.1f %8.1f | %10.6f%s\n",
-                    label.c_str(), nf, c.params_name.c_str(), c.threads,
+        std::printf("%-12s %9.0f %-5s %-5s %3d | %7.1f %7.1f %7.1f | %8.1f %8.1f | %8.3f %7.2f %8.1f %8.1f | %10.6f%s\n",
+                    label.c_str(), nf, c.params_name.c_str(), c.order_name.c_str(), c.options.threads,
                     med([](const RunFigures& r) { return r.t.setup_ms; }),
                     med([](const RunFigures& r) { return r.t.initial_ms; }),
                     med([](const RunFigures& r) { return r.t.anisotropic_ms; }), normal_ns, vertex_ns,
-                    med([](const RunFigures& r) { return r.t.total_ms; }) / 1e3, peak, peak / (nf / 1e6),
+                    med([](const RunFigures& r) { return r.t.total_ms; }) / 1e3,
+                    med([](const RunFigures& r) { return r.cpu_s; }), peak, peak / (nf / 1e6),
                     msae(out, *truth) * 1e2, c.runs.front().peak_reset ? "" : " (peak not reset)");
       }
       if (o.cg)
-        for (const std::string& p : o.params) cg_section(*noisy, params_named(p), o.threads.back());
+        for (const std::string& p : o.params) cg_section(*noisy, params_named(p), configs.back().options);
       std::fflush(stdout);
     }
   } catch (const std::exception& e) {
