@@ -39,9 +39,11 @@ struct ShapingSolver::Impl {
   const Topology* topo;
   Executor* executor;
   // ConjugateGradient only: vertex -> (edge, coefficient of the vertex in S(e)), CSR, so that
-  // D^T s is a gather per vertex (parallel, fixed summation order).
+  // D^T s is a gather per vertex (parallel, fixed summation order). An entry is 2 e + 1 where
+  // the coefficient is -1 and 2 e where it is +1: 4 bytes per incidence, not 12.
   std::vector<std::int32_t> ve_offsets, ve_edges;
-  std::vector<double> ve_coef;
+  static Eigen::Index edge_of(std::int32_t entry) { return entry >> 1; }
+  static double coef_of(std::int32_t entry) { return (entry & 1) ? -1.0 : 1.0; }
   // Ldlt only.
   SparseMatrix A;
   std::vector<int> diagonal_slot;           // #V
@@ -67,13 +69,11 @@ struct ShapingSolver::Impl {
     ve_offsets.assign(count.size(), 0);
     for (std::size_t v = 1; v < count.size(); ++v) ve_offsets[v] = ve_offsets[v - 1] + count[v];
     ve_edges.resize(static_cast<std::size_t>(4 * E));
-    ve_coef.resize(static_cast<std::size_t>(4 * E));
     std::vector<std::int32_t> cursor(ve_offsets.begin(), ve_offsets.end() - 1);
     for (Eigen::Index e = 0; e < E; ++e)
       for (int a = 0; a < 4; ++a) {
         const auto slot = static_cast<std::size_t>(cursor[static_cast<std::size_t>(t.interior_edges(e, a))]++);
-        ve_edges[slot] = static_cast<std::int32_t>(e);
-        ve_coef[slot] = kShape[a];
+        ve_edges[slot] = static_cast<std::int32_t>(2 * e + (kShape[a] < 0 ? 1 : 0));
       }
   }
 
@@ -173,7 +173,7 @@ struct ShapingSolver::Impl {
       for (std::int64_t v = begin; v < end; ++v) {
         Eigen::RowVector3d acc = x.row(v);
         for (std::int32_t k = ve_offsets[static_cast<std::size_t>(v)]; k < ve_offsets[static_cast<std::size_t>(v) + 1]; ++k)
-          acc += ve_coef[static_cast<std::size_t>(k)] * s.row(ve_edges[static_cast<std::size_t>(k)]);
+          acc += coef_of(ve_edges[static_cast<std::size_t>(k)]) * s.row(edge_of(ve_edges[static_cast<std::size_t>(k)]));
         y.row(v) = acc;
       }
     });
@@ -188,7 +188,7 @@ struct ShapingSolver::Impl {
       for (std::int64_t v = begin; v < end; ++v) {
         double d = 1;
         for (std::int32_t k = ve_offsets[static_cast<std::size_t>(v)]; k < ve_offsets[static_cast<std::size_t>(v) + 1]; ++k)
-          d += alpha * (weights.size() ? weights(ve_edges[static_cast<std::size_t>(k)]) : 1.0);
+          d += alpha * (weights.size() ? weights(edge_of(ve_edges[static_cast<std::size_t>(k)])) : 1.0);
         inv_diag(v) = 1.0 / d;
       }
     });

@@ -146,8 +146,26 @@ double cpu_seconds() {
   return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
 }
 
+// Process CPU time (all threads) at the stage boundaries the progress callbacks mark. On a
+// shared machine a run's wall time counts the time it waited for a core; its CPU time does not.
+// pre: Eq. 1 to the first normal-filter iteration (Eq. 1, Sec. 4.2, Eq. 3-4 and the normal
+// filter's set-up); normal and vertex: their iterations only.
+class CpuClock : public ProgressObserver {
+ public:
+  void on_progress(Stage stage, double fraction) override {
+    const double now = cpu_seconds();
+    if (stage == Stage::InitialPrefilter && pre0 < 0) pre0 = now;
+    if (stage == Stage::NormalFilter && normal0 < 0) normal0 = now;
+    if (stage == Stage::NormalFilter && fraction == 1.0) normal1 = now;
+    if (stage == Stage::VertexUpdate && vertex0 < 0) vertex0 = now;
+    if (stage == Stage::VertexUpdate && fraction == 1.0) vertex1 = now;
+  }
+  double pre0 = -1, normal0 = -1, normal1 = -1, vertex0 = -1, vertex1 = -1;
+};
+
 struct RunFigures {
   StageTimings t;
+  double cpu_pre_s = 0, cpu_normal_s = 0, cpu_vertex_s = 0;
   double rss_before_mib = 0, peak_mib = 0;
   double cpu_s = 0;  // user + system CPU time of denoise(), all threads
   bool peak_reset = false;
@@ -173,9 +191,15 @@ RunFigures run_child(std::unique_ptr<TriMesh>& truth, std::unique_ptr<TriMesh>& 
       clear.flush();
       fig.peak_reset = static_cast<bool>(clear);
     }
+    CpuClock clock;
+    RunOptions timed = options;
+    timed.progress = &clock;
     const double cpu0 = cpu_seconds();
-    DenoiseResult r = denoise(*noisy, params, options);
+    DenoiseResult r = denoise(*noisy, params, timed);
     fig.cpu_s = cpu_seconds() - cpu0;
+    fig.cpu_pre_s = clock.normal0 - clock.pre0;
+    fig.cpu_normal_s = clock.normal1 - clock.normal0;
+    fig.cpu_vertex_s = clock.vertex1 - clock.vertex0;
     fig.peak_mib = proc_status_mib("VmHWM:");
     fig.t = r.report.timings;
     auto write_all = [&](const void* data, std::size_t bytes) {
@@ -243,17 +267,19 @@ int main(int argc, char** argv) {
   std::printf("machine: %u hardware threads, load average %.2f %.2f %.2f; along_normal noise 0.2 l seed 1; "
               "%d runs per configuration (round-robin), medians\n",
               std::thread::hardware_concurrency(), load[0], load[1], load[2], o.runs);
-  std::printf("%-12s %9s %-5s %-5s %3s | %7s %7s %7s | %8s %8s | %8s %7s %8s %8s | %10s\n", "mesh", "faces", "param", "order", "thr",
-              "setup", "eq1", "eq3", "normal", "vertex", "total", "cpu", "peak", "per MF", "MSAE");
-  std::printf("%-12s %9s %-5s %-5s %3s | %7s %7s %7s | %8s %8s | %8s %7s %8s %8s | %10s\n", "", "", "", "", "", "ms", "ms", "ms",
-              "ns/f/it", "ns/f/it", "s", "cpu s", "MiB", "MiB", "x1e-2");
+  std::printf("%-11s %8s %-5s %-5s %3s | %7s %7s %7s %7s %7s %7s | %6s %7s %7s %7s | %7s %7s | %9s\n", "", "", "", "",
+              "", "wall:", "setup", "eq1", "eq3", "normal", "vertex", "cpu:", "pre", "normal", "vertex", "peak", "per MF", "MSAE");
+  std::printf("%-11s %8s %-5s %-5s %3s | %7s %7s %7s %7s %7s %7s | %6s %7s %7s %7s | %7s %7s | %9s\n", "mesh", "faces",
+              "param", "order", "thr", "total s", "ms", "ms", "ms", "ns/f/it", "ns/f/it", "tot s", "s", "ns/f/it", "ns/f/it",
+              "MiB", "MiB", "x1e-2");
   try {
     const fs::path dir = bench::cgal_meshes(o.data);
     for (const auto& [name, levels] : o.meshes) {
       auto truth = std::make_unique<TriMesh>(bench::load_off(dir / (name + ".off")));
       for (int l = 0; l < levels; ++l) *truth = bench::midpoint_subdivide(*truth);
       auto noisy = std::make_unique<TriMesh>(TriMesh{add_noise(*truth, {NoiseKind::AlongNormal, 0.2, 1, 0}), truth->F});
-      const std::string label = name + (levels ? "x" + std::to_string(levels) : "");
+      std::string label = name;
+      if (levels > 0) label += "x" + std::to_string(levels);
       const double nf = static_cast<double>(noisy->num_faces());
 
       struct Config {
@@ -281,19 +307,22 @@ int main(int argc, char** argv) {
           for (const RunFigures& r : c.runs) v.push_back(get(r));
           return bench::median(v);
         };
-        const double normal_ns = med([](const RunFigures& r) { return r.t.normal_ms; }) * 1e6 /
-                                 (nf * std::max(1, c.params.n_normal));
-        const double vertex_ns = med([](const RunFigures& r) { return r.t.vertex_ms; }) * 1e6 /
-                                 (nf * std::max(1, c.params.n_vertex));
+        const double per_normal = 1e9 / (nf * std::max(1, c.params.n_normal));  // seconds -> ns/f/it
+        const double per_vertex = 1e9 / (nf * std::max(1, c.params.n_vertex));
         const double peak = med([](const RunFigures& r) { return r.peak_mib; });
         const TriMesh out{c.output, truth->F};
-        std::printf("%-12s %9.0f %-5s %-5s %3d | %7.1f %7.1f %7.1f | %8.1f %8.1f | %8.3f %7.2f %8.1f %8.1f | %10.6f%s\n",
+        std::printf("%-11s %8.0f %-5s %-5s %3d | %7.2f %7.0f %7.0f %7.0f %7.1f %7.1f | %6.2f %7.2f %7.1f %7.1f | %7.0f %7.0f | "
+                    "%9.6f%s\n",
                     label.c_str(), nf, c.params_name.c_str(), c.order_name.c_str(), c.options.threads,
+                    med([](const RunFigures& r) { return r.t.total_ms; }) / 1e3,
                     med([](const RunFigures& r) { return r.t.setup_ms; }),
                     med([](const RunFigures& r) { return r.t.initial_ms; }),
-                    med([](const RunFigures& r) { return r.t.anisotropic_ms; }), normal_ns, vertex_ns,
-                    med([](const RunFigures& r) { return r.t.total_ms; }) / 1e3,
-                    med([](const RunFigures& r) { return r.cpu_s; }), peak, peak / (nf / 1e6),
+                    med([](const RunFigures& r) { return r.t.anisotropic_ms; }),
+                    med([](const RunFigures& r) { return r.t.normal_ms; }) * 1e-3 * per_normal,
+                    med([](const RunFigures& r) { return r.t.vertex_ms; }) * 1e-3 * per_vertex,
+                    med([](const RunFigures& r) { return r.cpu_s; }), med([](const RunFigures& r) { return r.cpu_pre_s; }),
+                    med([](const RunFigures& r) { return r.cpu_normal_s; }) * per_normal,
+                    med([](const RunFigures& r) { return r.cpu_vertex_s; }) * per_vertex, peak, peak / (nf / 1e6),
                     msae(out, *truth) * 1e2, c.runs.front().peak_reset ? "" : " (peak not reset)");
       }
       if (o.cg)
