@@ -279,7 +279,7 @@ int main(int argc, char** argv) {
       for (int l = 0; l < levels; ++l) *truth = bench::midpoint_subdivide(*truth);
       auto noisy = std::make_unique<TriMesh>(TriMesh{add_noise(*truth, {NoiseKind::AlongNormal, 0.2, 1, 0}), truth->F});
       std::string label = name;
-      if (levels > 0) label += "x" + std::to_string(levels);
+      if (levels > 0) label += 'x' + std::to_string(levels);
       const double nf = static_cast<double>(noisy->num_faces());
 
       struct Config {
