@@ -16,6 +16,8 @@
 //   --runs N        runs per configuration, round-robin over the configurations of a mesh;
 //                   medians printed (default 3)
 //   --cg            also print the pre-filter's CG iteration counts (Eq. 1 and each Eq. 3 step)
+//   --jitter EPS    displace the noisy input once more along the normals by N(0, (EPS l)^2)
+//                   (seed 2): how far MSAE moves under a perturbation far below the noise
 //
 // Each run is a forked child that holds only the noisy input, so its peak RSS (VmHWM, reset
 // through /proc/self/clear_refs before denoise()) is that of a process that read the mesh and
@@ -59,6 +61,7 @@ struct Options {
   std::vector<std::string> orders = {"curve"};
   int runs = 3;
   bool cg = false;
+  double jitter = 0;
 };
 
 std::vector<std::string> split(const std::string& s) {
@@ -72,7 +75,7 @@ std::vector<std::string> split(const std::string& s) {
 [[noreturn]] void usage(const char* argv0, int code) {
   std::fprintf(code ? stderr : stdout,
                "usage: %s [--data DIR] [--meshes NAME:LEVELS,...] [--params paper,cad] [--threads 1,2]\n"
-               "          [--order input,curve,bfs] [--runs N] [--cg]\n",
+               "          [--order input,curve,bfs] [--runs N] [--cg] [--jitter EPS]\n",
                argv0);
   std::exit(code);
 }
@@ -106,6 +109,8 @@ Options parse(int argc, char** argv) {
         if (k != "input" && k != "curve" && k != "bfs") usage(argv[0], 2);
     } else if (a == "--runs") {
       o.runs = std::max(1, std::stoi(value()));
+    } else if (a == "--jitter") {
+      o.jitter = std::stod(value());
     } else if (a == "--cg") {
       o.cg = true;
     } else if (a == "--help" || a == "-h") {
@@ -278,6 +283,7 @@ int main(int argc, char** argv) {
       auto truth = std::make_unique<TriMesh>(bench::load_off(dir / (name + ".off")));
       for (int l = 0; l < levels; ++l) *truth = bench::midpoint_subdivide(*truth);
       auto noisy = std::make_unique<TriMesh>(TriMesh{add_noise(*truth, {NoiseKind::AlongNormal, 0.2, 1, 0}), truth->F});
+      if (o.jitter > 0) noisy->V = add_noise(*noisy, {NoiseKind::AlongNormal, o.jitter, 2, 0});
       std::string label = name;
       if (levels > 0) label += 'x' + std::to_string(levels);
       const double nf = static_cast<double>(noisy->num_faces());
