@@ -17,7 +17,7 @@ namespace mdn {
 struct RunOptions {
   int threads = 1;                        // worker threads for this call; output does not depend on it
   ProgressObserver* progress = nullptr;   // optional; progress and cancellation
-  OrderKind order = OrderKind::SpaceFillingCurve;  // memory order of the run (decision 16); output order is the input's
+  OrderKind order = OrderKind::Auto;      // memory order of the run (decision 16); output order is the input's
 };
 
 // Wall-clock milliseconds per step.

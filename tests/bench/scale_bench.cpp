@@ -12,7 +12,7 @@
 //                   prototype: alpha 0.06, sigma_theta 70, n_aniso 2, sigma_gamma 60,
 //                   n_normal 100, n_vertex 80); default paper,cad
 //   --threads LIST  default 1,2
-//   --order LIST    RunOptions::order: input, curve (the default) and/or bfs (decision 16)
+//   --order LIST    RunOptions::order: auto (the default), input, curve and/or bfs (decision 16)
 //   --runs N        runs per configuration, round-robin over the configurations of a mesh;
 //                   medians printed (default 3)
 //   --cg            also print the pre-filter's CG iteration counts (Eq. 1 and each Eq. 3 step)
@@ -58,7 +58,7 @@ struct Options {
   std::vector<std::pair<std::string, int>> meshes = {{"fandisk", 0}, {"bunny00", 0}, {"bunny00", 2}, {"bunny00", 3}};
   std::vector<std::string> params = {"paper", "cad"};
   std::vector<int> threads = {1, 2};
-  std::vector<std::string> orders = {"curve"};
+  std::vector<std::string> orders = {"auto"};
   int runs = 3;
   bool cg = false;
   double jitter = 0;
@@ -75,7 +75,7 @@ std::vector<std::string> split(const std::string& s) {
 [[noreturn]] void usage(const char* argv0, int code) {
   std::fprintf(code ? stderr : stdout,
                "usage: %s [--data DIR] [--meshes NAME:LEVELS,...] [--params paper,cad] [--threads 1,2]\n"
-               "          [--order input,curve,bfs] [--runs N] [--cg] [--jitter EPS]\n",
+               "          [--order auto,input,curve,bfs] [--runs N] [--cg] [--jitter EPS]\n",
                argv0);
   std::exit(code);
 }
@@ -106,7 +106,7 @@ Options parse(int argc, char** argv) {
     } else if (a == "--order") {
       o.orders = split(value());
       for (const std::string& k : o.orders)
-        if (k != "input" && k != "curve" && k != "bfs") usage(argv[0], 2);
+        if (k != "auto" && k != "input" && k != "curve" && k != "bfs") usage(argv[0], 2);
     } else if (a == "--runs") {
       o.runs = std::max(1, std::stoi(value()));
     } else if (a == "--jitter") {
@@ -301,7 +301,10 @@ int main(int argc, char** argv) {
           for (const int t : o.threads) {
             RunOptions options;
             options.threads = t;
-            options.order = k == "input" ? OrderKind::Input : k == "bfs" ? OrderKind::BreadthFirst : OrderKind::SpaceFillingCurve;
+            options.order = k == "input" ? OrderKind::Input
+                            : k == "bfs"   ? OrderKind::BreadthFirst
+                            : k == "curve" ? OrderKind::SpaceFillingCurve
+                                           : OrderKind::Auto;
             configs.push_back({p, k, params_named(p), options, {}, {}});
           }
       for (int run = 0; run < o.runs; ++run)

@@ -17,7 +17,7 @@
 namespace mdn {
 namespace {
 
-constexpr OrderKind kKinds[] = {OrderKind::Input, OrderKind::SpaceFillingCurve, OrderKind::BreadthFirst};
+constexpr OrderKind kKinds[] = {OrderKind::Input, OrderKind::SpaceFillingCurve, OrderKind::BreadthFirst};  // Auto: one of these
 
 // The mesh with its faces and vertices renumbered at random (each face's corner order kept):
 // a scanner's or exporter's order with no locality at all.
@@ -74,6 +74,14 @@ TEST(LocalityOrder, IsAPermutationThatKeepsEveryFace) {
   EXPECT_EQ(identity.to_order(m.V), m.V);
 }
 
+TEST(LocalityOrder, AutoReordersLargeMeshesOnly) {
+  const TriMesh small = shuffled(test::sphere(3), 2);  // 1,280 faces
+  EXPECT_EQ(LocalityOrder::of(small, OrderKind::Auto).faces(), small.F);
+  const TriMesh large = shuffled(test::sphere(6), 2);  // 81,920 faces
+  ASSERT_GE(large.num_faces(), kReorderMinFaces);
+  EXPECT_EQ(LocalityOrder::of(large, OrderKind::Auto).face_of(), LocalityOrder::of(large, OrderKind::SpaceFillingCurve).face_of());
+}
+
 TEST(LocalityOrder, BringsNeighboursTogether) {
   const TriMesh m = shuffled(test::sphere(5), 3);  // 20,480 faces in random order
   const double before = mean_neighbour_distance(m.F, m.num_vertices());
@@ -92,7 +100,8 @@ TEST(LocalityOrder, DenoiseDoesNotDependOnTheInputNumbering) {
   const TriMesh noisy = test::with_noise(test::sphere(4), 0.3);
   std::vector<std::int32_t> to;
   const TriMesh renumbered = shuffled(noisy, 11, &to);
-  const DenoiseResult a = denoise(noisy, {}), b = denoise(renumbered, {});
+  const RunOptions curve{.order = OrderKind::SpaceFillingCurve};  // 5,120 faces: Auto would keep the input's order
+  const DenoiseResult a = denoise(noisy, {}, curve), b = denoise(renumbered, {}, curve);
   EXPECT_EQ(b.mesh.F, renumbered.F);
   for (Eigen::Index v = 0; v < noisy.V.rows(); ++v)
     ASSERT_EQ(std::memcmp(a.mesh.V.row(v).data(), b.mesh.V.row(to[static_cast<std::size_t>(v)]).data(), 3 * sizeof(double)), 0)
@@ -117,7 +126,7 @@ TEST(LocalityOrder, OrdersAgreeAndTheDefaultIsBitIdenticalAcrossThreads) {
       reference = m;
     else
       EXPECT_NEAR(m, reference, 1e-6 * reference) << static_cast<int>(kind);
-    if (kind != RunOptions{}.order) continue;
+    if (kind != OrderKind::SpaceFillingCurve) continue;  // what Auto picks at this size
     for (const int threads : {2, 3}) {
       const DenoiseResult many = denoise(noisy, p, {.threads = threads, .order = kind});
       EXPECT_EQ(std::memcmp(one.mesh.V.data(), many.mesh.V.data(), sizeof(double) * one.mesh.V.size()), 0)
