@@ -123,18 +123,13 @@ Options parse(int argc, char** argv) {
   return o;
 }
 
+// "paper": DenoiseParams{} (Table 1's Fandisk row: 0.1, 30, 2, 30, 20, 10); "cad": the heavy
+// CAD prototype. Manual either way.
 DenoiseParams params_named(const std::string& name) {
-  DenoiseParams p;  // "paper": Table 1's Fandisk row (0.1, 30, 2, 30, 20, 10)
-  p.mode = ParamMode::Manual;
-  if (name == "cad") {
-    p.alpha = 0.06;
-    p.sigma_theta = 70;
-    p.n_aniso = 2;
-    p.sigma_gamma = 60;
-    p.n_normal = 100;
-    p.n_vertex = 80;
-  }
-  return p;
+  if (name == "cad")
+    return {.mode = ParamMode::Manual, .alpha = 0.06, .sigma_theta = 70, .n_aniso = 2, .sigma_gamma = 60,
+            .n_normal = 100, .n_vertex = 80};
+  return {.mode = ParamMode::Manual};
 }
 
 // VmHWM / VmRSS of this process in MiB (Linux).
