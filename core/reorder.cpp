@@ -100,7 +100,7 @@ LocalityOrder LocalityOrder::of(const TriMesh& mesh, OrderKind kind) {
   const auto nf = static_cast<std::size_t>(mesh.num_faces());
   const auto nv = static_cast<std::size_t>(mesh.num_vertices());
   LocalityOrder o;
-  if (kind == OrderKind::Auto) kind = mesh.num_faces() >= kReorderMinFaces ? OrderKind::SpaceFillingCurve : OrderKind::Input;
+  if (kind == OrderKind::Auto) kind = mesh.num_faces() >= kReorderMinFaces ? OrderKind::BreadthFirst : OrderKind::Input;
   if (kind == OrderKind::SpaceFillingCurve) {
     o.face_of_ = curve_order(mesh.V, mesh.F);
   } else if (kind == OrderKind::BreadthFirst) {

@@ -13,15 +13,15 @@
 namespace mdn {
 
 enum class OrderKind {
-  Auto,              // SpaceFillingCurve from kReorderMinFaces faces on, Input below (decision 16)
+  Auto,              // BreadthFirst from kReorderMinFaces faces on, Input below (decision 16)
   Input,             // the identity: the input's own order, faces and vertices
   SpaceFillingCurve, // faces along a Morton (Z-order) curve over their centroids
   BreadthFirst,      // faces breadth-first over vertex adjacency, from the lowest face of each component
 };
 
 // Below this many faces a run's arrays fit the caches and the input's own order is as good as
-// any (measured: the curve cost Fandisk's 13k faces 10% in the normal filter; it halved the
-// cost per face of the 75k-face bunny).
+// any (measured: the Morton curve cost Fandisk's 13k faces 10% in the normal filter; a
+// reordering halved the cost per face of the 75k-face bunny).
 inline constexpr std::int64_t kReorderMinFaces = 32768;
 
 class LocalityOrder {
@@ -29,7 +29,7 @@ class LocalityOrder {
   // Orders the faces by `kind`, then (except for Input) numbers the vertices in the order the
   // ordered faces first reference them (vertices no face references keep their relative order,
   // at the end).
-  // The mesh must be valid (validate_mesh). Deterministic; O(#F) for the curve (radix sort).
+  // The mesh must be valid (validate_mesh). Deterministic; O(#F) (the curve: a radix sort).
   static LocalityOrder of(const TriMesh& mesh, OrderKind kind = OrderKind::SpaceFillingCurve);
 
   // #F by 3: row k is input face face_of()[k] with its vertices renumbered (corner order kept).

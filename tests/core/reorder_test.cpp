@@ -79,7 +79,7 @@ TEST(LocalityOrder, AutoReordersLargeMeshesOnly) {
   EXPECT_EQ(LocalityOrder::of(small, OrderKind::Auto).faces(), small.F);
   const TriMesh large = shuffled(test::sphere(6), 2);  // 81,920 faces
   ASSERT_GE(large.num_faces(), kReorderMinFaces);
-  EXPECT_EQ(LocalityOrder::of(large, OrderKind::Auto).face_of(), LocalityOrder::of(large, OrderKind::SpaceFillingCurve).face_of());
+  EXPECT_EQ(LocalityOrder::of(large, OrderKind::Auto).face_of(), LocalityOrder::of(large, OrderKind::BreadthFirst).face_of());
 }
 
 TEST(LocalityOrder, BringsNeighboursTogether) {
@@ -93,14 +93,15 @@ TEST(LocalityOrder, BringsNeighboursTogether) {
   }
 }
 
-// The run's order comes from the geometry alone: a renumbered input gives the renumbered
+// The curve's order comes from the geometry alone: a renumbered input gives the renumbered
 // output, bit for bit (the Morton codes of this mesh's centroids are distinct, so no tie is
 // broken by the input's numbering).
-TEST(LocalityOrder, DenoiseDoesNotDependOnTheInputNumbering) {
+TEST(LocalityOrder, TheCurveDoesNotDependOnTheInputNumbering) {
   const TriMesh noisy = test::with_noise(test::sphere(4), 0.3);
   std::vector<std::int32_t> to;
   const TriMesh renumbered = shuffled(noisy, 11, &to);
-  const RunOptions curve{.order = OrderKind::SpaceFillingCurve};  // 5,120 faces: Auto would keep the input's order
+  // The curve (breadth-first starts from the lowest-numbered face and follows the numbering).
+  const RunOptions curve{.order = OrderKind::SpaceFillingCurve};
   const DenoiseResult a = denoise(noisy, {}, curve), b = denoise(renumbered, {}, curve);
   EXPECT_EQ(b.mesh.F, renumbered.F);
   for (Eigen::Index v = 0; v < noisy.V.rows(); ++v)
@@ -126,7 +127,7 @@ TEST(LocalityOrder, OrdersAgreeAndTheDefaultIsBitIdenticalAcrossThreads) {
       reference = m;
     else
       EXPECT_NEAR(m, reference, 1e-6 * reference) << static_cast<int>(kind);
-    if (kind != OrderKind::SpaceFillingCurve) continue;  // what Auto picks at this size
+    if (kind != OrderKind::BreadthFirst) continue;  // what Auto picks at this size
     for (const int threads : {2, 3}) {
       const DenoiseResult many = denoise(noisy, p, {.threads = threads, .order = kind});
       EXPECT_EQ(std::memcmp(one.mesh.V.data(), many.mesh.V.data(), sizeof(double) * one.mesh.V.size()), 0)
