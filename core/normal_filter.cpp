@@ -76,25 +76,33 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
 
   // The range part, phi((1 - cos gamma_ij) / (1 - cos sigma_gamma)) / ||n_i - n_j||, is
   // symmetric in i and j: evaluate it once per unordered pair (half the exp and sqrt calls).
-  // pair_of[k] maps CSR entry k (face i -> neighbour j) to its pair; N(j) contains i because
-  // vertex adjacency is symmetric, and the lists are sorted.
-  std::vector<std::int32_t> pair_first, pair_second, pair_of(entries);
-  pair_first.reserve(entries / 2);
-  pair_second.reserve(entries / 2);
-  for (std::int64_t i = 0; i < nf; ++i)
-    for (std::int32_t k = topo.ff_offsets[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k) {
-      const std::int32_t j = topo.ff_faces[static_cast<std::size_t>(k)];
-      if (j < i) continue;
-      const auto id = static_cast<std::int32_t>(pair_first.size());
-      pair_first.push_back(static_cast<std::int32_t>(i));
-      pair_second.push_back(j);
-      pair_of[static_cast<std::size_t>(k)] = id;
-      const auto jb = topo.ff_faces.begin() + topo.ff_offsets[static_cast<std::size_t>(j)];
-      const auto je = topo.ff_faces.begin() + topo.ff_offsets[static_cast<std::size_t>(j) + 1];
-      pair_of[static_cast<std::size_t>(std::lower_bound(jb, je, static_cast<std::int32_t>(i)) - topo.ff_faces.begin())] = id;
+  // N(i) is sorted, so the pairs (i, j > i) are the tail of i's list, from upper[i] on; pairs
+  // are numbered along those tails in face order (face i's from pair_start[i]), and
+  // pair_of[k] maps CSR entry k (face i -> neighbour j) to its pair. N(j) contains i because
+  // vertex adjacency is symmetric. No pair list is stored: the pair pass walks the tails.
+  std::vector<std::int32_t> upper(static_cast<std::size_t>(nf)), pair_start(static_cast<std::size_t>(nf) + 1, 0);
+  for (std::int64_t i = 0; i < nf; ++i) {
+    const auto b = topo.ff_faces.begin() + topo.ff_offsets[static_cast<std::size_t>(i)];
+    const auto e = topo.ff_faces.begin() + topo.ff_offsets[static_cast<std::size_t>(i) + 1];
+    const auto u = std::upper_bound(b, e, static_cast<std::int32_t>(i));
+    upper[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(u - topo.ff_faces.begin());
+    pair_start[static_cast<std::size_t>(i) + 1] = pair_start[static_cast<std::size_t>(i)] + static_cast<std::int32_t>(e - u);
+  }
+  std::vector<std::int32_t> pair_of(entries);
+  ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t i = begin; i < end; ++i) {
+      const auto iu = static_cast<std::size_t>(i);
+      for (std::int32_t k = topo.ff_offsets[iu]; k < upper[iu]; ++k) {  // j < i: the pair is in j's tail
+        const auto j = static_cast<std::size_t>(topo.ff_faces[static_cast<std::size_t>(k)]);
+        const auto jt = topo.ff_faces.begin() + upper[j];
+        const auto je = topo.ff_faces.begin() + topo.ff_offsets[j + 1];
+        pair_of[static_cast<std::size_t>(k)] = pair_start[j] + static_cast<std::int32_t>(std::lower_bound(jt, je, static_cast<std::int32_t>(i)) - jt);
+      }
+      for (std::int32_t k = upper[iu]; k < topo.ff_offsets[iu + 1]; ++k) pair_of[static_cast<std::size_t>(k)] = pair_start[iu] + (k - upper[iu]);
     }
-  const auto num_pairs = static_cast<std::int64_t>(pair_first.size());
-  std::vector<double> range(static_cast<std::size_t>(num_pairs)), range_x(static_cast<std::size_t>(num_pairs));
+  });
+  const auto num_pairs = static_cast<std::int64_t>(pair_start.back());
+  std::vector<double> range(static_cast<std::size_t>(num_pairs));
 
   // Eq. 7 typo: both denominators mean 1 - cos(sigma_gamma) (NOTES reading 8).
   const double inv_range = 1.0 / (1.0 - std::cos(s.sigma_gamma_deg * std::numbers::pi / 180.0));
@@ -102,18 +110,30 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
   if (s.on_iteration) s.on_iteration(0, current);
   for (int it = 0; it < s.iterations; ++it) {
     checkpoint(progress, Stage::NormalFilter, static_cast<double>(it) / s.iterations);
-    ex.parallel_for(num_pairs, [&](std::int64_t begin, std::int64_t end) {
+    ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
       const double* n = current.data();  // row-major #F x 3
-      // Gather: (1 - cos gamma_ij) / (1 - cos sigma_gamma) and ||n_i - n_j|| per pair...
-      for (std::int64_t q = begin; q < end; ++q) {
-        const double* ni = n + 3 * pair_first[static_cast<std::size_t>(q)];
-        const double* nj = n + 3 * pair_second[static_cast<std::size_t>(q)];
-        const double dx = ni[0] - nj[0], dy = ni[1] - nj[1], dz = ni[2] - nj[2];
-        range_x[static_cast<std::size_t>(q)] = (1.0 - (ni[0] * nj[0] + ni[1] * nj[1] + ni[2] * nj[2])) * inv_range;
-        range[static_cast<std::size_t>(q)] = dx * dx + dy * dy + dz * dz;
+      // Blocks of about kBlock pairs: gather (1 - cos gamma_ij) / (1 - cos sigma_gamma) into a
+      // small buffer and ||n_i - n_j||^2 into range, then the weights while both are in L1
+      // (branch-free, vectorised).
+      constexpr std::int32_t kBlock = 512;
+      std::vector<double> x(kBlock);
+      for (std::int64_t i = begin; i < end;) {
+        std::int64_t stop = i + 1;  // at least one face, however many pairs it has
+        while (stop < end && pair_start[static_cast<std::size_t>(stop) + 1] - pair_start[static_cast<std::size_t>(i)] <= kBlock) ++stop;
+        const std::int32_t q0 = pair_start[static_cast<std::size_t>(i)];
+        const std::int32_t count = pair_start[static_cast<std::size_t>(stop)] - q0;
+        if (static_cast<std::size_t>(count) > x.size()) x.resize(static_cast<std::size_t>(count));
+        for (std::int32_t q = q0; i < stop; ++i) {
+          const double* ni = n + 3 * i;
+          for (std::int32_t k = upper[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k, ++q) {
+            const double* nj = n + 3 * topo.ff_faces[static_cast<std::size_t>(k)];
+            const double dx = ni[0] - nj[0], dy = ni[1] - nj[1], dz = ni[2] - nj[2];
+            x[static_cast<std::size_t>(q - q0)] = (1.0 - (ni[0] * nj[0] + ni[1] * nj[1] + ni[2] * nj[2])) * inv_range;
+            range[static_cast<std::size_t>(q)] = dx * dx + dy * dy + dz * dz;
+          }
+        }
+        range_weights(x.data(), range.data() + q0, count, s.bilateral_switch, s.l1_median);
       }
-      // ...then the weights over contiguous arrays (branch-free, vectorised).
-      range_weights(range_x.data() + begin, range.data() + begin, end - begin, s.bilateral_switch, s.l1_median);
     });
     // Eq. 7: one Jacobi step of the weighted L1-median, all faces from the previous iterate.
     ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {

@@ -6,6 +6,7 @@
 #include "core/normal_filter.h"
 #include "core/parallel.h"
 #include "core/prefilter.h"
+#include "core/reorder.h"
 #include "core/topology.h"
 #include "core/vertex_update.h"
 
@@ -77,8 +78,9 @@ DenoiseResult denoise(const TriMesh& input, const DenoiseParams& requested, cons
   // Sec. 3: work in the unit box (NOTES reading 1); undone at the end.
   auto t0 = Clock::now();
   const UnitBox box = UnitBox::of(input.V);
-  const Triangles& F = input.F;
-  Vertices P = box.apply(input.V);
+  const LocalityOrder order = LocalityOrder::of(input, options.order);  // decision 16, undone at the end
+  const Triangles& F = order.faces();
+  Vertices P = box.apply(order.to_order(input.V));
   const Topology topo = Topology::build(F, static_cast<std::int32_t>(P.rows()));
   report.fold_ratio = fold_ratio(P, F, topo, requested.fold_angle);  // on the noisy input (reading 5)
   times.setup_ms = ms_since(t0);
@@ -107,8 +109,8 @@ DenoiseResult denoise(const TriMesh& input, const DenoiseParams& requested, cons
   P = vertex_update(P, F, topo, N, params.n_vertex, &executor, progress);
   times.vertex_ms = ms_since(t0);
 
-  result.mesh.V = box.undo(P);
-  result.mesh.F = F;
+  result.mesh.V = order.to_input(box.undo(P));
+  result.mesh.F = input.F;
   times.total_ms = ms_since(t_start);
   return result;
 }

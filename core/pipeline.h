@@ -9,6 +9,7 @@
 #include "core/normal_filter.h"
 #include "core/params.h"
 #include "core/progress.h"
+#include "core/reorder.h"
 #include "core/topology.h"
 
 namespace mdn {
@@ -16,6 +17,7 @@ namespace mdn {
 struct RunOptions {
   int threads = 1;                        // worker threads for this call; output does not depend on it
   ProgressObserver* progress = nullptr;   // optional; progress and cancellation
+  OrderKind order = OrderKind::Auto;      // memory order of the run (decision 16); output order is the input's
 };
 
 // Wall-clock milliseconds per step.

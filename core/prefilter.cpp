@@ -39,15 +39,18 @@ struct ShapingSolver::Impl {
   const Topology* topo;
   Executor* executor;
   // ConjugateGradient only: vertex -> (edge, coefficient of the vertex in S(e)), CSR, so that
-  // D^T s is a gather per vertex (parallel, fixed summation order).
+  // D^T s is a gather per vertex (parallel, fixed summation order). An entry is 2 e + 1 where
+  // the coefficient is -1 and 2 e where it is +1: 4 bytes per incidence, not 12.
   std::vector<std::int32_t> ve_offsets, ve_edges;
-  std::vector<double> ve_coef;
+  static Eigen::Index edge_of(std::int32_t entry) { return entry >> 1; }
+  static double coef_of(std::int32_t entry) { return (entry & 1) ? -1.0 : 1.0; }
   // Ldlt only.
   SparseMatrix A;
   std::vector<int> diagonal_slot;           // #V
   std::vector<int> edge_slot;               // #E x 16, slot of (row a, col b) for a, b in 0..3
   Eigen::SimplicialLDLT<SparseMatrix> ldlt;
   bool analyzed = false;
+  int last_iterations = 0;
 
   Impl(const Topology& t, LinearSolver k, double tol, Executor* ex)
       : kind(k), cg_tolerance(tol), topo(&t), executor(ex) {
@@ -66,13 +69,11 @@ struct ShapingSolver::Impl {
     ve_offsets.assign(count.size(), 0);
     for (std::size_t v = 1; v < count.size(); ++v) ve_offsets[v] = ve_offsets[v - 1] + count[v];
     ve_edges.resize(static_cast<std::size_t>(4 * E));
-    ve_coef.resize(static_cast<std::size_t>(4 * E));
     std::vector<std::int32_t> cursor(ve_offsets.begin(), ve_offsets.end() - 1);
     for (Eigen::Index e = 0; e < E; ++e)
       for (int a = 0; a < 4; ++a) {
         const auto slot = static_cast<std::size_t>(cursor[static_cast<std::size_t>(t.interior_edges(e, a))]++);
-        ve_edges[slot] = static_cast<std::int32_t>(e);
-        ve_coef[slot] = kShape[a];
+        ve_edges[slot] = static_cast<std::int32_t>(2 * e + (kShape[a] < 0 ? 1 : 0));
       }
   }
 
@@ -89,21 +90,30 @@ struct ShapingSolver::Impl {
 
   // Column-wise dot products with a fixed blocking, so the rounding does not depend on the
   // number of threads: blocks are summed in parallel, block sums serially in order.
-  Eigen::Array3d dot3(const Vertices& a, const Vertices& b) const {
-    constexpr std::int64_t kBlock = 2048;
-    const std::int64_t n = a.rows(), blocks = (n + kBlock - 1) / kBlock;
-    std::vector<Eigen::Array3d> partial(static_cast<std::size_t>(blocks), Eigen::Array3d::Zero());
+  // blocked_sums runs body(i, sums) for every row i, block by block in parallel, and returns the
+  // in-order total of the blocks' sums; passes that update a vector take its dot products in
+  // the same sweep (the same sums, in the same order, as a separate dot3).
+  static constexpr std::int64_t kBlock = 2048;
+  using Sums = Eigen::Array<double, 3, 2>;
+  template <class Body>
+  Sums blocked_sums(std::int64_t n, const Body& body) const {
+    const std::int64_t blocks = (n + kBlock - 1) / kBlock;
+    std::vector<Sums> partial(static_cast<std::size_t>(blocks), Sums::Zero());
     parallel(blocks, [&](std::int64_t begin, std::int64_t end) {
       for (std::int64_t blk = begin; blk < end; ++blk) {
-        Eigen::Array3d sum = Eigen::Array3d::Zero();
-        for (std::int64_t i = blk * kBlock; i < std::min(n, (blk + 1) * kBlock); ++i)
-          sum += a.row(i).array().transpose() * b.row(i).array().transpose();
+        Sums sum = Sums::Zero();
+        for (std::int64_t i = blk * kBlock; i < std::min(n, (blk + 1) * kBlock); ++i) body(i, sum);
         partial[static_cast<std::size_t>(blk)] = sum;
       }
     });
-    Eigen::Array3d total = Eigen::Array3d::Zero();
+    Sums total = Sums::Zero();
     for (const auto& p : partial) total += p;
     return total;
+  }
+  Eigen::Array3d dot3(const Vertices& a, const Vertices& b) const {
+    return blocked_sums(a.rows(), [&](std::int64_t i, Sums& sum) {
+             sum.col(0) += a.row(i).array().transpose() * b.row(i).array().transpose();
+           }).col(0);
   }
 
   void build_pattern() {
@@ -159,7 +169,8 @@ struct ShapingSolver::Impl {
   }
 
   // y = A x = x + alpha D^T W D x: s_e = alpha w_e S(e) per edge, then a gather per vertex.
-  void apply(const Vertices& x, double alpha, const Eigen::VectorXd& weights, Vertices& s, Vertices& y) const {
+  // Returns x . y (column-wise, blocked as dot3).
+  Eigen::Array3d apply(const Vertices& x, double alpha, const Eigen::VectorXd& weights, Vertices& s, Vertices& y) const {
     const auto E = topo->num_interior_edges();
     const auto& ie = topo->interior_edges;
     parallel(E, [&](std::int64_t begin, std::int64_t end) {
@@ -168,14 +179,13 @@ struct ShapingSolver::Impl {
         s.row(e) = w * (x.row(ie(e, 0)) - x.row(ie(e, 1)) + x.row(ie(e, 2)) - x.row(ie(e, 3)));
       }
     });
-    parallel(x.rows(), [&](std::int64_t begin, std::int64_t end) {
-      for (std::int64_t v = begin; v < end; ++v) {
-        Eigen::RowVector3d acc = x.row(v);
-        for (std::int32_t k = ve_offsets[static_cast<std::size_t>(v)]; k < ve_offsets[static_cast<std::size_t>(v) + 1]; ++k)
-          acc += ve_coef[static_cast<std::size_t>(k)] * s.row(ve_edges[static_cast<std::size_t>(k)]);
-        y.row(v) = acc;
-      }
-    });
+    return blocked_sums(x.rows(), [&](std::int64_t v, Sums& sum) {
+             Eigen::RowVector3d acc = x.row(v);
+             for (std::int32_t k = ve_offsets[static_cast<std::size_t>(v)]; k < ve_offsets[static_cast<std::size_t>(v) + 1]; ++k)
+               acc += coef_of(ve_edges[static_cast<std::size_t>(k)]) * s.row(edge_of(ve_edges[static_cast<std::size_t>(k)]));
+             y.row(v) = acc;
+             sum.col(0) += x.row(v).array().transpose() * acc.array().transpose();
+           }).col(0);
   }
 
   Vertices solve_cg(const Vertices& P, double alpha, const Eigen::VectorXd& weights) {
@@ -187,7 +197,7 @@ struct ShapingSolver::Impl {
       for (std::int64_t v = begin; v < end; ++v) {
         double d = 1;
         for (std::int32_t k = ve_offsets[static_cast<std::size_t>(v)]; k < ve_offsets[static_cast<std::size_t>(v) + 1]; ++k)
-          d += alpha * (weights.size() ? weights(ve_edges[static_cast<std::size_t>(k)]) : 1.0);
+          d += alpha * (weights.size() ? weights(edge_of(ve_edges[static_cast<std::size_t>(k)])) : 1.0);
         inv_diag(v) = 1.0 / d;
       }
     });
@@ -208,25 +218,25 @@ struct ShapingSolver::Impl {
     for (int it = 0; it < max_iterations; ++it) {
       // A converged column is frozen (step 0) so that 0/0 never appears.
       const Eigen::Array3d active = (r_norm2 > threshold).cast<double>();
+      last_iterations = it;
       if ((active == 0).all()) return x;
-      apply(p, alpha, weights, s, Ap);
-      const Eigen::Array3d pAp = dot3(p, Ap);
+      const Eigen::Array3d pAp = apply(p, alpha, weights, s, Ap);
       const Eigen::Array3d step = active * rz / pAp.max(1e-300);
-      parallel(n, [&](std::int64_t begin, std::int64_t end) {
-        for (std::int64_t v = begin; v < end; ++v) {
-          x.row(v) += (step * p.row(v).array().transpose()).transpose().matrix();
-          r.row(v) -= (step * Ap.row(v).array().transpose()).transpose().matrix();
-          z.row(v) = inv_diag(v) * r.row(v);
-        }
+      const Sums rz_rr = blocked_sums(n, [&](std::int64_t v, Sums& sum) {
+        x.row(v) += (step * p.row(v).array().transpose()).transpose().matrix();
+        r.row(v) -= (step * Ap.row(v).array().transpose()).transpose().matrix();
+        z.row(v) = inv_diag(v) * r.row(v);
+        sum.col(0) += r.row(v).array().transpose() * z.row(v).array().transpose();
+        sum.col(1) += r.row(v).array().transpose() * r.row(v).array().transpose();
       });
-      const Eigen::Array3d rz_new = dot3(r, z);
+      const Eigen::Array3d rz_new = rz_rr.col(0);
       const Eigen::Array3d beta = active * rz_new / rz.max(1e-300);
       parallel(n, [&](std::int64_t begin, std::int64_t end) {
         for (std::int64_t v = begin; v < end; ++v)
           p.row(v) = (z.row(v).array().transpose() + beta * p.row(v).array().transpose()).transpose().matrix();
       });
       rz = active * rz_new + (1 - active) * rz;
-      r_norm2 = dot3(r, r);
+      r_norm2 = rz_rr.col(1);
     }
     throw SolverError("conjugate gradients did not converge on the pre-filter system");
   }
@@ -246,6 +256,7 @@ ShapingSolver::~ShapingSolver() = default;
 Vertices ShapingSolver::solve(const Vertices& P, double alpha, const Eigen::VectorXd& weights) {
   return impl_->solve(P, alpha, weights);
 }
+int ShapingSolver::last_iterations() const { return impl_->last_iterations; }
 
 // Eq. 1: argmin sum ||p~_i - p_i||^2 + alpha sum_e ||S(e)||^2  <=>  (I + alpha D^T D) P~ = P.
 Vertices initial_prefilter(const Vertices& P, const Topology& topo, double alpha, LinearSolver kind) {

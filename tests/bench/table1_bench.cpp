@@ -21,10 +21,10 @@
 #include <sstream>
 #include <string>
 #include <thread>
-#include <unordered_map>
 #include <vector>
 
 #include "cgal_data.h"
+#include "subdivide.h"
 #include "core/io/document.h"
 #include "core/metrics.h"
 #include "core/noise.h"
@@ -100,36 +100,6 @@ TriMesh load_fandisk(const fs::path& dir) {
   std::printf("mesh: %s (%lld vertices, %lld faces)\n", path.c_str(), static_cast<long long>(mesh.num_vertices()),
               static_cast<long long>(mesh.num_faces()));
   return mesh;
-}
-
-// Loop subdivision's connectivity with midpoint positions (the surface is unchanged):
-// every triangle becomes four, #F x 4 per level.
-TriMesh midpoint_subdivide(const TriMesh& m) {
-  std::unordered_map<std::uint64_t, std::int32_t> mid;
-  mid.reserve(static_cast<std::size_t>(m.num_faces()) * 2);
-  std::vector<Vec3> verts;
-  verts.reserve(static_cast<std::size_t>(m.num_vertices() + 2 * m.num_faces()));
-  for (Eigen::Index i = 0; i < m.V.rows(); ++i) verts.emplace_back(m.V.row(i).transpose());
-  auto midpoint = [&](std::int32_t a, std::int32_t b) {
-    const auto [lo, hi] = std::minmax(a, b);
-    const std::uint64_t key = (static_cast<std::uint64_t>(lo) << 32) | static_cast<std::uint32_t>(hi);
-    const auto [it, inserted] = mid.emplace(key, static_cast<std::int32_t>(verts.size()));
-    if (inserted) verts.push_back(0.5 * (verts[static_cast<std::size_t>(a)] + verts[static_cast<std::size_t>(b)]));
-    return it->second;
-  };
-  TriMesh out;
-  out.F.resize(4 * m.num_faces(), 3);
-  for (Eigen::Index f = 0; f < m.F.rows(); ++f) {
-    const std::int32_t a = m.F(f, 0), b = m.F(f, 1), c = m.F(f, 2);
-    const std::int32_t ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
-    out.F.row(4 * f) << a, ab, ca;
-    out.F.row(4 * f + 1) << ab, b, bc;
-    out.F.row(4 * f + 2) << ca, bc, c;
-    out.F.row(4 * f + 3) << ab, bc, ca;
-  }
-  out.V.resize(static_cast<Eigen::Index>(verts.size()), 3);
-  for (std::size_t i = 0; i < verts.size(); ++i) out.V.row(static_cast<Eigen::Index>(i)) = verts[i].transpose();
-  return out;
 }
 
 double mean(const std::vector<double>& v) {
@@ -287,7 +257,7 @@ void scale_section(const TriMesh& fandisk) {
   std::printf("peak RSS before: %.1f MiB\n", peak_rss_mib());
   auto t0 = std::chrono::steady_clock::now();
   TriMesh truth = fandisk;
-  for (int level = 0; level < 3; ++level) truth = midpoint_subdivide(truth);
+  for (int level = 0; level < 3; ++level) truth = bench::midpoint_subdivide(truth);
   const TriMesh noisy{add_noise(truth, {NoiseKind::AlongNormal, 0.2, 1, 0}), truth.F};
   std::printf("mesh: %lld vertices, %lld faces (built in %.2f s)\n", static_cast<long long>(truth.num_vertices()),
               static_cast<long long>(truth.num_faces()), seconds_since(t0));
