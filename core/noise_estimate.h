@@ -12,7 +12,7 @@ namespace mdn {
 class Executor;
 
 struct NoiseEstimate {
-  double sigma = 0;          // RMS displacement along the surface normal, in the positions' units
+  double sigma = 0;          // RMS displacement along the surface normal, in the positions' units (at most 4 x gaussian_sigma)
   double sigma_edges = 0;    // sigma / edge_length: the noise in mean edge lengths
   double gaussian_sigma = 0; // the same read off the median residual (the Gaussian core, blind to impulses)
   double edge_length = 0;    // mean edge length of the clean surface, estimated (noise lengthens edges)
