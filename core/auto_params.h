@@ -1,6 +1,7 @@
-// Automatic parameters (ParamMode::Auto): measure the noisy input, then choose the six
-// parameters of Table 1 and the region mode from the measurements with a rule fitted on
-// data by tests/bench/tune_bench.cpp (see core/README.md, "Automatic parameters").
+// Automatic parameters (ParamMode::Auto): what is measured on the noisy input (reported, and
+// the sampling irregularity decides the region mode), and the prototype parameter sets the
+// selection (core/auto_select.h) scores, fitted by tests/bench/tune_bench.cpp (see
+// core/README.md, "Automatic parameters").
 #pragma once
 
 #include "core/mesh.h"
@@ -33,23 +34,11 @@ struct InputMeasures {
 InputMeasures measure_input(const Vertices& P, const Triangles& F, const Topology& topo, const DenoiseParams& params,
                             Executor* executor = nullptr);
 
-// The rule: returns `requested` with every non-pinned AutoField replaced by the value the
-// fitted rule gives for these measurements, and mode Manual (the result is what runs).
-// region_mode is On iff cluster_area_ratio >= requested.irregular_area_ratio.
-DenoiseParams choose_parameters(const InputMeasures& measures, const DenoiseParams& requested);
-
-// --- The rule's form, shared with its fitting (tests/bench/tune_fit.cpp) ---
-// Features: (1, ln noise, ln tail, ln smooth_tail, ln(smooth_residual / noise), feature_share,
-// irregular 0/1). The rule takes the k training cases nearest in standardised feature space
-// and the prototype parameter set with the least summed log-MSAE excess over them.
-inline constexpr int kAutoFeatures = 7;
-using AutoFeatures = Eigen::Matrix<double, kAutoFeatures, 1>;
-AutoFeatures auto_features(const InputMeasures& measures, double irregular_area_ratio = DenoiseParams{}.irregular_area_ratio);
-int choose_prototype(const InputMeasures& measures, double irregular_area_ratio);  // index into the rule's table
+// The prototypes (core/auto_rule.inc; the paper's Table 1 row first).
 int rule_prototype_count();
-// `requested` with prototype p (0 <= p < rule_prototype_count()) filled in as choose_parameters
-// does; choose_parameters is this with p = choose_prototype. tune_bench uses it to show what
-// the best choice among the prototypes would give (the ceiling of the rule's form).
+// `requested` with prototype p (0 <= p < rule_prototype_count()) filled in for every field not
+// pinned, mode Manual; region_mode On iff cluster_area_ratio >= requested.irregular_area_ratio
+// (unless pinned). Throws std::out_of_range for another p.
 DenoiseParams prototype_parameters(int p, const InputMeasures& measures, const DenoiseParams& requested);
 
 }  // namespace mdn

@@ -68,6 +68,13 @@ class Sampler {
 
 }  // namespace
 
+std::vector<double> gaussian_draws(std::size_t n, std::uint64_t seed) {
+  Sampler rng(seed);
+  std::vector<double> out(n);
+  for (double& x : out) x = rng.gaussian();
+  return out;
+}
+
 std::string_view to_string(NoiseKind kind) {
   switch (kind) {
     case NoiseKind::PerCoordinate: return "per_coordinate";

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <string_view>
+#include <vector>
 
 #include "core/mesh.h"
 
@@ -31,5 +32,8 @@ struct NoiseSpec {
 // for an invalid mesh and InvalidParamsError (field "sigma" or "impulse_fraction") for a
 // negative or non-finite sigma or a fraction outside [0, 1].
 Vertices add_noise(const TriMesh& mesh, const NoiseSpec& spec);
+
+// n independent standard normal draws from `seed` (the sampler add_noise uses).
+std::vector<double> gaussian_draws(std::size_t n, std::uint64_t seed);
 
 }  // namespace mdn

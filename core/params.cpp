@@ -24,10 +24,18 @@ std::optional<RegionMode> region_mode_from_string(std::string_view text) {
   return std::nullopt;
 }
 
-std::string_view to_string(ParamMode mode) { return mode == ParamMode::Auto ? "auto" : "manual"; }
+std::string_view to_string(ParamMode mode) {
+  switch (mode) {
+    case ParamMode::Auto: return "auto";
+    case ParamMode::Search: return "search";
+    case ParamMode::Manual: break;
+  }
+  return "manual";
+}
 
 std::optional<ParamMode> param_mode_from_string(std::string_view text) {
   if (text == "auto") return ParamMode::Auto;
+  if (text == "search") return ParamMode::Search;
   if (text == "manual") return ParamMode::Manual;
   return std::nullopt;
 }

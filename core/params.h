@@ -30,7 +30,8 @@ std::optional<LinearSolver> linear_solver_from_string(std::string_view text);
 // Who sets the six parameters of Table 1 and the region mode.
 enum class ParamMode {
   Manual,  // the values below, as given
-  Auto,    // chosen from measurements of the input (core/auto_params.h), except pinned fields
+  Auto,    // chosen per input among candidates by an estimated error (core/auto_select.h), except pinned fields
+  Search,  // Auto, then a coordinate descent driven by the same estimated error (slower; core/tune.h)
 };
 std::string_view to_string(ParamMode mode);
 std::optional<ParamMode> param_mode_from_string(std::string_view text);

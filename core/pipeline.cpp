@@ -56,6 +56,23 @@ Vertices prefilter_stage(const Vertices& input, const Triangles& F, const Topolo
   return P;
 }
 
+Vertices run_method(const Vertices& input, const Triangles& F, const Topology& topo, const DenoiseParams& params,
+                    Executor& executor, ProgressObserver* progress, DenoiseReport& report) {
+  StageTimings& times = report.timings;
+  Vertices P = prefilter_stage(input, F, topo, params, executor, progress, report);
+
+  // Sec. 5, Eq. 6-7.
+  auto t0 = Clock::now();
+  const Vertices N = l1_median_normal_filter(P, F, topo, normal_filter_settings(params), &executor, progress);
+  times.normal_ms = ms_since(t0);
+
+  // Sec. 6, Eq. 8, starting from the pre-filtered positions.
+  t0 = Clock::now();
+  P = vertex_update(P, F, topo, N, params.n_vertex, &executor, progress);
+  times.vertex_ms = ms_since(t0);
+  return P;
+}
+
 NormalFilterSettings normal_filter_settings(const DenoiseParams& params) {
   NormalFilterSettings nfs;
   nfs.sigma_gamma_deg = params.sigma_gamma;
@@ -85,29 +102,24 @@ DenoiseResult denoise(const TriMesh& input, const DenoiseParams& requested, cons
   report.fold_ratio = fold_ratio(P, F, topo, requested.fold_angle);  // on the noisy input (reading 5)
   times.setup_ms = ms_since(t0);
 
-  // ParamMode::Auto: measure the input and let the fitted rule choose (core/auto_params.h).
+  // ParamMode::Auto / Search: measure the input, score the candidates on recorrupted copies
+  // of a sample (Search: then descend from the best) and run the winner (core/auto_select.h).
   report.mode = requested.mode;
   report.params = requested;
-  if (requested.mode == ParamMode::Auto) {
+  if (requested.mode != ParamMode::Manual) {
     t0 = Clock::now();
     report.measures = measure_input(P, F, topo, requested, &executor);
-    report.params = choose_parameters(*report.measures, requested);
+    report.selection = select_parameters(P, F, topo, requested, *report.measures, executor, progress);
+    report.params = report.selection->candidates[static_cast<std::size_t>(report.selection->chosen)].params;
+    NoiseEstimate& noise = report.selection->noise;  // reported in the input's units
+    noise.sigma /= box.scale;
+    noise.gaussian_sigma /= box.scale;
+    noise.edge_length /= box.scale;
     report.params.validate();
     times.measure_ms = ms_since(t0);
   }
-  const DenoiseParams& params = report.params;
 
-  P = prefilter_stage(P, F, topo, params, executor, progress, report);
-
-  // Sec. 5, Eq. 6-7.
-  t0 = Clock::now();
-  const Vertices N = l1_median_normal_filter(P, F, topo, normal_filter_settings(params), &executor, progress);
-  times.normal_ms = ms_since(t0);
-
-  // Sec. 6, Eq. 8, starting from the pre-filtered positions.
-  t0 = Clock::now();
-  P = vertex_update(P, F, topo, N, params.n_vertex, &executor, progress);
-  times.vertex_ms = ms_since(t0);
+  P = run_method(P, F, topo, report.params, executor, progress, report);
 
   result.mesh.V = order.to_input(box.undo(P));
   result.mesh.F = input.F;

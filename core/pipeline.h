@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "core/auto_params.h"
+#include "core/auto_select.h"
 #include "core/mesh.h"
 #include "core/normal_filter.h"
 #include "core/params.h"
@@ -23,7 +24,7 @@ struct RunOptions {
 // Wall-clock milliseconds per step.
 struct StageTimings {
   double setup_ms = 0;        // validation, normalisation, topology
-  double measure_ms = 0;      // ParamMode::Auto: measure_input and the rule
+  double measure_ms = 0;      // ParamMode::Auto / Search: measuring the input and choosing the parameters
   double initial_ms = 0;      // Eq. 1
   double region_ms = 0;       // Sec. 4.2 detection, K-means and Eq. 2
   double anisotropic_ms = 0;  // Eq. 3-4, all iterations
@@ -41,7 +42,8 @@ struct DenoiseReport {
   std::int64_t region_vertices = 0;  // vertices smoothed by Eq. 2
   ParamMode mode = ParamMode::Manual;     // as requested
   DenoiseParams params;                   // what ran (Auto: the rule's choice, pinned fields kept)
-  std::optional<InputMeasures> measures;  // ParamMode::Auto only
+  std::optional<InputMeasures> measures;  // ParamMode::Auto / Search only
+  std::optional<Selection> selection;     // ParamMode::Auto / Search only: the noise estimate, the candidates and the pick
   StageTimings timings;
 };
 
@@ -62,6 +64,12 @@ DenoiseResult denoise(const TriMesh& input, const DenoiseParams& params, const R
 Vertices prefilter_stage(const Vertices& P, const Triangles& F, const Topology& topo, const DenoiseParams& params,
                          Executor& executor, ProgressObserver* progress, DenoiseReport& report,
                          const IterationHook& on_aniso_iteration = {});
+
+// Sec. 4-6 with `params` as given (mode Manual): prefilter_stage, the L1-median normal filter
+// and the vertex update. Returns the denoised positions; fills report's region fields and
+// timings (not total_ms).
+Vertices run_method(const Vertices& P, const Triangles& F, const Topology& topo, const DenoiseParams& params,
+                    Executor& executor, ProgressObserver* progress, DenoiseReport& report);
 
 // The settings of the normal filter (Sec. 5) that `params` asks for.
 NormalFilterSettings normal_filter_settings(const DenoiseParams& params);

@@ -6,6 +6,7 @@ namespace mdn {
 
 std::string_view to_string(Stage stage) {
   switch (stage) {
+    case Stage::SelectParameters: return "select_parameters";
     case Stage::InitialPrefilter: return "initial_prefilter";
     case Stage::RegionPrefilter: return "region_prefilter";
     case Stage::AnisotropicPrefilter: return "anisotropic_prefilter";

@@ -6,6 +6,7 @@
 namespace mdn {
 
 enum class Stage {
+  SelectParameters,      // ParamMode::Auto / Search: scoring candidate parameters on a sample
   InitialPrefilter,      // Eq. 1
   RegionPrefilter,       // Sec. 4.2, K-means + Eq. 2
   AnisotropicPrefilter,  // Eq. 3-4

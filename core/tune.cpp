@@ -44,16 +44,9 @@ int nearest(const std::vector<T>& list, double value) {
 
 class Search {
  public:
-  Search(const TriMesh& truth, const TriMesh& noisy, const DenoiseParams& base, const TuneOptions& options)
-      : grid_(options.grid),
-        base_(base),
-        options_(options),
-        executor_(options.threads),
-        F_(noisy.F),
-        P_(UnitBox::of(noisy.V).apply(noisy.V)),
-        topo_(Topology::build(F_, static_cast<std::int32_t>(P_.rows()))),
-        truth_normals_(face_normals(truth.V, truth.F)) {
-    report_.fold_ratio = fold_ratio(P_, F_, topo_, base.fold_angle);
+  Search(const TuneProblem& problem, const DenoiseParams& base, const TuneOptions& options, Executor& executor)
+      : grid_(options.grid), base_(base), options_(options), executor_(executor), problem_(problem) {
+    report_.fold_ratio = problem.fold_ratio;
   }
 
   DenoiseParams params_at(const Point& p, const Inner& inner) const {
@@ -74,28 +67,32 @@ class Search {
     if (auto it = inner_.find(p.key()); it != inner_.end()) return it->second;
     if (options_.progress && options_.progress->cancel_requested()) throw CancelledError();
     ++evaluations_;
-    const Vertices& P = prefiltered(p);
-    Inner best;
-    // Sec. 5: one run of the longest n_normal, keeping the normals at every listed count.
-    std::vector<Vertices> normals(grid_.n_normal.size());
-    NormalFilterSettings nfs = normal_filter_settings(params_at(p, {}));
-    nfs.iterations = grid_.n_normal.back();
-    nfs.on_iteration = [&](int done, const Vertices& N) {
-      for (std::size_t k = 0; k < grid_.n_normal.size(); ++k)
-        if (grid_.n_normal[k] == done) normals[k] = N;
-    };
-    l1_median_normal_filter(P, F_, topo_, nfs, &executor_);
-    // Sec. 6: for each, one run of the longest n_vertex, scoring every listed count.
-    for (std::size_t k = 0; k < normals.size(); ++k) {
-      vertex_update(P, F_, topo_, normals[k], grid_.n_vertex.back(), &executor_, nullptr,
-                    [&](int done, const Vertices& V) {
-                      for (std::size_t j = 0; j < grid_.n_vertex.size(); ++j)
-                        if (grid_.n_vertex[j] == done) {
-                          const double e = msae_of_normals(face_normals(V, F_), truth_normals_);
-                          if (e < best.msae) best = {e, static_cast<int>(k), static_cast<int>(j)};
-                        }
-                    });
+    // Summed over the problem's inputs: score[k][j] for n_normal k and n_vertex j.
+    std::vector<std::vector<double>> score(grid_.n_normal.size(), std::vector<double>(grid_.n_vertex.size(), 0.0));
+    for (int t = 0; t < static_cast<int>(problem_.inputs.size()); ++t) {
+      const Vertices& P = prefiltered(p, t);
+      // Sec. 5: one run of the longest n_normal, keeping the normals at every listed count.
+      std::vector<Vertices> normals(grid_.n_normal.size());
+      NormalFilterSettings nfs = normal_filter_settings(params_at(p, {}));
+      nfs.iterations = grid_.n_normal.back();
+      nfs.on_iteration = [&](int done, const Vertices& N) {
+        for (std::size_t k = 0; k < grid_.n_normal.size(); ++k)
+          if (grid_.n_normal[k] == done) normals[k] = N;
+      };
+      l1_median_normal_filter(P, problem_.F, problem_.topo, nfs, &executor_);
+      // Sec. 6: for each, one run of the longest n_vertex, scoring every listed count.
+      for (std::size_t k = 0; k < normals.size(); ++k) {
+        vertex_update(P, problem_.F, problem_.topo, normals[k], grid_.n_vertex.back(), &executor_, nullptr,
+                      [&](int done, const Vertices& V) {
+                        for (std::size_t j = 0; j < grid_.n_vertex.size(); ++j)
+                          if (grid_.n_vertex[j] == done) score[k][j] += problem_.score(t, V);
+                      });
+      }
     }
+    Inner best;
+    for (std::size_t k = 0; k < score.size(); ++k)
+      for (std::size_t j = 0; j < score[k].size(); ++j)
+        if (score[k][j] < best.msae) best = {score[k][j], static_cast<int>(k), static_cast<int>(j)};
     return inner_.emplace(p.key(), best).first->second;
   }
 
@@ -104,8 +101,8 @@ class Search {
  private:
   // Sec. 4 output at an outer point; one run of Eq. 3 serves every shorter n_aniso: a miss
   // runs up to aniso_horizon (the end of the current n_aniso scan) and keeps every listed count.
-  const Vertices& prefiltered(const Point& p) {
-    const auto key = std::make_tuple(p.region, p.alpha, p.theta, p.aniso);
+  const Vertices& prefiltered(const Point& p, int input) {
+    const auto key = std::make_tuple(input, p.region, p.alpha, p.theta, p.aniso);
     if (auto it = prefilter_.find(key); it != prefilter_.end()) return it->second;
     while (prefilter_.size() > 48) {  // bounded memory: forget the oldest runs
       prefilter_.erase(order_.front());
@@ -114,10 +111,11 @@ class Search {
     DenoiseParams q = params_at(p, {});
     q.n_aniso = std::max(q.n_aniso, aniso_horizon);
     DenoiseReport report = report_;
-    prefilter_stage(P_, F_, topo_, q, executor_, nullptr, report, [&](int done, const Vertices& V) {
+    prefilter_stage(problem_.inputs[static_cast<std::size_t>(input)], problem_.F, problem_.topo, q, executor_, nullptr, report,
+                    [&](int done, const Vertices& V) {
       const auto at = std::find(grid_.n_aniso.begin(), grid_.n_aniso.end(), done);
       if (at == grid_.n_aniso.end()) return;
-      const auto k = std::make_tuple(p.region, p.alpha, p.theta, static_cast<int>(at - grid_.n_aniso.begin()));
+      const auto k = std::make_tuple(input, p.region, p.alpha, p.theta, static_cast<int>(at - grid_.n_aniso.begin()));
       if (prefilter_.emplace(k, V).second) order_.push_back(k);
     });
     return prefilter_.at(key);
@@ -130,29 +128,18 @@ class Search {
   const TuneGrid& grid_;
   const DenoiseParams base_;
   const TuneOptions& options_;
-  Executor executor_;
-  const Triangles F_;
-  const Vertices P_;
-  const Topology topo_;
-  const Vertices truth_normals_;
+  Executor& executor_;
+  const TuneProblem& problem_;
   DenoiseReport report_;
   std::map<std::tuple<int, int, int, int, int>, Inner> inner_;
-  std::map<std::tuple<int, int, int, int>, Vertices> prefilter_;
-  std::deque<std::tuple<int, int, int, int>> order_;
+  std::map<std::tuple<int, int, int, int, int>, Vertices> prefilter_;
+  std::deque<std::tuple<int, int, int, int, int>> order_;
   int evaluations_ = 0;
 };
 
 }  // namespace
 
-TuneResult tune_parameters(const TriMesh& truth, const TriMesh& noisy, const DenoiseParams& start,
-                           const TuneOptions& options) {
-  const auto t0 = std::chrono::steady_clock::now();
-  validate_mesh(truth);
-  validate_mesh(noisy);
-  if (truth.V.rows() != noisy.V.rows() || truth.F != noisy.F)
-    throw InvalidMeshError("tune: the ground truth and the noisy mesh must have the same vertices count and faces");
-  start.validate();
-  const TuneGrid& g = options.grid;
+void validate_grid(const TuneGrid& g) {
   const auto require = [](bool nonempty, const char* field) {
     if (!nonempty) throw InvalidParamsError(field, std::string("tune: the search list of ") + field + " is empty");
   };
@@ -165,24 +152,21 @@ TuneResult tune_parameters(const TriMesh& truth, const TriMesh& noisy, const Den
   require(!g.n_vertex.empty(), "n_vertex");
   for (auto* list : {&g.n_aniso, &g.n_normal, &g.n_vertex})
     require(std::is_sorted(list->begin(), list->end()) && list->front() >= 0, "iteration lists (sorted, >= 0)");
+}
 
-  TuneResult result;
-  const RunOptions run{options.threads, nullptr};
-  const DenoiseResult start_run = denoise(noisy, start, run);
-  result.start_msae = msae(start_run.mesh, truth);
-  const DenoiseParams& ran = start_run.report.params;  // Auto mode: what the rule chose
-  result.start = ran;
-
-  Search search(truth, noisy, ran, options);
+Descent descend(const TuneProblem& problem, const DenoiseParams& start, const TuneOptions& options, Executor& executor) {
+  validate_grid(options.grid);
+  const TuneGrid& g = options.grid;
+  Search search(problem, start, options, executor);
   Point at;
-  const bool region_on = start_run.report.region_prefilter_applied;
+  const bool region_on = start.region_mode == RegionMode::On;
   at.region = 0;
   for (int i = 0; i < static_cast<int>(g.region_mode.size()); ++i)
     if ((g.region_mode[static_cast<std::size_t>(i)] == RegionMode::On) == region_on) at.region = i;
-  at.alpha = nearest(g.alpha, ran.alpha);
-  at.theta = nearest(g.sigma_theta, ran.sigma_theta);
-  at.aniso = nearest(g.n_aniso, ran.n_aniso);
-  at.gamma = nearest(g.sigma_gamma, ran.sigma_gamma);
+  at.alpha = nearest(g.alpha, start.alpha);
+  at.theta = nearest(g.sigma_theta, start.sigma_theta);
+  at.aniso = nearest(g.n_aniso, start.n_aniso);
+  at.gamma = nearest(g.sigma_gamma, start.sigma_gamma);
 
   // Coordinate descent, cheapest coordinates first (n_aniso and sigma_gamma reuse the
   // pre-filter). Ties keep the current value, so the search is deterministic.
@@ -214,19 +198,48 @@ TuneResult tune_parameters(const TriMesh& truth, const TriMesh& noisy, const Den
     }
     if (!improved) break;
   }
+  return {search.params_at(at, current), current.msae, search.evaluations()};
+}
+
+TuneResult tune_parameters(const TriMesh& truth, const TriMesh& noisy, const DenoiseParams& start,
+                           const TuneOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  validate_mesh(truth);
+  validate_mesh(noisy);
+  if (truth.V.rows() != noisy.V.rows() || truth.F != noisy.F)
+    throw InvalidMeshError("tune: the ground truth and the noisy mesh must have the same vertices count and faces");
+  start.validate();
+  validate_grid(options.grid);
+
+  TuneResult result;
+  const RunOptions run{options.threads, nullptr};
+  const DenoiseResult start_run = denoise(noisy, start, run);
+  result.start_msae = msae(start_run.mesh, truth);
+  DenoiseParams ran = start_run.report.params;  // Auto mode: what was chosen
+  result.start = ran;
+  ran.region_mode = start_run.report.region_prefilter_applied ? RegionMode::On : RegionMode::Off;
+
+  // The descent scores every setting by MSAE against the truth.
+  const Vertices P = UnitBox::of(noisy.V).apply(noisy.V);
+  const Topology topo = Topology::build(noisy.F, static_cast<std::int32_t>(P.rows()));
+  const Vertices truth_normals = face_normals(truth.V, truth.F);
+  TuneProblem problem{noisy.F, topo, {P}, [&](int, const Vertices& V) { return msae_of_normals(face_normals(V, noisy.F), truth_normals); },
+                      fold_ratio(P, noisy.F, topo, start.fold_angle)};
+  Executor executor(options.threads);
+  TuneOptions descent_options = options;
+  const Descent d = descend(problem, ran, descent_options, executor);
 
   // The winner, run once more through denoise() exactly as a user would run it.
-  DenoiseParams best = search.params_at(at, current);
-  const double best_msae = msae(denoise(noisy, best, run).mesh, truth);
+  const double best_msae = msae(denoise(noisy, d.best, run).mesh, truth);
   if (best_msae < result.start_msae) {
-    result.best = best;
+    result.best = d.best;
     result.best_msae = best_msae;
   } else {  // the start was off the grid and better: keep it
-    result.best = ran;
+    result.best = result.start;
     result.best.mode = ParamMode::Manual;
     result.best_msae = result.start_msae;
   }
-  result.evaluations = search.evaluations();
+  result.evaluations = d.evaluations;
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }

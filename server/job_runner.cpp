@@ -84,6 +84,23 @@ nlohmann::json report_to_json(const DenoiseReport& report) {
                      {"smooth_tail", m.smooth_tail},
                      {"cluster_area_ratio", m.cluster_area_ratio}};
   }
+  if (report.selection) {
+    const Selection& sel = *report.selection;
+    nlohmann::json candidates = nlohmann::json::array();
+    for (const ScoredCandidate& c : sel.candidates)
+      candidates.push_back({{"name", c.name}, {"score", c.score}, {"params", method_params_json(c.params)}});
+    j["selection"] = {{"noise",
+                       {{"sigma_edges", sel.noise.sigma_edges},
+                        {"sigma", sel.noise.sigma},
+                        {"gaussian_sigma", sel.noise.gaussian_sigma},
+                        {"edge_length", sel.noise.edge_length}}},
+                      {"sample_faces", sel.sample_faces},
+                      {"scored_faces", sel.scored_faces},
+                      {"candidates", std::move(candidates)},
+                      {"chosen", sel.candidates[static_cast<std::size_t>(sel.chosen)].name},
+                      {"evaluations", sel.evaluations},
+                      {"select_ms", sel.select_ms}};
+  }
   return j;
 }
 

@@ -224,10 +224,13 @@ Options:
   --help, --version
 
 Parameters (--params). By default ("mode": "auto") the six parameters of Table 1 (alpha ...
-n_vertex) and region_mode are chosen from measurements of each input surface by a rule fitted
-on data; a field given explicitly keeps its value. "mode": "manual" uses the values as given
-and the defaults below (Table 1's Fandisk row) for the others. --report shows what ran.
-  mode "auto"|"manual", default "auto"
+n_vertex) and region_mode are chosen per surface: its noise is estimated from the surface,
+candidates (no filtering, Table 1's row, fitted prototypes) are scored on recorrupted copies
+of a sample of it, and the best runs; a field given explicitly keeps its value. "mode":
+"search" refines the pick by a coordinate descent on the same score (several times slower).
+"mode": "manual" uses the values as given and the defaults below (Table 1's Fandisk row) for
+the others. --report shows what ran, the noise estimate and every candidate's score.
+  mode "auto"|"search"|"manual", default "auto"
 [accepted range], default:
 )";
   const mdn::DenoiseParams defaults;

@@ -217,9 +217,9 @@ JobParams job_params_from_json(const nlohmann::json& j) {
   for (const auto& [key, value] : j.items()) {
     if (const auto field = auto_field_from_string(key)) p.denoise.pin(*field);  // explicit: kept in auto mode
     if (key == "mode") {
-      const auto& text = string_value(value, key, "\"auto\" or \"manual\"");
+      const auto& text = string_value(value, key, "\"auto\", \"search\" or \"manual\"");
       const auto mode = param_mode_from_string(text);
-      if (!mode) fail(key, "one of \"auto\" or \"manual\"", value);
+      if (!mode) fail(key, "one of \"auto\", \"search\" or \"manual\"", value);
       p.denoise.mode = *mode;
     } else if (key == "region_mode") {
       const auto& text = string_value(value, key, "\"auto\", \"on\" or \"off\"");
@@ -262,7 +262,7 @@ JobParams job_params_from_text(std::string_view text) {
 
 nlohmann::json to_json(const JobParams& p) {
   json j = json::object();
-  const bool automatic = p.denoise.mode == ParamMode::Auto;
+  const bool automatic = p.denoise.mode != ParamMode::Manual;
   j["mode"] = std::string(to_string(p.denoise.mode));
   for (const auto& spec : param_specs()) {
     if (const auto field = auto_field_from_string(spec.name); automatic && field && !p.denoise.is_pinned(*field)) continue;

@@ -1,4 +1,4 @@
-// tune_bench fit (tune_fit.cpp): fits the ParamMode::Auto rule on training cases.
+// tune_bench fit (tune_fit.cpp): fits the candidates of ParamMode::Auto on training cases.
 #pragma once
 
 #include <functional>
@@ -17,7 +17,9 @@ struct FitCase {
 // MSAE of training case i denoised with the given parameters.
 using FitScore = std::function<double(std::size_t i, const mdn::DenoiseParams& params)>;
 
-// Prints the rule as the C++ data core/auto_rule.inc holds; returns a process exit code.
+// Prints `prototypes` candidates (the paper's row and a greedy cover) as the C++ data
+// core/auto_rule.inc holds; returns a process exit code.
 // matrix_path (optional): the cost matrix's cache. Read from there when the file exists and
 // holds the same cases and candidates; otherwise computed (the expensive part) and written there.
-int fit(const std::vector<FitCase>& cases, const FitScore& score, int jobs, const std::string& matrix_path = {});
+int fit(const std::vector<FitCase>& cases, const FitScore& score, int jobs, const std::string& matrix_path = {},
+        int prototypes = 10);

@@ -144,7 +144,7 @@ TEST(ParamsJson, AutoIsTheDefaultAndExplicitFieldsArePinned) {
 
   const auto e = parse_error({{"mode", "automatic"}});
   EXPECT_EQ(e.field(), "mode");
-  EXPECT_NE(std::string(e.what()).find("\"auto\" or \"manual\""), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("\"auto\", \"search\" or \"manual\""), std::string::npos) << e.what();
   EXPECT_EQ(parse_error({{"mode", 1}}).field(), "mode");
 }
 

@@ -1,0 +1,156 @@
+#include "core/auto_select.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "core/auto_params.h"
+#include "core/errors.h"
+#include "core/noise.h"
+#include "core/parallel.h"
+#include "core/pipeline.h"
+#include "core/progress.h"
+#include "core/prefilter.h"
+#include "core/surface_sample.h"
+#include "core/tune.h"
+
+namespace mdn {
+
+struct RecorruptedScorer::Impl {
+  const SurfaceSample& sample;
+  Executor& executor;
+  ProgressObserver* progress;
+  std::vector<Vertices> y1, n2;  // per draw: the input, and y2's face normals
+  Vertices normals;              // of the smoothed sample, per vertex
+  double recorruption = 0;       // variance of a z along the normal
+};
+
+RecorruptedScorer::RecorruptedScorer(const SurfaceSample& sample, double sigma, const SelectionOptions& options,
+                                     Executor& executor, ProgressObserver* progress)
+    : impl_(new Impl{sample, executor, progress, {}, {}, {}, options.a * options.a * sigma * sigma}) {
+  // z along the normals of a smoothed copy (the noise being modelled is normal to the surface).
+  const Vertices N = vertex_normals(umbrella_smooth(sample.P, sample.topo, 4, 0.5, &executor), sample.F);
+  impl_->normals = N;
+  const auto n = static_cast<std::size_t>(sample.P.rows());
+  for (int d = 0; d < options.draws; ++d) {
+    const std::vector<double> g = gaussian_draws(3 * n, options.seed + static_cast<std::uint64_t>(d) * 0x9e3779b97f4a7c15ull);
+    Vertices y1 = sample.P, y2 = sample.P;
+    for (std::size_t v = 0; v < n; ++v) {
+      const auto i = static_cast<Eigen::Index>(v);
+      const Eigen::RowVector3d z = options.isotropic ? Eigen::RowVector3d(sigma * g[3 * v], sigma * g[3 * v + 1], sigma * g[3 * v + 2])
+                                                     : Eigen::RowVector3d(sigma * g[v] * N.row(i));
+      y1.row(i) += options.a * z;
+      y2.row(i) -= z / options.a;
+    }
+    impl_->y1.push_back(std::move(y1));
+    impl_->n2.push_back(face_normals(y2, sample.F));
+  }
+}
+
+RecorruptedScorer::~RecorruptedScorer() = default;
+
+int RecorruptedScorer::draws() const { return static_cast<int>(impl_->y1.size()); }
+const Vertices& RecorruptedScorer::input(int draw) const { return impl_->y1[static_cast<std::size_t>(draw)]; }
+
+double RecorruptedScorer::score_positions(int draw, const Vertices& output) const {
+  const Vertices N = face_normals(output, impl_->sample.F);
+  const Vertices& T = impl_->n2[static_cast<std::size_t>(draw)];
+  double sum = 0;
+  std::int64_t count = 0;
+  for (Eigen::Index f = 0; f < N.rows(); ++f) {
+    if (!impl_->sample.scored[static_cast<std::size_t>(f)]) continue;
+    if (N.row(f).squaredNorm() == 0 || T.row(f).squaredNorm() == 0) continue;  // degenerate: no orientation
+    sum += 1 - N.row(f).dot(T.row(f));
+    ++count;
+  }
+  return count ? sum / static_cast<double>(count) : 0;
+}
+
+double RecorruptedScorer::score(const DenoiseParams& params, double* residual) {
+  double total = 0, squares = 0;
+  for (int d = 0; d < draws(); ++d) {
+    checkpoint(impl_->progress, Stage::SelectParameters, 0);  // cancellation between runs
+    DenoiseReport scratch;
+    const Vertices out = run_method(input(d), impl_->sample.F, impl_->sample.topo, params, impl_->executor, nullptr, scratch);
+    total += score_positions(d, out);
+    for (const std::int32_t v : impl_->sample.scored_vertices)
+      squares += std::pow((input(d).row(v) - out.row(v)).dot(impl_->normals.row(v)), 2);
+  }
+  if (residual) {
+    const double n = static_cast<double>(std::max<std::size_t>(1, impl_->sample.scored_vertices.size())) * std::max(1, draws());
+    *residual = std::sqrt(std::max(0.0, squares / n - impl_->recorruption));
+  }
+  return total / std::max(1, draws());
+}
+
+std::vector<ScoredCandidate> auto_candidates(const InputMeasures& measures, const DenoiseParams& requested) {
+  std::vector<ScoredCandidate> out;
+  const auto add = [&](std::string name, DenoiseParams p) {
+    for (const ScoredCandidate& c : out)  // pinned fields can make two candidates the same
+      if (c.params.alpha == p.alpha && c.params.sigma_theta == p.sigma_theta && c.params.n_aniso == p.n_aniso &&
+          c.params.sigma_gamma == p.sigma_gamma && c.params.n_normal == p.n_normal && c.params.n_vertex == p.n_vertex &&
+          c.params.region_mode == p.region_mode)
+        return;
+    out.push_back({std::move(name), p, 0});
+  };
+  // Leave it alone: no pre-filter, no normal or vertex iterations (decision 17).
+  DenoiseParams identity = requested;
+  identity.mode = ParamMode::Manual;
+  if (!requested.is_pinned(AutoField::Alpha)) identity.alpha = 0;
+  if (!requested.is_pinned(AutoField::NAniso)) identity.n_aniso = 0;
+  if (!requested.is_pinned(AutoField::NNormal)) identity.n_normal = 0;
+  if (!requested.is_pinned(AutoField::NVertex)) identity.n_vertex = 0;
+  if (!requested.is_pinned(AutoField::RegionMode)) identity.region_mode = RegionMode::Off;
+  add("identity", identity);
+  for (int k = 0; k < rule_prototype_count(); ++k)
+    add(k == 0 ? "paper" : "prototype " + std::to_string(k), prototype_parameters(k, measures, requested));
+  return out;
+}
+
+Selection select_parameters(const Vertices& P, const Triangles& F, const Topology& topo, const DenoiseParams& requested,
+                            const InputMeasures& measures, Executor& executor, ProgressObserver* progress,
+                            const SelectionOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Selection sel;
+  const SurfaceSample sample = sample_surface(P, F, topo, options.max_faces);
+  sel.sample_faces = sample.F.rows();
+  sel.scored_faces = std::count(sample.scored.begin(), sample.scored.end(), 1);
+  sel.noise = estimate_noise(sample.P, sample.F, sample.topo, sample.scored_vertices, &executor);
+  sel.candidates = auto_candidates(measures, requested);
+  RecorruptedScorer scorer(sample, options.sigma > 0 ? options.sigma : sel.noise.sigma, options, executor, progress);
+  for (std::size_t k = 0; k < sel.candidates.size(); ++k) {
+    checkpoint(progress, Stage::SelectParameters, static_cast<double>(k) / static_cast<double>(sel.candidates.size()));
+    sel.candidates[k].score = scorer.score(sel.candidates[k].params, &sel.candidates[k].residual);
+    ++sel.evaluations;
+    if (sel.candidates[k].score < sel.candidates[static_cast<std::size_t>(sel.chosen)].score) sel.chosen = static_cast<int>(k);
+  }
+  if (requested.mode == ParamMode::Search) {
+    // Decision 19: the ground-truth search's coordinate descent (core/tune.h), started from the
+    // pick and driven by the recorrupted score of the same draws.
+    TuneProblem problem{sample.F, sample.topo, {}, [&](int t, const Vertices& V) { return scorer.score_positions(t, V); },
+                        fold_ratio(sample.P, sample.F, sample.topo, requested.fold_angle)};
+    for (int d = 0; d < scorer.draws(); ++d) problem.inputs.push_back(scorer.input(d));
+    TuneOptions tune;
+    tune.progress = progress;
+    // Pinned fields keep the caller's value: their grid lists hold that value alone.
+    const DenoiseParams& r = requested;
+    if (r.is_pinned(AutoField::RegionMode)) tune.grid.region_mode = {r.region_mode};
+    if (r.is_pinned(AutoField::Alpha)) tune.grid.alpha = {r.alpha};
+    if (r.is_pinned(AutoField::SigmaTheta)) tune.grid.sigma_theta = {r.sigma_theta};
+    if (r.is_pinned(AutoField::NAniso)) tune.grid.n_aniso = {r.n_aniso};
+    if (r.is_pinned(AutoField::SigmaGamma)) tune.grid.sigma_gamma = {r.sigma_gamma};
+    if (r.is_pinned(AutoField::NNormal)) tune.grid.n_normal = {r.n_normal};
+    if (r.is_pinned(AutoField::NVertex)) tune.grid.n_vertex = {r.n_vertex};
+    const Descent d = descend(problem, sel.candidates[static_cast<std::size_t>(sel.chosen)].params, tune, executor);
+    DenoiseParams best = d.best;
+    best.pinned = requested.pinned;
+    sel.evaluations += d.evaluations;
+    const double score = scorer.score(best);
+    sel.candidates.push_back({"search", best, score});
+    if (score < sel.candidates[static_cast<std::size_t>(sel.chosen)].score) sel.chosen = static_cast<int>(sel.candidates.size() - 1);
+  }
+  sel.select_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return sel;
+}
+
+}  // namespace mdn

@@ -1,0 +1,86 @@
+// ParamMode::Auto and ParamMode::Search: parameters chosen per input by an estimated error,
+// without ground truth (core/README.md, "Automatic parameters", decisions 16-19).
+//
+// Recorrupted-to-Recorrupted (Pang et al., CVPR 2021): with noise n ~ N(0, sigma^2) on y, draw
+// z with the same law and form y1 = y + a z, y2 = y - z / a. The noises of y1 and y2 are
+// uncorrelated, so comparing a denoiser's output f(y1) with y2 estimates f's error against the
+// unknown clean surface (at noise sigma sqrt(1 + a^2)) up to a constant shared by every f.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/mesh.h"
+#include "core/noise_estimate.h"
+#include "core/params.h"
+#include "core/topology.h"
+
+namespace mdn {
+
+class Executor;
+class ProgressObserver;
+struct InputMeasures;
+struct SurfaceSample;
+
+struct SelectionOptions {
+  std::int64_t max_faces = 8000;   // faces of the scoring sample (decision 18)
+  double a = 0.5;                  // recorruption strength
+  int draws = 2;                   // recorrupted pairs averaged per score
+  std::uint64_t seed = 1;          // of the recorruption draws
+  double sigma = 0;                // > 0: the noise level to use (positions' units) instead of the estimate
+  bool isotropic = true;           // recorrupt every coordinate (true) or along the normal only (false); decision 17
+};
+
+struct ScoredCandidate {
+  std::string name;       // "identity", "paper", "prototype 3", "search"
+  DenoiseParams params;   // mode Manual; what was scored
+  double score = 0;       // recorrupted normal error, mean over draws (lower is better)
+  double residual = 0;    // RMS of (y1 - f(y1)) along the normal, less the recorruption's share: the noise f removed
+};
+
+struct Selection {
+  NoiseEstimate noise;                  // what the recorruption used
+  std::int64_t sample_faces = 0;        // faces the candidates ran on
+  std::int64_t scored_faces = 0;        // faces the score read
+  std::vector<ScoredCandidate> candidates;
+  int chosen = 0;                       // index into candidates
+  int evaluations = 0;                  // parameter sets scored (Search: the descent's)
+  double select_ms = 0;
+};
+
+// The recorrupted score of parameter sets on a sample: owns the draws (y1, and y2's face
+// normals) and runs the method on each y1. Deterministic for a seed, any thread count.
+class RecorruptedScorer {
+ public:
+  RecorruptedScorer(const SurfaceSample& sample, double sigma, const SelectionOptions& options, Executor& executor,
+                    ProgressObserver* progress = nullptr);
+  ~RecorruptedScorer();
+  RecorruptedScorer(const RecorruptedScorer&) = delete;
+  RecorruptedScorer& operator=(const RecorruptedScorer&) = delete;
+
+  // Mean over draws of the mean over scored faces of 1 - n_f(f(y1)) . n_f(y2); `residual`, if
+  // given, receives sqrt(max(0, mean over draws and scored vertices of ((y1 - f(y1)) . n)^2 - (a sigma)^2)).
+  double score(const DenoiseParams& params, double* residual = nullptr);
+  // The draws' inputs and the normals they are compared with (for core/tune.cpp's search).
+  int draws() const;
+  const Vertices& input(int draw) const;
+  double score_positions(int draw, const Vertices& output) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Auto's candidates: "identity" (no filtering: a clean input comes back unchanged), the
+// paper's Table 1 Fandisk row, and the prototypes; pinned fields of `requested` kept.
+std::vector<ScoredCandidate> auto_candidates(const InputMeasures& measures, const DenoiseParams& requested);
+
+// Estimates the noise on a sample of P (unit-box frame), scores every candidate on recorrupted
+// copies of the sample and returns them with the pick (ties keep the earlier candidate).
+Selection select_parameters(const Vertices& P, const Triangles& F, const Topology& topo, const DenoiseParams& requested,
+                            const InputMeasures& measures, Executor& executor, ProgressObserver* progress = nullptr,
+                            const SelectionOptions& options = {});
+
+}  // namespace mdn

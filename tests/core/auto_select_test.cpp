@@ -1,0 +1,130 @@
+#include "core/auto_select.h"
+
+#include <gtest/gtest.h>
+
+#include "core/errors.h"
+#include "core/metrics.h"
+#include "core/noise.h"
+#include "core/parallel.h"
+#include "core/pipeline.h"
+#include "support/noisy.h"
+#include "support/shapes.h"
+
+namespace mdn {
+namespace {
+
+DenoiseParams automatic() {
+  DenoiseParams p;
+  p.mode = ParamMode::Auto;
+  return p;
+}
+
+double max_displacement(const TriMesh& a, const TriMesh& b) { return (a.V - b.V).rowwise().norm().maxCoeff(); }
+
+TEST(AutoSelect, ACleanSurfaceComesBackUnchanged) {
+  for (const TriMesh& clean : {test::sphere(4), test::cube(16), test::fold(30, 120)}) {
+    const DenoiseResult r = denoise(clean, automatic());
+    ASSERT_TRUE(r.report.selection.has_value());
+    const Selection& sel = *r.report.selection;
+    EXPECT_EQ(sel.candidates[static_cast<std::size_t>(sel.chosen)].name, "identity");
+    const double diagonal = (clean.V.colwise().maxCoeff() - clean.V.colwise().minCoeff()).norm();
+    EXPECT_LT(max_displacement(r.mesh, clean), 1e-9 * diagonal);
+  }
+}
+
+TEST(AutoSelect, NoisySurfacesAreFilteredAndBeatThePaperRowOnACadAndASmoothShape) {
+  for (const TriMesh& clean : {test::cube(16), test::sphere(4)}) {
+    const TriMesh noisy = test::with_noise(clean, 0.3);
+    const DenoiseResult r = denoise(noisy, automatic());
+    const Selection& sel = *r.report.selection;
+    EXPECT_NE(sel.candidates[static_cast<std::size_t>(sel.chosen)].name, "identity");
+    EXPECT_NEAR(sel.noise.sigma_edges, 0.3, 0.3 * 0.25);
+    EXPECT_LT(msae(r.mesh, clean), msae(denoise(noisy, DenoiseParams{}).mesh, clean));
+  }
+}
+
+TEST(AutoSelect, ReportsEveryCandidateAndRunsTheBestScoredOne) {
+  const TriMesh noisy = test::with_noise(test::cube(10), 0.2);
+  const DenoiseResult r = denoise(noisy, automatic());
+  const Selection& sel = *r.report.selection;
+  ASSERT_GE(sel.candidates.size(), 3u);
+  EXPECT_EQ(sel.candidates[0].name, "identity");
+  EXPECT_EQ(sel.candidates[1].name, "paper");
+  for (const ScoredCandidate& c : sel.candidates) EXPECT_GE(c.score, sel.candidates[static_cast<std::size_t>(sel.chosen)].score);
+  const DenoiseParams& ran = r.report.params;
+  EXPECT_EQ(ran.mode, ParamMode::Manual);
+  const DenoiseResult manual = denoise(noisy, ran);
+  EXPECT_TRUE(manual.mesh.V == r.mesh.V);  // auto = select + the manual pipeline
+  EXPECT_FALSE(manual.report.selection.has_value());
+}
+
+TEST(AutoSelect, PinnedFieldsKeepTheirValueInEveryCandidate) {
+  DenoiseParams p = automatic();
+  p.n_vertex = 7;
+  p.pin(AutoField::NVertex);
+  p.region_mode = RegionMode::Off;
+  p.pin(AutoField::RegionMode);
+  const DenoiseResult r = denoise(test::with_noise(test::cube(10), 0.2), p);
+  for (const ScoredCandidate& c : r.report.selection->candidates) {
+    EXPECT_EQ(c.params.n_vertex, 7) << c.name;
+    EXPECT_EQ(c.params.region_mode, RegionMode::Off) << c.name;
+  }
+  EXPECT_EQ(r.report.params.n_vertex, 7);
+}
+
+TEST(AutoSelect, IsBitIdenticalForAnyThreadCountAndSampledWhenLarge) {
+  const TriMesh noisy = test::with_noise(test::sphere(5), 0.2);  // 20480 faces
+  const Vertices P = UnitBox::of(noisy.V).apply(noisy.V);
+  const Topology topo = Topology::build(noisy.F, static_cast<std::int32_t>(P.rows()));
+  SelectionOptions small;
+  small.max_faces = 5000;
+  DenoiseParams p = automatic();
+  const InputMeasures m = measure_input(P, noisy.F, topo, p);
+  std::vector<Selection> runs;
+  for (const int threads : {1, 2, 3}) {
+    Executor ex(threads);
+    runs.push_back(select_parameters(P, noisy.F, topo, p, m, ex, nullptr, small));
+  }
+  EXPECT_LE(runs[0].sample_faces, 5000);
+  EXPECT_LT(runs[0].scored_faces, runs[0].sample_faces);
+  for (std::size_t k = 1; k < runs.size(); ++k) {
+    EXPECT_EQ(runs[k].chosen, runs[0].chosen);
+    EXPECT_EQ(runs[k].noise.sigma, runs[0].noise.sigma);
+    for (std::size_t c = 0; c < runs[0].candidates.size(); ++c) EXPECT_EQ(runs[k].candidates[c].score, runs[0].candidates[c].score);
+  }
+  const DenoiseResult one = denoise(noisy, p, {1, nullptr}), three = denoise(noisy, p, {3, nullptr});
+  EXPECT_TRUE(one.mesh.V == three.mesh.V);
+}
+
+TEST(AutoSelect, SearchModeScoresAtLeastAsWellAsAutoAndKeepsPinnedFields) {
+  const TriMesh clean = test::cube(10);
+  const TriMesh noisy = test::with_noise(clean, 0.3);
+  DenoiseParams s = automatic();
+  s.mode = ParamMode::Search;
+  s.sigma_gamma = 30;
+  s.pin(AutoField::SigmaGamma);
+  const DenoiseResult a = denoise(noisy, automatic()), b = denoise(noisy, s);
+  const Selection& sel = *b.report.selection;
+  EXPECT_EQ(sel.candidates.back().name, "search");
+  EXPECT_GT(sel.evaluations, static_cast<int>(sel.candidates.size()));
+  EXPECT_LE(sel.candidates[static_cast<std::size_t>(sel.chosen)].score,
+            a.report.selection->candidates[static_cast<std::size_t>(a.report.selection->chosen)].score * (1 + 1e-12));
+  EXPECT_EQ(b.report.params.sigma_gamma, 30);
+  EXPECT_EQ(b.report.mode, ParamMode::Search);
+}
+
+class CancelAtSelection : public ProgressObserver {
+ public:
+  void on_progress(Stage stage, double) override { seen = seen || stage == Stage::SelectParameters; }
+  bool cancel_requested() override { return seen; }
+  bool seen = false;
+};
+
+TEST(AutoSelect, HonoursCancellationWhileScoring) {
+  CancelAtSelection cancel;
+  EXPECT_THROW(denoise(test::with_noise(test::cube(10), 0.2), automatic(), {1, &cancel}), CancelledError);
+  EXPECT_TRUE(cancel.seen);
+}
+
+}  // namespace
+}  // namespace mdn
