@@ -28,7 +28,7 @@ struct RecorruptedScorer::Impl {
 RecorruptedScorer::RecorruptedScorer(const SurfaceSample& sample, double sigma, const SelectionOptions& options,
                                      Executor& executor, ProgressObserver* progress)
     : impl_(new Impl{sample, executor, progress, {}, {}, {}, options.a * options.a * sigma * sigma}) {
-  // z along the normals of a smoothed copy (the noise being modelled is normal to the surface).
+  // z per coordinate (decision 20), or along the normals of a smoothed copy of the sample.
   const Vertices N = vertex_normals(umbrella_smooth(sample.P, sample.topo, 4, 0.5, &executor), sample.F);
   impl_->normals = N;
   const auto n = static_cast<std::size_t>(sample.P.rows());
@@ -93,7 +93,7 @@ std::vector<ScoredCandidate> auto_candidates(const InputMeasures& measures, cons
         return;
     out.push_back({std::move(name), p, 0});
   };
-  // Leave it alone: no pre-filter, no normal or vertex iterations (decision 17).
+  // Leave it alone: no pre-filter, no normal or vertex iterations (decision 20).
   DenoiseParams identity = requested;
   identity.mode = ParamMode::Manual;
   if (!requested.is_pinned(AutoField::Alpha)) identity.alpha = 0;
@@ -125,7 +125,7 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
     if (sel.candidates[k].score < sel.candidates[static_cast<std::size_t>(sel.chosen)].score) sel.chosen = static_cast<int>(k);
   }
   if (requested.mode == ParamMode::Search) {
-    // Decision 19: the ground-truth search's coordinate descent (core/tune.h), started from the
+    // Decision 22: the ground-truth search's coordinate descent (core/tune.h), started from the
     // pick and driven by the recorrupted score of the same draws.
     TuneProblem problem{sample.F, sample.topo, {}, [&](int t, const Vertices& V) { return scorer.score_positions(t, V); },
                         fold_ratio(sample.P, sample.F, sample.topo, requested.fold_angle)};

@@ -1,5 +1,5 @@
 // ParamMode::Auto and ParamMode::Search: parameters chosen per input by an estimated error,
-// without ground truth (core/README.md, "Automatic parameters", decisions 16-19).
+// without ground truth (core/README.md, "Automatic parameters", decisions 19-22).
 //
 // Recorrupted-to-Recorrupted (Pang et al., CVPR 2021): with noise n ~ N(0, sigma^2) on y, draw
 // z with the same law and form y1 = y + a z, y2 = y - z / a. The noises of y1 and y2 are
@@ -25,12 +25,12 @@ struct InputMeasures;
 struct SurfaceSample;
 
 struct SelectionOptions {
-  std::int64_t max_faces = 8000;   // faces of the scoring sample (decision 18)
+  std::int64_t max_faces = 8000;   // faces of the scoring sample (decision 21)
   double a = 0.5;                  // recorruption strength
-  int draws = 2;                   // recorrupted pairs averaged per score
+  int draws = 1;                   // recorrupted pairs averaged per score (decision 21)
   std::uint64_t seed = 1;          // of the recorruption draws
   double sigma = 0;                // > 0: the noise level to use (positions' units) instead of the estimate
-  bool isotropic = true;           // recorrupt every coordinate (true) or along the normal only (false); decision 17
+  bool isotropic = true;           // recorrupt every coordinate (true) or along the normal only (false); decision 20
 };
 
 struct ScoredCandidate {

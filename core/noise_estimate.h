@@ -1,5 +1,5 @@
 // Noise level of a noisy surface from the surface alone, no ground truth (ParamMode::Auto
-// scores its candidates on recorrupted copies and needs it; core/README.md, decision 16).
+// scores its candidates on recorrupted copies and needs it; core/README.md, decision 19).
 #pragma once
 
 #include <vector>
@@ -22,7 +22,7 @@ struct NoiseEstimate {
 // Leave-one-out local quadric fits: vertex i's height over the tangent plane of a smoothed
 // normal is predicted from its 2-ring by a least-squares quadric; the prediction error e_i
 // has variance sigma^2 (1 + |w_i|^2) under white noise (w_i: the fit's linear weights), while
-// smooth curvature is fitted away. Features and impulses give large errors; see decision 16
+// smooth curvature is fitted away. Features and impulses give large errors; see decision 19
 // for how the per-vertex errors are combined. `vertices`: where to estimate (all if empty).
 NoiseEstimate estimate_noise(const Vertices& P, const Triangles& F, const Topology& topo,
                              const std::vector<std::int32_t>& vertices = {}, Executor* executor = nullptr);

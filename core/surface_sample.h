@@ -1,5 +1,5 @@
 // A bounded piece of a surface for scoring parameters (ParamMode::Auto and Search score
-// candidates there, then run the winner once on the whole surface; core/README.md, decision 18).
+// candidates there, then run the winner once on the whole surface; core/README.md, decision 21).
 #pragma once
 
 #include <cstdint>

@@ -218,8 +218,6 @@ int search(const fs::path& data, int jobs, const std::string& which, const std::
   return 0;
 }
 
-using bench::median;
-
 // The noise a case really has: RMS of (noisy - clean) along the clean vertex normals, in clean
 // mean edge lengths (what NoiseEstimate::sigma_edges estimates).
 double true_sigma_edges(const Case& c) {
@@ -231,11 +229,13 @@ double true_sigma_edges(const Case& c) {
 
 double diagonal(const TriMesh& m) { return (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm(); }
 
-int report(const fs::path& data, int jobs, const fs::path& rows_path, bool with_search) {
+using bench::median;
+
+int report(const fs::path& data, int jobs, const std::string& which, const fs::path& rows_path, bool with_search) {
   const std::vector<Row> rows = read_rows(rows_path);
   std::map<std::string, const Row*> by_key;
   for (const Row& r : rows) by_key[r.field.at("mesh") + "/" + r.field.at("config")] = &r;
-  std::vector<Case> cases = build_cases(data, "all", "");
+  std::vector<Case> cases = build_cases(data, which, "");
   std::erase_if(cases, [&](const Case& c) { return c.config != "clean" && !by_key.count(c.mesh + "/" + c.config); });
   struct Out {
     double auto_msae = 0, search_msae = 0, sigma_true = 0, sigma_est = 0, auto_ms = 0, one_ms = 0, search_ms = 0, moved = 0;
@@ -384,11 +384,8 @@ int noise_command(const fs::path& data, int jobs, const std::string& which) {
     const Vertices P = box.apply(c.noisy.V), X = box.apply(c.truth.V);
     const Topology topo = Topology::build(c.noisy.F, static_cast<std::int32_t>(P.rows()));
     const double lc = topo.mean_edge_length(X);
-    const Vertices Nc = vertex_normals(X, c.truth.F);
-    double ss = 0;
-    for (Eigen::Index v = 0; v < P.rows(); ++v) ss += std::pow((P.row(v) - X.row(v)).dot(Nc.row(v)), 2);
     Out& o = out[i];
-    o.truth = std::sqrt(ss / static_cast<double>(P.rows())) / lc;
+    o.truth = true_sigma_edges(c);
     o.l_noisy = topo.mean_edge_length(P) / lc;
     o.l_smooth = topo.mean_edge_length(umbrella_smooth(P, topo, 4, 0.5)) / lc;
     const auto t0 = std::chrono::steady_clock::now();
@@ -426,14 +423,13 @@ int select_command(const fs::path& data, int jobs, const std::string& which, con
   std::vector<Case> cases = build_cases(data, which, only);
   std::erase_if(cases, [](const Case& c) { return c.config == "clean"; });
   // Variants of the selection: noise level (estimated x factor, or the truth), draws, recorruption.
-  struct Variant { const char* name; double est_factor; bool oracle; int draws; bool isotropic; };
-  const Variant variants[] = {{"est", 1.0, false, 2, true}, {"est x0.84", 0.84, false, 2, true},
-                              {"est 1 draw", 1.0, false, 1, true}, {"oracle", 1.0, true, 2, true}};
+  struct Variant { const char* name; std::int64_t faces; bool oracle; int draws; bool isotropic; };
+  const Variant variants[] = {{"1 draw 8k", 8000, false, 1, true}, {"1 draw 4k", 4000, false, 1, true},
+                              {"2 draws 4k", 4000, false, 2, true}, {"1 draw 2k", 2000, false, 1, true}};
   constexpr int kVariants = 4;
   const char* names[kVariants] = {variants[0].name, variants[1].name, variants[2].name, variants[3].name};
   struct Out { double truth, est, refined; std::vector<double> msae; int pick[kVariants]; double ms, one_ms; std::vector<std::string> names; };
   std::vector<Out> out(cases.size());
-  const std::int64_t budget = std::getenv("MDN_SAMPLE") ? std::atoll(std::getenv("MDN_SAMPLE")) : 8000;
   run_parallel(cases.size(), jobs, [&](std::size_t i) {
     const Case& c = cases[i];
     const UnitBox box = UnitBox::of(c.noisy.V);
@@ -448,7 +444,8 @@ int select_command(const fs::path& data, int jobs, const std::string& which, con
     const InputMeasures m = measure_input(P, c.noisy.F, topo, req);
     Executor ex(1);
     SelectionOptions so;
-    so.max_faces = budget;
+    so.max_faces = variants[0].faces;
+    so.draws = variants[0].draws;
     so.isotropic = true;
     const auto t0 = std::chrono::steady_clock::now();
     const Selection sel = select_parameters(P, c.noisy.F, topo, req, m, ex, nullptr, so);
@@ -459,7 +456,8 @@ int select_command(const fs::path& data, int jobs, const std::string& which, con
       SelectionOptions vo = so;
       vo.draws = variants[v].draws;
       vo.isotropic = variants[v].isotropic;
-      vo.sigma = variants[v].oracle ? sigma_true : sel.noise.sigma * variants[v].est_factor;
+      vo.max_faces = variants[v].faces;
+      vo.sigma = variants[v].oracle ? sigma_true : 0;
       o.pick[v] = (v == 0) ? sel.chosen : select_parameters(P, c.noisy.F, topo, req, m, ex, nullptr, vo).chosen;
     }
     for (const auto& cand : sel.candidates) {
@@ -470,7 +468,7 @@ int select_command(const fs::path& data, int jobs, const std::string& which, con
       o.names.push_back(cand.name);
     }
   });
-  std::printf("sample budget %lld faces\n%-10s %-22s %-9s %7s %6s %6s %6s | %6s", static_cast<long long>(budget), "set", "mesh", "config", "faces",
+  std::printf("%-10s %-22s %-9s %7s %6s %6s %6s | %6s", "set", "mesh", "config", "faces",
               "true", "est/t", "ref/t", "pap/b");
   for (const char* n : names) std::printf(" | %-12s %6s", n, "/best");
   std::printf(" | %7s %6s\n", "sel ms", "x run");
@@ -515,7 +513,7 @@ int select_command(const fs::path& data, int jobs, const std::string& which, con
   std::fprintf(code ? stderr : stdout,
                "usage: tune_bench search [--data DIR] [--jobs N] [--set train|validation|all] [--only MESH] OUT.tsv\n"
                "       tune_bench fit [--data DIR] [--jobs N] [--matrix FILE] [--prototypes N] ROWS.tsv\n"
-               "       tune_bench report [--data DIR] [--jobs N] [--search] ROWS.tsv\n"
+               "       tune_bench report [--data DIR] [--jobs N] [--set train|validation|all] [--search] ROWS.tsv\n"
                "       tune_bench noise|select [--data DIR] [--jobs N] [--set train|validation|all] [--only MESH]\n");
   std::exit(code);
 }
@@ -552,7 +550,7 @@ int main(int argc, char** argv) {
   try {
     if (command == "fit") return fit_command(data, jobs, file, matrix, prototypes);
     if (command == "search") return search(data, jobs, which, only, file);
-    if (command == "report") return report(data, jobs, file, with_search);
+    if (command == "report") return report(data, jobs, which, file, with_search);
     if (command == "noise") return noise_command(data, jobs, which);
     if (command == "select") return select_command(data, jobs, which, only);
   } catch (const std::exception& e) {

@@ -22,11 +22,11 @@ TEST(EstimateNoise, ACleanSurfaceHasNoNoise) {
 }
 
 TEST(EstimateNoise, TracksGaussianNoiseOnSmoothAndCreasedShapes) {
-  // At 0.1 edge lengths the cube's creases weigh as much as the noise (decision 16): from 0.3 on.
+  // At 0.1 edge lengths the cube's creases weigh as much as the noise (decision 19): from 0.3 on.
   for (const auto& [name, clean, from] : {std::tuple{"sphere", test::sphere(4), 0.1}, std::tuple{"cube", test::cube(24), 0.3}}) {
     for (const double sigma : {0.1, 0.3, 0.6, 1.0}) {
       if (sigma < from) continue;
-      // At 1.0 edge lengths the surface folds over itself and the fits read high (decision 16).
+      // At 1.0 edge lengths the surface folds over itself and the fits read high (decision 19).
       const double tolerance = sigma < 1 ? 0.2 : 0.4;
       SCOPED_TRACE(std::string(name) + " sigma " + std::to_string(sigma));
       const NoiseEstimate e = estimate(test::with_noise(clean, sigma));
