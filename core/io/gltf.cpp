@@ -1100,7 +1100,12 @@ static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes,
   return doc;
 }
 
-std::string write_plain_gltf(const std::vector<TriMesh>& surfaces, Format format, const EncodeOptions& options) {
+std::string write_plain_gltf(const std::vector<TriMesh>& all, Format format, const EncodeOptions& options) {
+  // glTF accessors hold at least one element: surfaces without triangles are left out.
+  std::vector<TriMesh> surfaces;
+  for (const TriMesh& m : all)
+    if (m.F.rows() > 0) surfaces.push_back(m);
+  if (surfaces.empty()) throw UnsupportedError("the mesh has no triangles: there is nothing to write as glTF");
   // A minimal asset (one node per surface), then the regular encoder for Draco and layout.
   Json json = {{"asset", {{"version", "2.0"}, {"generator", "meshdenoise"}}}};
   json["scene"] = 0;

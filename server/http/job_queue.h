@@ -108,7 +108,8 @@ struct JobQueueOptions {
   int capacity = 64;               // jobs waiting for a worker
   std::chrono::milliseconds time_limit{300'000};  // running time per job
   std::chrono::milliseconds result_ttl{600'000};  // how long finished jobs stay
-  int max_stored = 1024;           // finished jobs kept at most
+  int max_stored = 1024;           // asynchronous jobs kept at most (queued, running, finished);
+                                   // when all are taken, new ones get 503 (none is evicted early)
   io::Limits limits;               // decoder limits
 };
 
@@ -166,6 +167,10 @@ class JobQueue {
   // fetched once, or the deadline passes. True if everything finished.
   bool wait_drained(Clock::time_point deadline);
 
+  // Jobs a drain that ends now would abandon: queued or running, and asynchronous results not
+  // fetched yet (running synchronous jobs are not listed; their requests are answered 503).
+  std::vector<JobSnapshot> unfinished() const;
+
   int queued() const;
   int running() const;
   int capacity() const { return options_.capacity; }
@@ -180,7 +185,8 @@ class JobQueue {
   void end_run(Job& job, Job::End end, bool report);
   void finish_locked(Job& job, JobState state, std::optional<Problem> error,
                      std::shared_ptr<const service::JobOutput> output);  // job.mutex_ held
-  void sweep_locked();  // mutex_ held: drops expired and surplus finished jobs
+  void sweep_locked();  // mutex_ held: drops finished jobs past their result lifetime
+  int store_retry_after_s_locked() const;  // mutex_ held: until a stored-job slot frees
   std::string new_id_locked();
 
   const JobQueueOptions options_;
