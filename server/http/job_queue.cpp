@@ -347,9 +347,10 @@ std::vector<JobSnapshot> JobQueue::unfinished() const {
 }
 
 int JobQueue::retry_after_s() const {
-  // A coarse hint: one second per job ahead per worker, at least 1, at most 60.
-  const std::size_t ahead = queue_.size();
-  return int(std::clamp<std::size_t>(ahead / std::size_t(std::max(1, options_.workers)), 1, 60));
+  // How long jobs now wait in the queue before a worker takes them (measured), at least 1 s,
+  // at most 60: a client told to come back then finds a slot about as soon as one frees.
+  const double wait = queue_wait_s_.load();
+  return wait < 0 ? 1 : int(std::clamp(std::ceil(wait), 1.0, 60.0));
 }
 
 void JobQueue::worker_loop() {
@@ -366,6 +367,9 @@ void JobQueue::worker_loop() {
       job->state_ = JobState::Running;
       job->started_ = Clock::now();
       job->stage_ = "decode";
+      // Moving average of the measured queue waits (the last few jobs weigh most).
+      const double wait = seconds_between(job->created_, *job->started_), old = queue_wait_s_.load();
+      queue_wait_s_.store(old < 0 ? wait : 0.7 * old + 0.3 * wait);
     }
     run(job);
     {

@@ -176,7 +176,7 @@ class JobQueue {
   int capacity() const { return options_.capacity; }
   int workers() const { return options_.workers; }
   bool saturated() const;       // the queue is full
-  int retry_after_s() const;    // a hint for clients told to come back
+  int retry_after_s() const;    // a hint for clients told to come back: the measured queue wait
 
  private:
   void worker_loop();
@@ -204,6 +204,7 @@ class JobQueue {
   bool draining_ = false;
   bool stop_ = false;
   bool abandoned_ = false;  // cancel_all() was called: drain waits no longer
+  std::atomic<double> queue_wait_s_{-1};  // moving average of measured queue waits; -1: none yet
   std::mt19937_64 rng_;
   std::vector<std::thread> workers_;
 };
