@@ -24,7 +24,7 @@ namespace {
 // those counts where the bitstream declares them and refuse them against Limits before Draco
 // allocates anything for them: the connectivity counts before DecodeConnectivity, and the
 // attribute sizes (points x components x bytes, every attribute) before DecodeAllAttributes.
-// The memory Draco needs is bounded by what the limits allow (decision 21 in core/README.md).
+// The memory Draco needs is bounded by what the limits allow (core/io/README.md, "Limits").
 struct DracoBudget {
   const Limits& limits;
   std::string refused;  // why a declared size was refused ("" if none was)
