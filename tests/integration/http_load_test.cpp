@@ -25,6 +25,17 @@ std::string cli_denoise(const std::string& dir, const std::string& input, const 
   return read_file(dir + "/" + name + "_out.off");
 }
 
+// Posts n asynchronous OFF jobs; the ids of those answered 202 (fewer on any other answer).
+std::vector<std::string> post_jobs(httplib::Client& c, int n, const std::string& body, const std::string& params) {
+  std::vector<std::string> ids;
+  for (int i = 0; i < n; ++i) {
+    auto r = c.Post("/v1/jobs", {{"X-Denoise-Params", params}}, body, "model/x-off");
+    if (!r || r->status != 202) break;
+    ids.push_back(parse_json(r->body)["id"]);
+  }
+  return ids;
+}
+
 TEST(HttpLoad, ThirtyTwoConcurrentClientsAllAnsweredCorrectly) {
   ServerProcess server({"--workers", "2", "--queue-capacity", "64"});
   ASSERT_TRUE(server.started()) << server.log();
@@ -179,13 +190,8 @@ TEST(HttpLoad, SigtermDrainsWithoutLosingAcceptedJobs) {
   auto c = server.client();
   const std::string medium = noisy_sphere_off(4, 7);
   const std::string params = R"({"n_normal":60,"n_vertex":30})";
-  std::vector<std::string> ids;
-  for (int i = 0; i < 3; ++i) {
-    auto r = c->Post("/v1/jobs", {{"X-Denoise-Params", params}}, medium, "model/x-off");
-    ASSERT_TRUE(r);
-    ASSERT_EQ(r->status, 202);
-    ids.push_back(parse_json(r->body)["id"]);
-  }
+  const std::vector<std::string> ids = post_jobs(*c, 3, medium, params);
+  ASSERT_EQ(ids.size(), 3u);
   // A synchronous request in flight when the signal comes is answered too.
   std::string sync_body;
   int sync_status = 0;
@@ -226,13 +232,8 @@ TEST(HttpLoad, AFullJobStoreRefusesNewJobsAndEvictsNone) {
   auto c = server.client();
   const std::string small = noisy_sphere_off(1);
   const std::string params = R"({"n_normal":3,"n_vertex":3})";
-  std::vector<std::string> ids;
-  for (int i = 0; i < 3; ++i) {
-    auto r = c->Post("/v1/jobs", {{"X-Denoise-Params", params}}, small, "model/x-off");
-    ASSERT_TRUE(r);
-    ASSERT_EQ(r->status, 202) << r->body;
-    ids.push_back(parse_json(r->body)["id"]);
-  }
+  std::vector<std::string> ids = post_jobs(*c, 3, small, params);
+  ASSERT_EQ(ids.size(), 3u);
   // Synchronous requests take no slot: many of them, all answered, none evicts a job.
   for (int i = 0; i < 8; ++i) {
     auto r = c->Post("/v1/denoise", {{"X-Denoise-Params", params}}, small, "model/x-off");
@@ -262,13 +263,8 @@ TEST(HttpLoad, ADrainOutOfGraceNamesEveryAbandonedJobAndExitsNonZero) {
   auto c = server.client();
   const std::string medium = noisy_sphere_off(4, 9);
   const std::string params = R"({"n_normal":200,"n_vertex":200})";
-  std::vector<std::string> ids;
-  for (int i = 0; i < 3; ++i) {
-    auto r = c->Post("/v1/jobs", {{"X-Denoise-Params", params}}, medium, "model/x-off");
-    ASSERT_TRUE(r);
-    ASSERT_EQ(r->status, 202);
-    ids.push_back(parse_json(r->body)["id"]);
-  }
+  const std::vector<std::string> ids = post_jobs(*c, 3, medium, params);
+  ASSERT_EQ(ids.size(), 3u);
   server.signal(SIGTERM);
   EXPECT_EQ(server.wait_exit(std::chrono::seconds(60)), 1) << server.log();
   const std::string log = server.log();
