@@ -150,6 +150,10 @@ std::unique_ptr<draco::Mesh> draco_decode(std::string_view bytes, const std::str
     throw FormatError(what + ": the Draco mesh has no POSITION attribute");
   const auto* position = mesh->GetNamedAttribute(draco::GeometryAttribute::POSITION);
   if (position->num_components() != 3) throw FormatError(what + ": Draco POSITION must have 3 components");
+  // Read through ConvertValue, which loads each component as its declared type: a bool byte
+  // other than 0 or 1 is undefined behaviour there (found by fuzz_drc under UBSan).
+  if (position->data_type() == draco::DT_BOOL || position->data_type() == draco::DT_INVALID)
+    throw FormatError(what + ": Draco POSITION must have a numeric type");
   for (draco::FaceIndex f(0); f < mesh->num_faces(); ++f)
     for (int k = 0; k < 3; ++k)
       if (mesh->face(f)[k].value() >= mesh->num_points()) throw FormatError(what + ": a Draco face references a missing point");

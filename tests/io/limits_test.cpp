@@ -159,6 +159,17 @@ TEST(DracoLimits, AttributeBytesAreChargedBeforeDecodingThem) {
   EXPECT_EQ(decode(drc, Format::Drc)->surfaces().front().num_faces(), 8 * 12 * 2 - 2 * 12);
 }
 
+TEST(DracoLimits, APositionOfTypeBoolIsAFormatError) {
+  // Found by fuzz_drc under UBSan: Draco's ConvertValue loaded the byte 222 as a bool.
+  const std::string payload(
+      "\x44\x52\x41\x43\x4f\x02\x02\x01\x01\x00\x00\x00\x0c\x14\x00\x13\x00\x00\x05\x6f\xab\x55\x55\x0a"
+      "\x01\x01\x10\x01\xff\x00\x00\x01\x00\x0b\x03\x00\x00\x00\x70\x1c\x76\xe3\x01\x00\xde\x78\x00\x80"
+      "\x00\xe3\xe0\x30\x38\xec\xc6\x03\x00\x00\x00\x00\xff\xff\x00\x00\x40\xc4\x5d\x59\xbf\x40\xc4\x59"
+      "\xbf\x40\xc4\x59\xbf\x40\xc4\xd9\x35\x10",
+      82);
+  EXPECT_TRUE(mentions(message_of<FormatError>([&] { decode(payload, Format::Drc); }), "numeric type"));
+}
+
 // ---- glTF ----
 
 std::string small_gltf() {
