@@ -37,7 +37,7 @@ class UnsupportedError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
-// Declared or decoded sizes exceed Limits. Maps to HTTP 413.
+// Declared or decoded sizes exceed Limits; what() names the limit. Maps to HTTP 413.
 class LimitError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
@@ -47,6 +47,11 @@ struct Limits {
   std::int64_t max_faces = 5'000'000;
   std::int64_t max_vertices = 5'000'000;
   std::int64_t max_decoded_bytes = std::int64_t{1} << 30;  // total bytes any decoder may allocate
+  // glTF: the scene's size, checked before tinygltf parses it (its JSON walk is recursive and
+  // a node costs it about 1 KB, so 10^6 nodes in 12 MB of JSON would take 700 MB).
+  int max_json_depth = 64;             // nesting of JSON objects and arrays (extras included)
+  std::int64_t max_nodes = 100'000;    // entries of "nodes"
+  std::int64_t max_accessors = 1'000'000;  // entries of "accessors" + "bufferViews"; primitives
 };
 
 struct EncodeOptions {

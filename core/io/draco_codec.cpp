@@ -2,39 +2,201 @@
 
 #include <draco/compression/decode.h>
 #include <draco/compression/encode.h>
+#include <draco/compression/mesh/mesh_edgebreaker_decoder.h>
+#include <draco/compression/mesh/mesh_sequential_decoder.h>
+#include <draco/core/varint_decoding.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 
 #include "core/errors.h"
 #include "core/io/detail.h"
 
 namespace mdn::io::detail {
 
+namespace {
+
+// Draco sizes its buffers from counts declared in the bitstream (an edgebreaker header of a
+// few bytes can declare a billion faces; a sequential one 4 billion points, which every
+// attribute then allocates). Draco's own decoders are run here through subclasses that read
+// those counts where the bitstream declares them and refuse them against Limits before Draco
+// allocates anything for them: the connectivity counts before DecodeConnectivity, and the
+// attribute sizes (points x components x bytes, every attribute) before DecodeAllAttributes.
+// The memory Draco needs is bounded by what the limits allow (core/io/README.md, "Limits").
+struct DracoBudget {
+  const Limits& limits;
+  std::string refused;  // why a declared size was refused ("" if none was)
+
+  // Checks the counts an edgebreaker or sequential header declares. Bytes charged are what
+  // Draco's decoder holds per face and per vertex (corner table, traversal state).
+  bool connectivity(std::uint64_t faces, std::uint64_t vertices) {
+    if (faces > static_cast<std::uint64_t>(limits.max_faces))
+      return refuse("the Draco payload declares " + std::to_string(faces) + " faces, more than the limit of " +
+                    std::to_string(limits.max_faces) + " (max_faces)");
+    if (vertices > static_cast<std::uint64_t>(limits.max_vertices))
+      return refuse("the Draco payload declares " + std::to_string(vertices) + " vertices, more than the limit of " +
+                    std::to_string(limits.max_vertices) + " (max_vertices)");
+    return charge(static_cast<std::int64_t>(faces) * 96 + static_cast<std::int64_t>(vertices) * 48);
+  }
+  // Every attribute's values for every point, plus Draco's portable (integer) copy of each.
+  bool attributes(const draco::PointCloud& cloud) {
+    const auto points = static_cast<std::int64_t>(cloud.num_points());
+    if (points > limits.max_vertices * 3)  // a point per corner at most
+      return refuse("the Draco payload declares " + std::to_string(points) + " points, more than the limit of " +
+                    std::to_string(limits.max_vertices * 3) + " (3 x max_vertices)");
+    std::int64_t per_point = 0;
+    for (int i = 0; i < cloud.num_attributes(); ++i) {
+      const draco::PointAttribute* a = cloud.attribute(i);
+      if (a == nullptr) continue;
+      per_point += static_cast<std::int64_t>(a->num_components()) * (std::max(draco::DataTypeLength(a->data_type()), 1) + 4);
+    }
+    return charge(points * per_point * 2 + static_cast<std::int64_t>(cloud.num_attributes()) * 256);
+  }
+  bool charge(std::int64_t bytes) {
+    if (bytes > limits.max_decoded_bytes)
+      return refuse("decoding the Draco payload would take about " + std::to_string(bytes) + " bytes, more than the limit of " +
+                    std::to_string(limits.max_decoded_bytes) + " (max_decoded_bytes)");
+    return true;
+  }
+  bool refuse(std::string why) {
+    refused = std::move(why);
+    return false;
+  }
+};
+
+// Reads a count as the bitstream stores it: 32-bit before version 2.0 (2.2 for sequential
+// meshes), a varint after.
+bool read_count(draco::DecoderBuffer& buffer, bool fixed, std::uint32_t& value) {
+  return fixed ? buffer.Decode(&value) : draco::DecodeVarint(&value, &buffer);
+}
+
+class BoundedEdgebreakerDecoder final : public draco::MeshEdgebreakerDecoder {
+ public:
+  explicit BoundedEdgebreakerDecoder(DracoBudget& budget) : budget_(budget) {}
+
+ protected:
+  // Bitstream (Draco spec, ParseEdgebreakerConnectivityData): [num_new_vertices before 2.2],
+  // num_encoded_vertices, num_faces, num_attribute_data (u8), num_encoded_symbols,
+  // num_encoded_split_symbols. The traversal type byte was read by InitializeDecoder.
+  bool DecodeConnectivity() override {
+    draco::DecoderBuffer peek(*buffer());
+    const std::uint16_t version = bitstream_version();
+    const bool fixed = version < DRACO_BITSTREAM_VERSION(2, 0);
+    std::uint32_t skip = 0, vertices = 0, faces = 0, split = 0, symbols = 0;
+    std::uint8_t attribute_data = 0;
+    if (version < DRACO_BITSTREAM_VERSION(2, 2) && !read_count(peek, fixed, skip)) return false;
+    if (!read_count(peek, fixed, vertices) || !read_count(peek, fixed, faces) || !peek.Decode(&attribute_data) ||
+        !read_count(peek, fixed, symbols) || !read_count(peek, fixed, split))
+      return false;
+    if (!budget_.connectivity(faces, std::uint64_t{vertices} + split)) return false;
+    return draco::MeshEdgebreakerDecoder::DecodeConnectivity();
+  }
+  bool DecodeAllAttributes() override {
+    return budget_.attributes(*point_cloud()) && draco::MeshEdgebreakerDecoder::DecodeAllAttributes();
+  }
+
+ private:
+  DracoBudget& budget_;
+};
+
+class BoundedSequentialDecoder final : public draco::MeshSequentialDecoder {
+ public:
+  explicit BoundedSequentialDecoder(DracoBudget& budget) : budget_(budget) {}
+
+ protected:
+  // Bitstream (Draco spec, ParseSequentialConnectivityData): num_faces, num_points.
+  bool DecodeConnectivity() override {
+    draco::DecoderBuffer peek(*buffer());
+    const bool fixed = bitstream_version() < DRACO_BITSTREAM_VERSION(2, 2);
+    std::uint32_t faces = 0, points = 0;
+    if (!read_count(peek, fixed, faces) || !read_count(peek, fixed, points)) return false;
+    if (!budget_.connectivity(faces, points)) return false;
+    return draco::MeshSequentialDecoder::DecodeConnectivity();
+  }
+  bool DecodeAllAttributes() override {
+    return budget_.attributes(*point_cloud()) && draco::MeshSequentialDecoder::DecodeAllAttributes();
+  }
+
+ private:
+  DracoBudget& budget_;
+};
+
+}  // namespace
+
 std::unique_ptr<draco::Mesh> draco_decode(std::string_view bytes, const std::string& what, const Limits& limits) {
   draco::DecoderBuffer buffer;
   buffer.Init(bytes.data(), bytes.size());
-  auto type = draco::Decoder::GetEncodedGeometryType(&buffer);
-  if (!type.ok()) throw FormatError(what + ": not a Draco payload (" + type.status().error_msg_string() + ")");
-  if (type.value() != draco::TRIANGULAR_MESH)
+  draco::DecoderBuffer peek(buffer);
+  draco::DracoHeader header;
+  const draco::Status status = draco::PointCloudDecoder::DecodeHeader(&peek, &header);
+  if (!status.ok()) throw FormatError(what + ": not a Draco payload (" + status.error_msg_string() + ")");
+  if (header.encoder_type != draco::TRIANGULAR_MESH)
     throw UnsupportedError(what + ": the Draco payload is a point cloud, not a triangle mesh");
-  draco::Decoder decoder;
-  auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
-  if (!decoded.ok()) throw FormatError(what + ": corrupt Draco payload (" + decoded.status().error_msg_string() + ")");
-  std::unique_ptr<draco::Mesh> mesh = std::move(decoded).value();
-  if (!mesh) throw FormatError(what + ": the Draco payload decoded to nothing");
-  // Draco sizes its buffers from the payload's header while decoding; what it produced is
-  // checked here against the limits before any further copy is made.
+  DracoBudget budget{limits, {}};
+  std::unique_ptr<draco::MeshDecoder> decoder;
+  if (header.encoder_method == draco::MESH_EDGEBREAKER_ENCODING) decoder = std::make_unique<BoundedEdgebreakerDecoder>(budget);
+  else if (header.encoder_method == draco::MESH_SEQUENTIAL_ENCODING) decoder = std::make_unique<BoundedSequentialDecoder>(budget);
+  else throw FormatError(what + ": unknown Draco encoding method " + std::to_string(header.encoder_method));
+  auto mesh = std::make_unique<draco::Mesh>();
+  const draco::DecoderOptions options;
+  const draco::Status decoded = decoder->Decode(options, &buffer, mesh.get());
+  if (!budget.refused.empty()) throw LimitError(what + ": " + budget.refused);
+  if (!decoded.ok()) throw FormatError(what + ": corrupt Draco payload (" + decoded.error_msg_string() + ")");
   check_count(mesh->num_faces(), limits.max_faces, "faces");
   check_count(mesh->num_points(), limits.max_vertices, "vertices");
   if (mesh->GetNamedAttribute(draco::GeometryAttribute::POSITION) == nullptr)
     throw FormatError(what + ": the Draco mesh has no POSITION attribute");
   const auto* position = mesh->GetNamedAttribute(draco::GeometryAttribute::POSITION);
   if (position->num_components() != 3) throw FormatError(what + ": Draco POSITION must have 3 components");
+  // Read through ConvertValue, which loads each component as its declared type: a bool byte
+  // other than 0 or 1 is undefined behaviour there (found by fuzz_drc under UBSan).
+  if (position->data_type() == draco::DT_BOOL || position->data_type() == draco::DT_INVALID)
+    throw FormatError(what + ": Draco POSITION must have a numeric type");
   for (draco::FaceIndex f(0); f < mesh->num_faces(); ++f)
     for (int k = 0; k < 3; ++k)
       if (mesh->face(f)[k].value() >= mesh->num_points()) throw FormatError(what + ": a Draco face references a missing point");
   return mesh;
+}
+
+void check_draco_encodable(const draco::Mesh& mesh) {
+  const auto* position = mesh.GetNamedAttribute(draco::GeometryAttribute::POSITION);
+  if (position == nullptr || position->num_components() != 3)
+    throw UnsupportedError("the mesh cannot be written as Draco: no 3-component POSITION");
+  // Draco quantises positions on a float grid over their bounding box: a coordinate or a span
+  // past the float range makes that grid infinite, and Draco's encoder then crashes.
+  double lo[3], hi[3];
+  std::fill(lo, lo + 3, std::numeric_limits<double>::infinity());
+  std::fill(hi, hi + 3, -std::numeric_limits<double>::infinity());
+  for (draco::AttributeValueIndex i(0); i < static_cast<std::uint32_t>(position->size()); ++i) {
+    float value[3] = {0, 0, 0};
+    if (!position->ConvertValue<float>(i, 3, value)) throw UnsupportedError("the mesh cannot be written as Draco: unreadable POSITION");
+    for (int k = 0; k < 3; ++k) {
+      if (!std::isfinite(value[k]))
+        throw UnsupportedError("the mesh cannot be written as Draco: a coordinate is outside the float range (|x| > 3.4e38)");
+      lo[k] = std::min(lo[k], double(value[k]));
+      hi[k] = std::max(hi[k], double(value[k]));
+    }
+  }
+  for (int k = 0; k < 3; ++k)
+    if (hi[k] - lo[k] > kMaxDracoSpan)
+    {
+      char text[96];
+      std::snprintf(text, sizeof text, "its bounding box spans %.3g, more than Draco's float grid can hold (%.3g)", hi[k] - lo[k],
+                    kMaxDracoSpan);
+      throw UnsupportedError(std::string("the mesh cannot be written as Draco: ") + text);
+    }
+  // Draco drops faces that repeat a corner and fails on a mesh with none left.
+  bool any = mesh.num_faces() == 0;
+  for (draco::FaceIndex f(0); !any && f < mesh.num_faces(); ++f) {
+    const auto a = position->mapped_index(mesh.face(f)[0]), b = position->mapped_index(mesh.face(f)[1]),
+               c = position->mapped_index(mesh.face(f)[2]);
+    any = a != b && b != c && a != c;
+  }
+  if (!any)
+    throw UnsupportedError("the mesh cannot be written as Draco: all of its " + std::to_string(mesh.num_faces()) +
+                           " triangles are degenerate (a corner repeated)");
 }
 
 std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options, const std::optional<QuantizationBox>& box) {
@@ -49,6 +211,7 @@ std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options, 
   check_bits(options.generic_bits, "generic_bits");
   if (options.compression_level < 0 || options.compression_level > 10)
     throw InvalidParamsError("compression_level", "compression_level must be in [0, 10]");
+  check_draco_encodable(mesh);
   draco::Encoder encoder;
   if (box) encoder.SetAttributeExplicitQuantization(draco::GeometryAttribute::POSITION, options.position_bits, 3, box->origin, box->range);
   else encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, options.position_bits);
@@ -65,7 +228,8 @@ std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options, 
   encoder.SetSpeedOptions(speed, speed);
   draco::EncoderBuffer buffer;
   const draco::Status status = encoder.EncodeMeshToBuffer(mesh, &buffer);
-  if (!status.ok()) throw std::runtime_error("Draco encoding failed: " + status.error_msg_string());
+  // Whatever else Draco's encoder refuses is a property of this mesh, not a fault of ours.
+  if (!status.ok()) throw UnsupportedError("the mesh cannot be written as Draco: " + status.error_msg_string());
   return std::string(buffer.data(), buffer.size());
 }
 

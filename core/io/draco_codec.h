@@ -26,8 +26,16 @@ struct QuantizationBox {
   float range = 1;  // edge of the cube the grid spans
 };
 
+// The largest bounding-box edge a Draco position grid may span (a quarter of the float
+// range, so that the grid's margins stay finite).
+inline constexpr double kMaxDracoSpan = 8.5e37;
+
+// Throws UnsupportedError (HTTP 422) for a mesh Draco's encoder cannot take: a coordinate or a
+// bounding box outside the float range, or only degenerate triangles. draco_encode calls it.
+void check_draco_encodable(const draco::Mesh& mesh);
+
 // Encodes with the quantisation bits and speed of `options` (and `box` for positions when
-// given). Deterministic.
+// given). Deterministic. Throws UnsupportedError for a mesh Draco cannot encode.
 std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options,
                          const std::optional<QuantizationBox>& box = std::nullopt);
 

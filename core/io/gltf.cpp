@@ -333,7 +333,14 @@ class GltfDocument final : public MeshDocument {
   Format format() const override { return format_; }
   std::vector<TriMesh>& surfaces() override { return meshes_; }
   std::vector<std::string> notes() const override { return notes_; }
-  std::string encode(const EncodeOptions& options) const override;
+  std::string encode(const EncodeOptions& options) const override {
+    try {
+      return encode_json(options);
+    } catch (const Json::exception& e) {  // the input's JSON, in a shape decoding let through
+      throw FormatError(std::string("glTF: unexpected JSON content (") + e.what() + ")");
+    }
+  }
+  std::string encode_json(const EncodeOptions& options) const;
 
   Format format_ = Format::Glb;
   Json json_;
@@ -497,12 +504,13 @@ std::string make_glb(std::string text, std::string_view bin) {
   return glb;
 }
 
-std::string GltfDocument::encode(const EncodeOptions& options) const {
+std::string GltfDocument::encode_json(const EncodeOptions& options) const {
   std::vector<std::int64_t> counts;
   for (const auto& s : surfaces_) counts.push_back(s.welded);
   check_surface_sizes(meshes_, counts);
   const Format target = options.format.value_or(format_);
   if (target != Format::Glb && target != Format::Gltf) return encode_plain(meshes_, target, options);
+  check_float_coordinates(meshes_, target);
 
   Output out;
   out.json = json_;
@@ -766,16 +774,165 @@ void refuse_external(const Json& json, const char* key) {
 
 }  // namespace
 
-std::unique_ptr<MeshDocument> decode_gltf(std::string_view bytes, Format format, const Limits& limits) {
-  auto doc = std::make_unique<GltfDocument>();
-  doc->format_ = format;
-  const std::string_view text = format == Format::Glb ? glb_json(bytes) : bytes;
+namespace {
+
+// Required extensions this adapter reads (geometry) or that do not change what the geometry
+// is (materials, textures, lights, instancing of nodes): all are carried over verbatim. A
+// loader must refuse any other required extension (glTF 2.0, 3.12).
+bool understood_extension(std::string_view name) {
+  static constexpr std::string_view kKnown[] = {
+      kDraco, "KHR_mesh_quantization", "KHR_texture_transform", "KHR_texture_basisu", "KHR_lights_punctual",
+      "KHR_materials_variants", "EXT_mesh_gpu_instancing", "EXT_texture_webp", "EXT_texture_avif"};
+  for (const auto known : kKnown)
+    if (name == known) return true;
+  return name.rfind("KHR_materials_", 0) == 0;
+}
+
+// The JSON's shape where this adapter reads it: wrong types are a FormatError here instead of a
+// JSON type error later (e.g. "nodes": 0).
+// Entries of json[key] when it is an array (no copy), else 0.
+std::size_t size_of(const Json& json, const char* key) {
+  const auto it = json.find(key);
+  return it != json.end() && it->is_array() ? it->size() : 0;
+}
+
+void check_shape(const Json& json) {
+  const auto fail = [](const std::string& where, const char* expected) {
+    throw FormatError("glTF: " + where + " must be " + expected);
+  };
+  const auto objects = [&](const Json& parent, const char* key, const std::string& where) {
+    if (!parent.contains(key)) return;
+    const Json& list = parent[key];
+    if (!list.is_array()) fail(where + key, "an array");
+    for (std::size_t i = 0; i < list.size(); ++i)
+      if (!list[i].is_object()) fail(where + key + "[" + std::to_string(i) + "]", "an object");
+  };
+  const auto object = [&](const Json& parent, const char* key, const std::string& where) {
+    if (parent.contains(key) && !parent[key].is_object()) fail(where + key, "an object");
+  };
+  const auto integer = [&](const Json& parent, const char* key, const std::string& where) {
+    if (parent.contains(key) && !parent[key].is_number_integer()) fail(where + key, "an integer");
+  };
+  for (const char* key : {"accessors", "animations", "buffers", "bufferViews", "cameras", "images", "materials", "meshes",
+                          "nodes", "samplers", "scenes", "skins", "textures"})
+    objects(json, key, "");
+  for (const char* key : {"extensionsUsed", "extensionsRequired"}) {
+    if (!json.contains(key)) continue;
+    if (!json[key].is_array()) fail(key, "an array of strings");
+    for (const auto& name : json[key])
+      if (!name.is_string()) fail(key, "an array of strings");
+  }
+  object(json, "asset", "");
+  object(json, "extensions", "");
+  integer(json, "scene", "");
+  for (std::size_t m = 0; m < size_of(json, "meshes"); ++m) {
+    const Json& mesh = json["meshes"][m];
+    const std::string where = "meshes[" + std::to_string(m) + "].";
+    objects(mesh, "primitives", where);
+    for (std::size_t p = 0; p < size_of(mesh, "primitives"); ++p) {
+      const Json& prim = mesh["primitives"][p];
+      const std::string at = where + "primitives[" + std::to_string(p) + "].";
+      object(prim, "attributes", at);
+      object(prim, "extensions", at);
+      integer(prim, "indices", at);
+      integer(prim, "mode", at);
+      objects(prim, "targets", at);
+      if (prim.contains("attributes"))
+        for (const auto& [semantic, index] : prim["attributes"].items())
+          if (!index.is_number_integer()) fail(at + "attributes." + semantic, "an integer");
+    }
+  }
+  for (std::size_t n = 0; n < size_of(json, "nodes"); ++n) {
+    const Json& node = json["nodes"][n];
+    const std::string where = "nodes[" + std::to_string(n) + "].";
+    object(node, "extensions", where);
+    if (node.contains("extensions") && node["extensions"].contains("EXT_mesh_gpu_instancing")) {
+      const Json& instancing = node["extensions"]["EXT_mesh_gpu_instancing"];
+      if (!instancing.is_object()) fail(where + "extensions.EXT_mesh_gpu_instancing", "an object");
+      object(instancing, "attributes", where + "extensions.EXT_mesh_gpu_instancing.");
+    }
+  }
+  for (std::size_t a = 0; a < size_of(json, "animations"); ++a)
+    objects(json["animations"][a], "samplers", "animations[" + std::to_string(a) + "].");
+}
+
+// Parses the JSON with its nesting depth and size bounded before anything recursive walks it
+// (tinygltf's parser overflows the stack at a depth of about 20,000), and charges what the
+// parsed scene will hold: our two copies of the JSON and tinygltf's objects.
+Json parse_bounded(std::string_view text, const Limits& limits, std::int64_t& bytes) {
+  // One linear pass over the text (nlohmann's callback parser is quadratic on long arrays):
+  // the nesting depth, and the number of values (commas and openings; exact for valid JSON).
+  std::int64_t values = 1;
+  int depth = 0;
+  bool in_string = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\') ++i;
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '{' || c == '[') {
+      ++values;
+      if (++depth > limits.max_json_depth)
+        throw LimitError("glTF: the JSON nests deeper than the limit of " + std::to_string(limits.max_json_depth) +
+                         " (max_json_depth)");
+    } else if (c == '}' || c == ']') {
+      --depth;
+    } else if (c == ',') {
+      ++values;
+    }
+  }
+  Json json;
   try {
-    doc->json_ = Json::parse(text);
+    json = Json::parse(text);
   } catch (const Json::exception& e) {
     throw FormatError(std::string("glTF: invalid JSON (") + e.what() + ")");
   }
-  if (!doc->json_.is_object()) throw FormatError("glTF: the JSON is not an object");
+  if (!json.is_object()) throw FormatError("glTF: the JSON is not an object");
+  check_shape(json);
+  const auto count = [&](const char* key) { return static_cast<std::int64_t>(size_of(json, key)); };
+  const auto limit = [](std::int64_t n, std::int64_t max, const char* what, const char* name) {
+    if (n > max)
+      throw LimitError("glTF: the asset has " + std::to_string(n) + " " + what + ", more than the limit of " + std::to_string(max) +
+                       " (" + name + ")");
+  };
+  limit(count("nodes"), limits.max_nodes, "nodes", "max_nodes");
+  limit(count("accessors") + count("bufferViews"), limits.max_accessors, "accessors and buffer views", "max_accessors");
+  std::int64_t primitives = 0;
+  for (std::size_t m = 0; m < size_of(json, "meshes"); ++m) primitives += static_cast<std::int64_t>(size_of(json["meshes"][m], "primitives"));
+  limit(primitives, limits.max_accessors, "primitives", "max_accessors");
+  // About 3 x 64 bytes per JSON value (the JSON, the copy given to tinygltf, tinygltf's own).
+  bytes = values * 192 + count("nodes") * static_cast<std::int64_t>(sizeof(tinygltf::Node)) +
+          count("accessors") * static_cast<std::int64_t>(sizeof(tinygltf::Accessor)) +
+          count("bufferViews") * static_cast<std::int64_t>(sizeof(tinygltf::BufferView)) +
+          count("meshes") * static_cast<std::int64_t>(sizeof(tinygltf::Mesh)) +
+          primitives * static_cast<std::int64_t>(sizeof(tinygltf::Primitive)) +
+          count("materials") * static_cast<std::int64_t>(sizeof(tinygltf::Material)) + static_cast<std::int64_t>(text.size()) * 2;
+  if (bytes > limits.max_decoded_bytes)
+    throw LimitError("glTF: the scene would take about " + std::to_string(bytes) + " bytes of memory, more than the limit of " +
+                     std::to_string(limits.max_decoded_bytes) + " (max_decoded_bytes)");
+  return json;
+}
+
+}  // namespace
+
+static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes, Format format, const Limits& limits);
+
+std::unique_ptr<MeshDocument> decode_gltf(std::string_view bytes, Format format, const Limits& limits) {
+  try {
+    return decode_gltf_checked(bytes, format, limits);
+  } catch (const Json::exception& e) {  // a shape check_shape does not cover: still the input's fault
+    throw FormatError(std::string("glTF: unexpected JSON content (") + e.what() + ")");
+  }
+}
+
+static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes, Format format, const Limits& limits) {
+  auto doc = std::make_unique<GltfDocument>();
+  doc->format_ = format;
+  const std::string_view text = format == Format::Glb ? glb_json(bytes) : bytes;
+  std::int64_t scene_bytes = 0;
+  doc->json_ = parse_bounded(text, limits, scene_bytes);
   // Refused before tinygltf sees the asset: nothing external is ever opened.
   refuse_external(doc->json_, "buffers");
   refuse_external(doc->json_, "images");
@@ -783,6 +940,10 @@ std::unique_ptr<MeshDocument> decode_gltf(std::string_view bytes, Format format,
     for (const auto& name : doc->json_.value(list, Json::array()))
       if (name == "EXT_meshopt_compression" || name == "KHR_meshopt_compression")
         throw UnsupportedError("glTF extension " + name.get<std::string>() + " is not supported; decompress the asset first");
+  for (const auto& name : doc->json_.value("extensionsRequired", Json::array()))
+    if (!understood_extension(name.get<std::string>()))
+      throw UnsupportedError("glTF extension " + name.get<std::string>().substr(0, 100) +
+                             " is required by the asset and not supported");
   // tinygltf 2.7 rejects an indices accessor without a buffer view, which is what a Draco
   // primitive has (valid glTF). Draco primitives are read from the JSON and the payload
   // here, so tinygltf gets a copy of the JSON without their "indices".
@@ -821,6 +982,7 @@ std::unique_ptr<MeshDocument> decode_gltf(std::string_view bytes, Format format,
   }
 
   Reader reader(model, limits);
+  reader.charge(scene_bytes, "glTF");
   // Every buffer view is copied into the output, used by a surface or not (images, animations):
   // each must lie inside its buffer, and tinygltf's list must be the JSON's.
   if (doc->json_.value("bufferViews", Json::array()).size() != model.bufferViews.size() ||
@@ -938,7 +1100,12 @@ std::unique_ptr<MeshDocument> decode_gltf(std::string_view bytes, Format format,
   return doc;
 }
 
-std::string write_plain_gltf(const std::vector<TriMesh>& surfaces, Format format, const EncodeOptions& options) {
+std::string write_plain_gltf(const std::vector<TriMesh>& all, Format format, const EncodeOptions& options) {
+  // glTF accessors hold at least one element: surfaces without triangles are left out.
+  std::vector<TriMesh> surfaces;
+  for (const TriMesh& m : all)
+    if (m.F.rows() > 0) surfaces.push_back(m);
+  if (surfaces.empty()) throw UnsupportedError("the mesh has no triangles: there is nothing to write as glTF");
   // A minimal asset (one node per surface), then the regular encoder for Draco and layout.
   Json json = {{"asset", {{"version", "2.0"}, {"generator", "meshdenoise"}}}};
   json["scene"] = 0;

@@ -4,6 +4,7 @@
 #include <draco/mesh/mesh.h>
 
 #include <cstring>
+#include <limits>
 #include <string>
 
 #include "core/io/detail.h"
@@ -41,6 +42,14 @@ void check_surface_sizes(const std::vector<TriMesh>& surfaces, const std::vector
     if (surfaces[i].V.rows() != counts[i] || surfaces[i].V.cols() != 3)
       throw InvalidMeshError("surface " + std::to_string(i) + " had " + std::to_string(counts[i]) +
                              " vertices; replaced positions must keep that count");
+}
+
+void check_float_coordinates(const std::vector<TriMesh>& surfaces, Format format) {
+  constexpr double kFloatMax = std::numeric_limits<float>::max();
+  for (const TriMesh& s : surfaces)
+    if (s.V.size() > 0 && s.V.cwiseAbs().maxCoeff() > kFloatMax)
+      throw UnsupportedError("the mesh cannot be written as " + std::string(to_string(format)) +
+                             ": a coordinate is outside the float range (|x| > 3.4e38)");
 }
 
 std::string write_off(const TriMesh& mesh) {
@@ -114,6 +123,7 @@ std::string write_drc(const TriMesh& mesh, const EncodeOptions& options) {
 }
 
 std::string encode_plain(const std::vector<TriMesh>& surfaces, Format format, const EncodeOptions& options) {
+  if (format == Format::Ply || format == Format::Glb || format == Format::Gltf) check_float_coordinates(surfaces, format);
   switch (format) {
     case Format::Off: return write_off(concatenate(surfaces));
     case Format::Obj: return write_obj(concatenate(surfaces));

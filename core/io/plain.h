@@ -20,6 +20,10 @@ std::string write_ply(const TriMesh& mesh);  // binary little endian, float posi
 std::string write_drc(const TriMesh& mesh, const EncodeOptions& options);
 std::string write_plain_gltf(const std::vector<TriMesh>& surfaces, Format format, const EncodeOptions& options);
 
+// Throws UnsupportedError (HTTP 422) if a coordinate does not fit in the float32 that `format`
+// stores positions in (PLY as written here, glTF), before anything is written.
+void check_float_coordinates(const std::vector<TriMesh>& surfaces, Format format);
+
 // Throws InvalidMeshError if a caller changed the number of vertices of a surface (the
 // document maps every welded vertex back to the file's copies and needs the same count).
 void check_surface_sizes(const std::vector<TriMesh>& surfaces, const std::vector<std::int64_t>& counts);

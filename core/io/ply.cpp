@@ -7,6 +7,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <string>
 
 #include "core/io/detail.h"
@@ -42,6 +43,27 @@ std::size_t type_size(Type type) {
 }
 
 bool is_integer(Type type) { return type != Type::Float32 && type != Type::Float64; }
+
+// The range of an integer type, as doubles (exact: at most 32 bits).
+double type_min(Type type) {
+  switch (type) {
+    case Type::Int8: return std::numeric_limits<std::int8_t>::min();
+    case Type::Int16: return std::numeric_limits<std::int16_t>::min();
+    case Type::Int32: return std::numeric_limits<std::int32_t>::min();
+    default: return 0;
+  }
+}
+double type_max(Type type) {
+  switch (type) {
+    case Type::Int8: return std::numeric_limits<std::int8_t>::max();
+    case Type::UInt8: return std::numeric_limits<std::uint8_t>::max();
+    case Type::Int16: return std::numeric_limits<std::int16_t>::max();
+    case Type::UInt16: return std::numeric_limits<std::uint16_t>::max();
+    case Type::Int32: return std::numeric_limits<std::int32_t>::max();
+    case Type::UInt32: return std::numeric_limits<std::uint32_t>::max();
+    default: return std::numeric_limits<double>::max();
+  }
+}
 
 // Every value is held as a double: exact for all PLY types (at most 32-bit integers, floats).
 struct Property {
@@ -130,6 +152,10 @@ class AsciiReader {
       throw FormatError("PLY: '" + std::string(token.substr(0, 32)) + "' is not a number");
     if (is_integer(type) && value != std::floor(value))
       throw FormatError("PLY: '" + std::string(token.substr(0, 32)) + "' is not an integer");
+    // Written back with its declared type: it must fit in it (a cast out of range is undefined).
+    if (is_integer(type) ? !(value >= type_min(type) && value <= type_max(type))
+                         : (type == Type::Float32 && std::isfinite(value) && std::abs(value) > std::numeric_limits<float>::max()))
+      throw FormatError("PLY: '" + std::string(token.substr(0, 32)) + "' does not fit in its property's type");
     return value;
   }
   std::size_t remaining() const { return data_.size() - pos_; }
@@ -143,6 +169,11 @@ template <class Reader>
 void read_body(Reader& reader, std::vector<Element>& elements, std::size_t min_row_bytes_unit, const Limits& limits) {
   std::int64_t decoded_bytes = 0;
   for (auto& element : elements) {
+    // A row of an element without properties takes no bytes at all, so nothing would bound
+    // its count (4e18 empty rows pin a thread; written back as ascii, they fill memory).
+    if (element.properties.empty() && element.count > 0)
+      throw FormatError("PLY: element '" + element.name + "' declares " + std::to_string(element.count) +
+                        " rows but no properties");
     // Each row takes at least one unit per property (a byte in binary, "0 " in ascii).
     const auto row_min = static_cast<std::int64_t>(element.properties.size() * min_row_bytes_unit);
     if (row_min > 0 && element.count > static_cast<std::int64_t>(reader.remaining()) / row_min)

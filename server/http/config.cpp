@@ -82,7 +82,7 @@ const std::vector<Setting>& settings() {
       {"result-ttl", "MDN_RESULT_TTL", "seconds a finished job and its result stay available",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.result_ttl_s = parse_seconds(n, v, 0, 1e7, true); },
        [](const ServerConfig& c) { return show_double(c.result_ttl_s); }},
-      {"max-stored-jobs", "MDN_MAX_STORED_JOBS", "finished jobs kept at most (the oldest are evicted first)",
+      {"max-stored-jobs", "MDN_MAX_STORED_JOBS", "asynchronous jobs kept at most (queued, running, finished); when all are taken, new ones get 503",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_stored_jobs = int(parse_int(n, v, 1, 1000000)); },
        [](const ServerConfig& c) { return std::to_string(c.max_stored_jobs); }},
       {"queue", "MDN_QUEUE", "job store: memory (this process) or redis://[:password@]host[:port][/db] (shared by replicas)",

@@ -39,6 +39,8 @@ constexpr const char* kExposedHeaders =
     "X-Denoise-Notes, X-Denoise-Report";
 constexpr const char* kAllowedRequestHeaders =
     "Authorization, Content-Type, X-Request-Id, X-Denoise-Params, Idempotency-Key";
+// Header fields a request may carry (431 beyond; cpp-httplib 0.11.4 has no such limit).
+constexpr std::size_t kMaxRequestHeaders = 100;
 
 std::string lower(std::string s) {
   for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -354,8 +356,15 @@ struct HttpService::Impl {
     } catch (...) {
       const Problem p = problem_from_exception(std::current_exception());
       if (route.reads_body && !ctx.body_consumed && has_request_body(req)) close_after_response(req, res);
-      if (p.status >= 500 && log)
+      if (p.status == 503 && (p.type == "queue-full" || p.type == "store-full")) {
+        // Overload is expected and already counted in the metrics: one line per interval with
+        // the number refused, not one error per request (10k lines a minute under overload).
+        std::int64_t refused = 0;
+        if (log && overload_log.due(Clock::now(), refused))
+          log->warn("overloaded", {{"type", p.type}, {"refused", refused}, {"interval_s", OverloadLog::kIntervalS}});
+      } else if (p.status >= 500 && log) {
         log->error("handler_failed", {{"request_id", ctx.request_id}, {"route", route.name}, {"detail", p.detail}});
+      }
       try {
         write_problem(req, res, p, ctx.request_id);
       } catch (...) {  // last resort: never let an exception reach httplib
@@ -383,6 +392,17 @@ struct HttpService::Impl {
       write_problem(req, res, p, id);
       return httplib::Server::HandlerResponse::Handled;
     };
+    // RFC 9112, 6.3: both framings in one request are a smuggling vector; refused, and the
+    // connection closed after the answer.
+    if (req.has_header("Transfer-Encoding") && req.has_header("Content-Length")) {
+      close_after_response(req, res);
+      return reject(make_problem(400, "bad-request", "Bad request",
+                                 "the request has both Transfer-Encoding and Content-Length"));
+    }
+    if (req.headers.size() > kMaxRequestHeaders)
+      return reject(make_problem(431, "too-many-headers", "Request header fields too large",
+                                 "the request has " + std::to_string(req.headers.size()) + " header fields, more than the limit of " +
+                                     std::to_string(kMaxRequestHeaders)));
     // Several ranges could multiply a result's size (one 1 MB result became 209 MB with 200
     // ranges in 0.11.4): refuse them; single ranges are honoured on result downloads only.
     if (req.ranges.size() > 1)
@@ -819,6 +839,14 @@ struct HttpService::Impl {
                                      "Idempotency-Key must be 1 to 255 visible ASCII characters"));
     }
     service::JobInput input = read_job_input(ctx);
+    // What can be refused at once is refused before the job is accepted (not 202 and a failed
+    // job later): parameters that do not validate (400), a body that is not the declared
+    // container (415).
+    service::validate(input.params);
+    if (const auto sniffed = io::sniff_format(input.bytes); sniffed != input.format)
+      throw HttpError(unsupported_media_type(
+          "the body is not a " + std::string(io::to_string(input.format)) + " file" +
+          (sniffed ? " (it looks like " + std::string(io::to_string(*sniffed)) + ")" : std::string(" (no mesh format recognised)"))));
     std::string fingerprint;
     if (key) {
       // Same key and same (body, format, effective parameters) -> same job.
@@ -898,6 +926,22 @@ struct HttpService::Impl {
   int listen_fd = -1;
   std::mutex start_mutex;
   std::map<std::thread::id, Clock::time_point> request_start;  // for access-log durations
+  // Requests refused for overload since the last "overloaded" line; due() is true (and hands
+  // over the count) at most once per interval.
+  struct OverloadLog {
+    static constexpr int kIntervalS = 10;
+    std::mutex mutex;
+    std::optional<Clock::time_point> last;
+    std::int64_t refused = 0;
+    bool due(Clock::time_point now, std::int64_t& count) {
+      std::lock_guard lock(mutex);
+      ++refused;
+      if (last && now - *last < std::chrono::seconds(kIntervalS)) return false;
+      last = now;
+      count = std::exchange(refused, 0);
+      return true;
+    }
+  } overload_log;
 };
 
 HttpService::HttpService(const ServerConfig& config, std::shared_ptr<const EventLog> log)

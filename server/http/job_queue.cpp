@@ -1,6 +1,7 @@
 #include "server/http/job_queue.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "core/errors.h"
@@ -160,12 +161,23 @@ JobQueue::Submitted JobQueue::submit(service::JobInput input, bool asynchronous,
     p.retry_after_s = retry_after_s();
     throw HttpError(std::move(p));
   }
+  // An accepted asynchronous job stays retrievable for its whole result lifetime: when every
+  // stored-job slot is taken, new jobs are refused rather than old ones evicted early.
+  if (asynchronous && int(jobs_.size()) >= options_.max_stored) {
+    Problem p = make_problem(503, "store-full", "Job store full",
+                             "all " + std::to_string(options_.max_stored) +
+                                 " stored-job slots hold jobs within their result lifetime; retry later");
+    p.retry_after_s = store_retry_after_s_locked();
+    throw HttpError(std::move(p));
+  }
   std::string id;
   do id = new_id_locked();
   while (jobs_.count(id) != 0);
   input.threads = options_.threads_per_job;
   auto job = std::make_shared<Job>(id, std::move(input), asynchronous);
-  jobs_.emplace(id, job);
+  // Synchronous jobs live only as long as their request holds them: they take no stored-job
+  // slot, and their bytes go with the response.
+  if (asynchronous) jobs_.emplace(id, job);
   queue_.push_back(job);
   if (idempotency_key) idempotency_[*idempotency_key] = {fingerprint, id};
   lock.unlock();
@@ -248,7 +260,7 @@ void JobQueue::cancel(const std::shared_ptr<Job>& job) {
     finish_locked(*job, JobState::Cancelled,
                   make_problem(409, "cancelled", "Job cancelled", "the client went away before the job started"), nullptr);
     job_lock.unlock();
-    if (!job->external_) finished_order_.push_back(job->id_);
+    if (!job->external_ && job->asynchronous_) finished_order_.push_back(job->id_);
     idle_cv_.notify_all();
   }
 }
@@ -311,10 +323,34 @@ bool JobQueue::saturated() const {
   return int(queue_.size()) >= options_.capacity;
 }
 
+int JobQueue::store_retry_after_s_locked() const {
+  // When the oldest finished job's lifetime ends, a slot frees (at least 1 s, at most 60).
+  if (finished_order_.empty()) return retry_after_s();
+  const auto it = jobs_.find(finished_order_.front());
+  if (it == jobs_.end()) return 1;
+  std::lock_guard job_lock(it->second->mutex_);
+  if (!it->second->finished_) return retry_after_s();
+  const double left = seconds_between(Clock::now(), *it->second->finished_ + options_.result_ttl);
+  return int(std::clamp(std::ceil(left), 1.0, 60.0));
+}
+
+std::vector<JobSnapshot> JobQueue::unfinished() const {
+  std::vector<JobSnapshot> out;
+  std::lock_guard lock(mutex_);
+  for (const auto& job : queue_)
+    if (!job->asynchronous_ || job->external_) out.push_back(job->snapshot());
+  for (const auto& [id, job] : jobs_) {
+    JobSnapshot s = job->snapshot();
+    if (!is_terminal(s.state) || (s.state == JobState::Succeeded && !job->result_fetched())) out.push_back(std::move(s));
+  }
+  return out;
+}
+
 int JobQueue::retry_after_s() const {
-  // A coarse hint: one second per job ahead per worker, at least 1, at most 60.
-  const std::size_t ahead = queue_.size();
-  return int(std::clamp<std::size_t>(ahead / std::size_t(std::max(1, options_.workers)), 1, 60));
+  // How long jobs now wait in the queue before a worker takes them (measured), at least 1 s,
+  // at most 60: a client told to come back then finds a slot about as soon as one frees.
+  const double wait = queue_wait_s_.load();
+  return wait < 0 ? 1 : int(std::clamp(std::ceil(wait), 1.0, 60.0));
 }
 
 void JobQueue::worker_loop() {
@@ -331,12 +367,15 @@ void JobQueue::worker_loop() {
       job->state_ = JobState::Running;
       job->started_ = Clock::now();
       job->stage_ = "decode";
+      // Moving average of the measured queue waits (the last few jobs weigh most).
+      const double wait = seconds_between(job->created_, *job->started_), old = queue_wait_s_.load();
+      queue_wait_s_.store(old < 0 ? wait : 0.7 * old + 0.3 * wait);
     }
     run(job);
     {
       std::lock_guard lock(mutex_);
       --running_;
-      if (!job->external_) finished_order_.push_back(job->id_);
+      if (!job->external_ && job->asynchronous_) finished_order_.push_back(job->id_);
       sweep_locked();
     }
     idle_cv_.notify_all();
@@ -425,7 +464,7 @@ void JobQueue::sweep_locked() {
   // finished_order_ is in finishing order, so expired jobs are at the front.
   while (!finished_order_.empty()) {
     auto it = jobs_.find(finished_order_.front());
-    bool expire = it == jobs_.end() || int(finished_order_.size()) > options_.max_stored;
+    bool expire = it == jobs_.end();
     if (!expire) {
       std::lock_guard job_lock(it->second->mutex_);
       expire = it->second->finished_ && *it->second->finished_ + options_.result_ttl <= now;

@@ -108,7 +108,8 @@ struct JobQueueOptions {
   int capacity = 64;               // jobs waiting for a worker
   std::chrono::milliseconds time_limit{300'000};  // running time per job
   std::chrono::milliseconds result_ttl{600'000};  // how long finished jobs stay
-  int max_stored = 1024;           // finished jobs kept at most
+  int max_stored = 1024;           // asynchronous jobs kept at most (queued, running, finished);
+                                   // when all are taken, new ones get 503 (none is evicted early)
   io::Limits limits;               // decoder limits
 };
 
@@ -166,12 +167,16 @@ class JobQueue {
   // fetched once, or the deadline passes. True if everything finished.
   bool wait_drained(Clock::time_point deadline);
 
+  // Jobs a drain that ends now would abandon: queued or running, and asynchronous results not
+  // fetched yet (running synchronous jobs are not listed; their requests are answered 503).
+  std::vector<JobSnapshot> unfinished() const;
+
   int queued() const;
   int running() const;
   int capacity() const { return options_.capacity; }
   int workers() const { return options_.workers; }
   bool saturated() const;       // the queue is full
-  int retry_after_s() const;    // a hint for clients told to come back
+  int retry_after_s() const;    // a hint for clients told to come back: the measured queue wait
 
  private:
   void worker_loop();
@@ -180,7 +185,8 @@ class JobQueue {
   void end_run(Job& job, Job::End end, bool report);
   void finish_locked(Job& job, JobState state, std::optional<Problem> error,
                      std::shared_ptr<const service::JobOutput> output);  // job.mutex_ held
-  void sweep_locked();  // mutex_ held: drops expired and surplus finished jobs
+  void sweep_locked();  // mutex_ held: drops finished jobs past their result lifetime
+  int store_retry_after_s_locked() const;  // mutex_ held: until a stored-job slot frees
   std::string new_id_locked();
 
   const JobQueueOptions options_;
@@ -198,6 +204,7 @@ class JobQueue {
   bool draining_ = false;
   bool stop_ = false;
   bool abandoned_ = false;  // cancel_all() was called: drain waits no longer
+  std::atomic<double> queue_wait_s_{-1};  // moving average of measured queue waits; -1: none yet
   std::mt19937_64 rng_;
   std::vector<std::thread> workers_;
 };

@@ -1,6 +1,7 @@
 // meshdenoise-server: parses the configuration (flags, then MDN_* variables), runs the HTTP
 // service, and drains on SIGTERM/SIGINT: /readyz turns 503, new jobs get 503, accepted jobs
-// finish within --drain-grace seconds, then the process exits 0. A second signal stops at once.
+// finish within --drain-grace seconds, then the process exits 0; a drain that runs out of grace
+// logs every job it abandons and exits 1. A second signal stops at once.
 #include <atomic>
 #include <cerrno>
 #include <csignal>
@@ -123,12 +124,20 @@ int main(int argc, char** argv) {
       }
     }
     drainer.join();
-    if (!drained)
-      log->warn("drain_incomplete", {{"queued", service.queue().queued()}, {"running", service.queue().running()}});
+    if (!drained) {
+      // Every job the drain gives up on is named (with the Redis store, unfinished jobs stay
+      // in Redis for another replica); the exit code says the drain was incomplete.
+      const auto abandoned = service.queue().unfinished();
+      log->warn("drain_incomplete", {{"queued", service.queue().queued()},
+                                     {"running", service.queue().running()},
+                                     {"abandoned", abandoned.size()}});
+      for (const auto& job : abandoned)
+        log->warn("job_abandoned", {{"job_id", job.id}, {"state", std::string(to_string(job.state))}, {"async", job.asynchronous}});
+    }
     service.stop();
     server.join();
     log->info("stopped", {{"drained", drained}});
-    if (!serve_ok) return 1;
+    if (!serve_ok || !drained) return 1;
   } catch (const std::exception& e) {
     log->error("fatal", {{"detail", e.what()}});
     return 1;

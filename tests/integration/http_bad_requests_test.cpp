@@ -332,5 +332,57 @@ TEST_F(HttpBadRequests, AClientStillSendingWhenRefusedCanFinishAndReadTheAnswer)
   EXPECT_NE(response.find("urn:meshdenoise:problem:too-large"), std::string::npos) << response;
 }
 
+// Issue 17, protocol: 2,000 header fields were accepted; a request with both Transfer-Encoding
+// and Content-Length left the connection open (RFC 9112, 6.3); POST /v1/jobs answered 202 to a
+// body that is no mesh (the job failed later) and to parameters that do not validate.
+TEST_F(HttpBadRequests, HeaderCountFramingAndJobBodiesAreCheckedAtOnce) {
+  ASSERT_TRUE(server_->started()) << server_->log();
+  std::string many = "GET /healthz HTTP/1.1\r\nHost: x\r\n";
+  for (int i = 0; i < 2000; ++i) many += "X-H" + std::to_string(i) + ": v\r\n";
+  std::string response;
+  EXPECT_EQ(raw_status(server_->port(), many + "\r\n", &response), 431) << response.substr(0, 300);
+  EXPECT_NE(response.find("too-many-headers"), std::string::npos) << response.substr(0, 300);
+  std::string some = "GET /healthz HTTP/1.1\r\nHost: x\r\n";
+  for (int i = 0; i < 50; ++i) some += "X-H" + std::to_string(i) + ": v\r\n";
+  EXPECT_EQ(raw_status(server_->port(), some + "\r\n"), 200);
+
+  // Both framings: answered 400 once, then the connection closes (the next request unserved).
+  const std::string both = "POST /v1/denoise HTTP/1.1\r\nHost: x\r\nContent-Type: model/x-off\r\n"
+                           "Transfer-Encoding: chunked\r\nContent-Length: 5\r\n\r\n0\r\n\r\n"
+                           "GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n";
+  EXPECT_EQ(raw_status(server_->port(), both, &response, /*read_until_close=*/true), 400) << response;
+  EXPECT_NE(response.find("Connection: close\r\n"), std::string::npos) << response;
+  EXPECT_EQ(response.find("HTTP/1.1", 10), std::string::npos) << "a second answer: " << response;
+
+  auto c = server_->client();
+  json p = expect_problem(c->Post("/v1/jobs", std::string("this is not a mesh at all\n"), "model/x-off"), 415);
+  EXPECT_NE(p.value("detail", "").find("not a off file"), std::string::npos) << p.dump();
+  p = expect_problem(c->Post("/v1/jobs", std::string("ply\nformat ascii 1.0\n"), "model/x-off"), 415);
+  EXPECT_NE(p.value("detail", "").find("looks like ply"), std::string::npos) << p.dump();
+  p = expect_problem(c->Post("/v1/jobs?params=%7B%22n_normal%22%3A-5%7D", noisy_sphere_off(1), "model/x-off"), 400);
+  EXPECT_EQ(p.value("field", ""), "n_normal") << p.dump();
+  auto ok = c->Post("/v1/jobs", noisy_sphere_off(1), "model/x-off");
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(ok->status, 202) << ok->body;
+}
+
+// Issue 17: an OFF whose coordinates span more than the float range killed the server (SIGSEGV
+// in Draco's encoder) when written as glb or drc; only degenerate triangles, or 1e300, were a 500.
+TEST_F(HttpBadRequests, MeshesDracoCannotEncodeAre422NotACrash) {
+  ASSERT_TRUE(server_->started()) << server_->log();
+  auto c = server_->client();
+  const std::string span = "OFF\n3 1 0\n3e38 0 0\n-3e38 0 0\n0 1 0\n3 0 1 2\n";
+  const std::string huge = "OFF\n3 1 0\n1e300 0 0\n0 0 0\n0 1 0\n3 0 1 2\n";
+  for (const std::string& body : {span, huge})
+    for (const char* format : {"glb", "drc"}) {
+      const std::string params = std::string(R"({"mode":"manual","output":{"format":")") + format + "\"}}";
+      const json p = expect_problem(c->Post("/v1/denoise", {{"X-Denoise-Params", params}}, body, "model/x-off"), 422);
+      EXPECT_EQ(p.value("type", ""), "urn:meshdenoise:problem:unsupported-content") << format << " " << p.dump();
+    }
+  auto health = c->Get("/healthz");
+  ASSERT_TRUE(health);
+  EXPECT_EQ(health->status, 200);
+}
+
 }  // namespace
 }  // namespace mdn::test

@@ -1,0 +1,87 @@
+// Writes the fuzzers' seed corpora, all generated here (no third-party files): for each format
+// a directory of small valid files in its variants, written by mdn_io itself from procedural
+// meshes and the glTF test fixtures, plus parameter texts.
+//   fuzz_seeds OUT_DIR   ->  OUT_DIR/{off,obj,ply,drc,glb,gltf,params}/seed-N
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "core/io/document.h"
+#include "io/gltf_fixtures.h"
+#include "support/shapes.h"
+
+namespace {
+
+using namespace mdn;
+namespace fs = std::filesystem;
+
+void write(const fs::path& dir, const std::string& bytes) {
+  fs::create_directories(dir);
+  const auto n = std::distance(fs::directory_iterator(dir), fs::directory_iterator{});
+  std::ofstream(dir / ("seed-" + std::to_string(n)), std::ios::binary) << bytes;
+}
+
+std::string encode(const std::string& off, io::Format format, bool draco, int position_bits = 16) {
+  io::EncodeOptions options;
+  options.format = format;
+  options.draco = draco;
+  options.position_bits = position_bits;
+  return io::decode(off, io::Format::Off)->encode(options);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: fuzz_seeds OUT_DIR\n");
+    return 2;
+  }
+  const fs::path out = argv[1];
+  const std::vector<std::string> meshes = {test::off_text(test::sphere(0)), test::off_text(test::cube(1)),
+                                           test::off_text(test::plane(2))};
+  for (const std::string& off : meshes) {
+    write(out / "off", off);
+    write(out / "obj", encode(off, io::Format::Obj, false));
+    write(out / "ply", encode(off, io::Format::Ply, false));
+    write(out / "drc", encode(off, io::Format::Drc, true));
+    write(out / "drc", encode(off, io::Format::Drc, true, 8));
+    write(out / "glb", encode(off, io::Format::Glb, true));
+    write(out / "glb", encode(off, io::Format::Glb, false));
+    write(out / "gltf", encode(off, io::Format::Gltf, false));
+    write(out / "gltf", encode(off, io::Format::Gltf, true));
+  }
+  // Text variants the writers above do not produce.
+  write(out / "off", "COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n3 0 1 2 9 9 9\n");
+  write(out / "off", "NOFF 3 1 0\n# comment\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2\n");
+  write(out / "obj", "# obj\nmtllib a.mtl\no quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n"
+                     "usemtl m\nf 1/1/1 2/2/1 3/3/1\nf -4//1 -2//1 -1//1\ns off\n");
+  write(out / "ply", "ply\nformat ascii 1.0\ncomment c\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                     "property float nx\nproperty float ny\nproperty float nz\nproperty uchar red\nelement face 1\n"
+                     "property list uchar int vertex_indices\nelement extra 1\nproperty int value\nend_header\n"
+                     "0 0 0 0 0 1 255\n1 0 0 0 0 1 0\n0 1 0 0 0 1 9\n3 0 1 2\n7\n");
+  write(out / "ply", "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+                     "property double z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n" +
+                         std::string(72, '\0') + std::string("\x03\0\0\0\0\0\0\0\x01\0\0\0\x02", 13));
+  // The glTF fixture scene: two primitives, a texture, instancing, extras; quantized, sparse,
+  // strips and fans.
+  const test_io::SphereFixture fixture = test_io::make_sphere();
+  for (const auto variant : {test_io::Variant::Plain, test_io::Variant::Quantized, test_io::Variant::Sparse}) {
+    const std::string glb = test_io::sphere_scene_glb(fixture, variant);
+    write(out / "glb", glb);
+    write(out / "glb", io::decode(glb, io::Format::Glb)->encode({}));  // its Draco output
+    io::EncodeOptions gltf;
+    gltf.format = io::Format::Gltf;
+    gltf.draco = false;
+    write(out / "gltf", io::decode(glb, io::Format::Glb)->encode(gltf));
+  }
+  write(out / "glb", test_io::strip_and_fan_glb(3));
+  // Parameters.
+  for (const char* text :
+       {"{}", R"({"mode":"manual"})", R"({"n_normal":30,"n_vertex":20,"output":{"position_bits":14}})",
+        R"({"mode":"manual","alpha":0.2,"sigma_theta":40,"n_aniso":6,"sigma_gamma":30,"n_normal":50,"n_vertex":40,"region_mode":"auto","output":{"format":"glb","draco":true,"position_bits":14,"normal_bits":10}})",
+        R"({"region_mode":"off","output":{"format":"ply","draco":false,"compression_level":3}})"})
+    write(out / "params", text);
+  return 0;
+}
