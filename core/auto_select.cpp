@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 
 #include "core/auto_params.h"
 #include "core/errors.h"
@@ -15,6 +16,10 @@
 #include "core/tune.h"
 
 namespace mdn {
+
+namespace {
+constexpr double kCleanNoiseEdges = 0.02;  // estimated noise below this many mean edge lengths: clean
+}  // namespace
 
 struct RecorruptedScorer::Impl {
   const SurfaceSample& sample;
@@ -117,13 +122,36 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
   sel.scored_faces = std::count(sample.scored.begin(), sample.scored.end(), 1);
   sel.noise = estimate_noise(sample.P, sample.F, sample.topo, sample.scored_vertices, &executor);
   sel.candidates = auto_candidates(measures, requested);
-  RecorruptedScorer scorer(sample, options.sigma > 0 ? options.sigma : sel.noise.sigma, options, executor, progress);
-  for (std::size_t k = 0; k < sel.candidates.size(); ++k) {
-    checkpoint(progress, Stage::SelectParameters, static_cast<double>(k) / static_cast<double>(sel.candidates.size()));
-    sel.candidates[k].score = scorer.score(sel.candidates[k].params, &sel.candidates[k].residual);
-    ++sel.evaluations;
-    if (sel.candidates[k].score < sel.candidates[static_cast<std::size_t>(sel.chosen)].score) sel.chosen = static_cast<int>(k);
+  const auto score_all = [&](RecorruptedScorer& scorer) {
+    sel.chosen = 0;
+    for (std::size_t k = 0; k < sel.candidates.size(); ++k) {
+      checkpoint(progress, Stage::SelectParameters, static_cast<double>(k) / static_cast<double>(sel.candidates.size()));
+      sel.candidates[k].score = scorer.score(sel.candidates[k].params, &sel.candidates[k].residual);
+      ++sel.evaluations;
+      if (sel.candidates[k].score < sel.candidates[static_cast<std::size_t>(sel.chosen)].score) sel.chosen = static_cast<int>(k);
+    }
+  };
+  // Decision 20: below 2% of an edge, noise tilts a face by ~1 degree at most (no more than the
+  // flattest shape detail): such a surface is taken as clean and left alone, without scoring.
+  if (options.sigma <= 0 && sel.noise.sigma_edges < kCleanNoiseEdges) {
+    sel.select_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return sel;  // chosen = 0, "identity", unscored
   }
+  auto scoring = std::make_unique<RecorruptedScorer>(sample, options.sigma > 0 ? options.sigma : sel.noise.sigma, options,
+                                                    executor, progress);
+  score_all(*scoring);
+  // Decision 20: the winner's residual on y1, less the recorruption's share, is the noise it
+  // found. Far less than the estimate means the estimate read shape as noise (a clean or nearly
+  // clean surface with many features): score again at the noise the winner found.
+  const double found = sel.candidates[static_cast<std::size_t>(sel.chosen)].residual;
+  if (options.sigma <= 0 && found < 0.5 * sel.noise.sigma) {
+    sel.noise.sigma = found;
+    sel.noise.sigma_edges = sel.noise.edge_length > 0 ? found / sel.noise.edge_length : 0;
+    scoring = std::make_unique<RecorruptedScorer>(sample, std::max(found, 1e-12 * sel.noise.edge_length), options,
+                                                  executor, progress);
+    score_all(*scoring);
+  }
+  RecorruptedScorer& scorer = *scoring;
   if (requested.mode == ParamMode::Search) {
     // Decision 22: the ground-truth search's coordinate descent (core/tune.h), started from the
     // pick and driven by the recorrupted score of the same draws.

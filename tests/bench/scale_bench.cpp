@@ -10,7 +10,9 @@
 //                   default fandisk:0,bunny00:0,bunny00:2,bunny00:3 (13k, 75k, 1.2M, 4.8M faces)
 //   --params LIST   paper (DenoiseParams{}, Table 1's Fandisk row) and/or cad (the heavy CAD
 //                   prototype: alpha 0.06, sigma_theta 70, n_aniso 2, sigma_gamma 60,
-//                   n_normal 100, n_vertex 80); default paper,cad
+//                   n_normal 100, n_vertex 80); default paper,cad. "auto" (ParamMode::Auto) also
+//                   prints how much of the run choosing the parameters took (its per-iteration
+//                   columns divide by the default iteration counts, not the chosen ones)
 //   --threads LIST  default 1,2
 //   --order LIST    RunOptions::order: auto (the default), input, curve and/or bfs (decision 16)
 //   --runs N        runs per configuration, round-robin over the configurations of a mesh;
@@ -100,7 +102,7 @@ Options parse(int argc, char** argv) {
     } else if (a == "--params") {
       o.params = split(value());
       for (const std::string& p : o.params)
-        if (p != "paper" && p != "cad") usage(argv[0], 2);
+        if (p != "paper" && p != "cad" && p != "auto") usage(argv[0], 2);
     } else if (a == "--threads") {
       o.threads.clear();
       for (const std::string& t : split(value())) o.threads.push_back(std::max(1, std::stoi(t)));
@@ -127,6 +129,7 @@ Options parse(int argc, char** argv) {
 // "paper": DenoiseParams{} (Table 1's Fandisk row: 0.1, 30, 2, 30, 20, 10); "cad": the heavy
 // CAD prototype. Manual either way.
 DenoiseParams params_named(const std::string& name) {
+  if (name == "auto") return {.mode = ParamMode::Auto};  // the default of the CLI and the service
   if (name == "cad")
     return {.mode = ParamMode::Manual, .alpha = 0.06, .sigma_theta = 70, .n_aniso = 2, .sigma_gamma = 60,
             .n_normal = 100, .n_vertex = 80};
@@ -330,6 +333,12 @@ int main(int argc, char** argv) {
                     med([](const RunFigures& r) { return r.cpu_vertex_s; }) * per_vertex, peak, peak / (nf / 1e6),
                     msae(out, *truth) * 1e2, med([](const RunFigures& r) { return r.rss_before_mib; }),
                     c.runs.front().peak_reset ? "" : " (peak not reset)");
+        if (c.params.mode == ParamMode::Auto) {
+          const double select = med([](const RunFigures& r) { return r.t.measure_ms; });
+          const double total = med([](const RunFigures& r) { return r.t.total_ms; });
+          std::printf("%-11s %8s   auto: measuring and choosing %.0f ms of %.0f ms: %.2f x one run of the choice\n", "", "",
+                      select, total, total / std::max(1.0, total - select));
+        }
       }
       if (o.cg)
         for (const std::string& p : o.params) cg_section(*noisy, params_named(p), configs.back().options);
