@@ -1,7 +1,6 @@
 #include "core/auto_select.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <memory>
 
@@ -115,7 +114,6 @@ std::vector<ScoredCandidate> auto_candidates(const InputMeasures& measures, cons
 Selection select_parameters(const Vertices& P, const Triangles& F, const Topology& topo, const DenoiseParams& requested,
                             const InputMeasures& measures, Executor& executor, ProgressObserver* progress,
                             const SelectionOptions& options) {
-  const auto t0 = std::chrono::steady_clock::now();
   Selection sel;
   const SurfaceSample sample = sample_surface(P, F, topo, options.max_faces);
   sel.sample_faces = sample.F.rows();
@@ -134,7 +132,6 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
   // Decision 20: below 2% of an edge, noise tilts a face by ~1 degree at most (no more than the
   // flattest shape detail): such a surface is taken as clean and left alone, without scoring.
   if (options.sigma <= 0 && sel.noise.sigma_edges < kCleanNoiseEdges) {
-    sel.select_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return sel;  // chosen = 0, "identity", unscored
   }
   auto scoring = std::make_unique<RecorruptedScorer>(sample, options.sigma > 0 ? options.sigma : sel.noise.sigma, options,
@@ -177,7 +174,6 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
     sel.candidates.push_back({"search", best, score});
     if (score < sel.candidates[static_cast<std::size_t>(sel.chosen)].score) sel.chosen = static_cast<int>(sel.candidates.size() - 1);
   }
-  sel.select_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return sel;
 }
 

@@ -26,7 +26,7 @@ struct SurfaceSample;
 
 struct SelectionOptions {
   std::int64_t max_faces = 8000;   // faces of the scoring sample (decision 21)
-  double a = 0.5;                  // recorruption strength
+  double a = 1.0;                  // recorruption strength (decision 20)
   int draws = 1;                   // recorrupted pairs averaged per score (decision 21)
   std::uint64_t seed = 1;          // of the recorruption draws
   double sigma = 0;                // > 0: the noise level to use (positions' units) instead of the estimate
@@ -46,8 +46,7 @@ struct Selection {
   std::int64_t scored_faces = 0;        // faces the score read
   std::vector<ScoredCandidate> candidates;
   int chosen = 0;                       // index into candidates
-  int evaluations = 0;                  // parameter sets scored (Search: the descent's)
-  double select_ms = 0;
+  int evaluations = 0;                  // parameter sets scored (Search: with the descent's); 0: taken as clean
 };
 
 // The recorrupted score of parameter sets on a sample: owns the draws (y1, and y2's face

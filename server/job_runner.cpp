@@ -98,8 +98,7 @@ nlohmann::json report_to_json(const DenoiseReport& report) {
                       {"scored_faces", sel.scored_faces},
                       {"candidates", std::move(candidates)},
                       {"chosen", sel.candidates[static_cast<std::size_t>(sel.chosen)].name},
-                      {"evaluations", sel.evaluations},
-                      {"select_ms", sel.select_ms}};
+                      {"evaluations", sel.evaluations}};
   }
   return j;
 }

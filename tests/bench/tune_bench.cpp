@@ -423,9 +423,9 @@ int select_command(const fs::path& data, int jobs, const std::string& which, con
   std::vector<Case> cases = build_cases(data, which, only);
   std::erase_if(cases, [](const Case& c) { return c.config == "clean"; });
   // Variants of the selection: noise level (estimated x factor, or the truth), draws, recorruption.
-  struct Variant { const char* name; std::int64_t faces; bool oracle; int draws; bool isotropic; };
-  const Variant variants[] = {{"1 draw 8k", 8000, false, 1, true}, {"1 draw 4k", 4000, false, 1, true},
-                              {"2 draws 4k", 4000, false, 2, true}, {"1 draw 2k", 2000, false, 1, true}};
+  struct Variant { const char* name; std::int64_t faces; bool oracle; int draws; bool isotropic; double a; };
+  const Variant variants[] = {{"a 0.5", 8000, false, 1, true, 0.5}, {"a 1", 8000, false, 1, true, 1.0},
+                              {"a 1, 2 draws", 8000, false, 2, true, 1.0}, {"a 0.75", 8000, false, 1, true, 0.75}};
   constexpr int kVariants = 4;
   const char* names[kVariants] = {variants[0].name, variants[1].name, variants[2].name, variants[3].name};
   struct Out { double truth, est, refined; std::vector<double> msae; int pick[kVariants]; double ms, one_ms; std::vector<std::string> names; };
@@ -457,6 +457,7 @@ int select_command(const fs::path& data, int jobs, const std::string& which, con
       vo.draws = variants[v].draws;
       vo.isotropic = variants[v].isotropic;
       vo.max_faces = variants[v].faces;
+      vo.a = variants[v].a;
       vo.sigma = variants[v].oracle ? sigma_true : 0;
       o.pick[v] = (v == 0) ? sel.chosen : select_parameters(P, c.noisy.F, topo, req, m, ex, nullptr, vo).chosen;
     }

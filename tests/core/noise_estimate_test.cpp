@@ -27,11 +27,11 @@ TEST(EstimateNoise, TracksGaussianNoiseOnSmoothAndCreasedShapes) {
     for (const double sigma : {0.1, 0.3, 0.6, 1.0}) {
       if (sigma < from) continue;
       // At 1.0 edge lengths the surface folds over itself and the fits read high (decision 19).
-      const double tolerance = sigma < 1 ? 0.2 : 0.4;
+      const double tolerance = sigma < 1 ? 0.25 : 0.4;
       SCOPED_TRACE(std::string(name) + " sigma " + std::to_string(sigma));
       const NoiseEstimate e = estimate(test::with_noise(clean, sigma));
       EXPECT_NEAR(e.sigma_edges / sigma, 1.0, tolerance);
-      EXPECT_NEAR(e.gaussian_sigma / e.edge_length / sigma, 1.0, tolerance);
+      EXPECT_NEAR(e.gaussian_sigma / e.edge_length / sigma, 1.0, tolerance);  // the uncorrected core
     }
   }
 }
