@@ -229,6 +229,21 @@ double true_sigma_edges(const Case& c) {
 
 double diagonal(const TriMesh& m) { return (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm(); }
 
+// A case in the noisy input's unit box (the frame denoise() works in): noisy and clean
+// positions, the topology and the clean mean edge length there.
+struct Framed {
+  Vertices P, X;
+  Topology topo;
+  double edge = 0;
+};
+Framed framed(const Case& c) {
+  const UnitBox box = UnitBox::of(c.noisy.V);
+  Framed f{box.apply(c.noisy.V), box.apply(c.truth.V), {}, 0};
+  f.topo = Topology::build(c.noisy.F, static_cast<std::int32_t>(f.P.rows()));
+  f.edge = f.topo.mean_edge_length(f.X);
+  return f;
+}
+
 using bench::median;
 
 int report(const fs::path& data, int jobs, const std::string& which, const fs::path& rows_path, bool with_search) {
@@ -380,10 +395,10 @@ int noise_command(const fs::path& data, int jobs, const std::string& which) {
   std::vector<Out> out(cases.size());
   run_parallel(cases.size(), jobs, [&](std::size_t i) {
     const Case& c = cases[i];
-    const UnitBox box = UnitBox::of(c.noisy.V);
-    const Vertices P = box.apply(c.noisy.V), X = box.apply(c.truth.V);
-    const Topology topo = Topology::build(c.noisy.F, static_cast<std::int32_t>(P.rows()));
-    const double lc = topo.mean_edge_length(X);
+    const Framed fr = framed(c);
+    const Vertices& P = fr.P;
+    const Topology& topo = fr.topo;
+    const double lc = fr.edge;
     Out& o = out[i];
     o.truth = true_sigma_edges(c);
     o.l_noisy = topo.mean_edge_length(P) / lc;
@@ -432,11 +447,11 @@ int select_command(const fs::path& data, int jobs, const std::string& which, con
   std::vector<Out> out(cases.size());
   run_parallel(cases.size(), jobs, [&](std::size_t i) {
     const Case& c = cases[i];
-    const UnitBox box = UnitBox::of(c.noisy.V);
-    const Vertices P = box.apply(c.noisy.V), X = box.apply(c.truth.V);
-    const Topology topo = Topology::build(c.noisy.F, static_cast<std::int32_t>(P.rows()));
+    const Framed fr = framed(c);
+    const Vertices& P = fr.P;
+    const Topology& topo = fr.topo;
+    const double lc = fr.edge;
     Out& o = out[i];
-    const double lc = topo.mean_edge_length(X);
     o.truth = true_sigma_edges(c);
     const double sigma_true = o.truth * lc;
     DenoiseParams req;
