@@ -29,11 +29,10 @@ struct RecorruptedScorer::Impl {
   double recorruption = 0;       // variance of a z along the normal
 };
 
-RecorruptedScorer::RecorruptedScorer(const SurfaceSample& sample, double sigma, const SelectionOptions& options,
+RecorruptedScorer::RecorruptedScorer(const SurfaceSample& sample, const Vertices& N, double sigma, const SelectionOptions& options,
                                      Executor& executor, ProgressObserver* progress)
     : impl_(new Impl{sample, executor, progress, {}, {}, {}, options.a * options.a * sigma * sigma}) {
   // z per coordinate (decision 20), or along the normals of a smoothed copy of the sample.
-  const Vertices N = vertex_normals(umbrella_smooth(sample.P, sample.topo, 4, 0.5, &executor), sample.F);
   impl_->normals = N;
   const auto n = static_cast<std::size_t>(sample.P.rows());
   for (int d = 0; d < options.draws; ++d) {
@@ -118,7 +117,8 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
   const SurfaceSample sample = sample_surface(P, F, topo, options.max_faces);
   sel.sample_faces = sample.F.rows();
   sel.scored_faces = std::count(sample.scored.begin(), sample.scored.end(), 1);
-  sel.noise = estimate_noise(sample.P, sample.F, sample.topo, sample.scored_vertices, &executor);
+  const Vertices normals = smoothed_normals(sample.P, sample.F, sample.topo, &executor);
+  sel.noise = estimate_noise(sample.P, sample.F, sample.topo, normals, sample.scored_vertices, &executor);
   sel.candidates = auto_candidates(measures, requested);
   const auto score_all = [&](RecorruptedScorer& scorer) {
     sel.chosen = 0;
@@ -134,7 +134,7 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
   if (options.sigma <= 0 && sel.noise.sigma_edges < kCleanNoiseEdges) {
     return sel;  // chosen = 0, "identity", unscored
   }
-  auto scoring = std::make_unique<RecorruptedScorer>(sample, options.sigma > 0 ? options.sigma : sel.noise.sigma, options,
+  auto scoring = std::make_unique<RecorruptedScorer>(sample, normals, options.sigma > 0 ? options.sigma : sel.noise.sigma, options,
                                                     executor, progress);
   score_all(*scoring);
   // Decision 20: the winner's residual on y1, less the recorruption's share, is the noise it
@@ -144,7 +144,7 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
   if (options.sigma <= 0 && found < 0.5 * sel.noise.sigma) {
     sel.noise.sigma = found;
     sel.noise.sigma_edges = sel.noise.edge_length > 0 ? found / sel.noise.edge_length : 0;
-    scoring = std::make_unique<RecorruptedScorer>(sample, std::max(found, 1e-12 * sel.noise.edge_length), options,
+    scoring = std::make_unique<RecorruptedScorer>(sample, normals, std::max(found, 1e-12 * sel.noise.edge_length), options,
                                                   executor, progress);
     score_all(*scoring);
   }

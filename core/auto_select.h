@@ -53,7 +53,9 @@ struct Selection {
 // normals) and runs the method on each y1. Deterministic for a seed, any thread count.
 class RecorruptedScorer {
  public:
-  RecorruptedScorer(const SurfaceSample& sample, double sigma, const SelectionOptions& options, Executor& executor,
+  // normals: smoothed_normals of the sample (core/noise_estimate.h), the recorruption's direction.
+  RecorruptedScorer(const SurfaceSample& sample, const Vertices& normals, double sigma, const SelectionOptions& options,
+                    Executor& executor,
                     ProgressObserver* progress = nullptr);
   ~RecorruptedScorer();
   RecorruptedScorer(const RecorruptedScorer&) = delete;

@@ -32,13 +32,14 @@ Vertices umbrella_smooth(const Vertices& P, const Topology& topo, int steps, dou
   return current;
 }
 
-std::vector<double> quadric_residuals(const Vertices& P, const Triangles& F, const Topology& topo,
+Vertices smoothed_normals(const Vertices& P, const Triangles& F, const Topology& topo, Executor* executor) {
+  return vertex_normals(umbrella_smooth(P, topo, 4, 0.5, executor), F);
+}
+
+std::vector<double> quadric_residuals(const Vertices& P, const Triangles&, const Topology& topo, const Vertices& N,
                                       const std::vector<std::int32_t>& vertices, Executor* executor) {
   Executor serial(1);
   Executor& ex = executor ? *executor : serial;
-  // The frame's normal comes from a smoothed copy: the noisy vertex normal is correlated with
-  // the very noise being measured (it tilts towards it) and reads low at high noise.
-  const Vertices N = vertex_normals(umbrella_smooth(P, topo, 4, 0.5, &ex), F);
   const double l = std::max(topo.mean_edge_length(P), 1e-300);
   const std::int64_t n = vertices.empty() ? P.rows() : static_cast<std::int64_t>(vertices.size());
   std::vector<double> out(static_cast<std::size_t>(n), std::nan(""));
@@ -96,10 +97,10 @@ std::vector<double> quadric_residuals(const Vertices& P, const Triangles& F, con
   return out;
 }
 
-NoiseEstimate estimate_noise(const Vertices& P, const Triangles& F, const Topology& topo,
+NoiseEstimate estimate_noise(const Vertices& P, const Triangles& F, const Topology& topo, const Vertices& normals,
                              const std::vector<std::int32_t>& vertices, Executor* executor) {
   const auto t0 = std::chrono::steady_clock::now();
-  std::vector<double> s = quadric_residuals(P, F, topo, vertices, executor);
+  std::vector<double> s = quadric_residuals(P, F, topo, normals, vertices, executor);
   std::erase_if(s, [](double v) { return std::isnan(v); });
   NoiseEstimate est;
   const double noisy_edge = topo.mean_edge_length(P);

@@ -404,7 +404,7 @@ int noise_command(const fs::path& data, int jobs, const std::string& which) {
     o.l_noisy = topo.mean_edge_length(P) / lc;
     o.l_smooth = topo.mean_edge_length(umbrella_smooth(P, topo, 4, 0.5)) / lc;
     const auto t0 = std::chrono::steady_clock::now();
-    std::vector<double> s = quadric_residuals(P, c.noisy.F, topo);
+    std::vector<double> s = quadric_residuals(P, c.noisy.F, topo, smoothed_normals(P, c.noisy.F, topo));
     o.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     std::erase_if(s, [](double v) { return std::isnan(v); });
     std::sort(s.begin(), s.end());

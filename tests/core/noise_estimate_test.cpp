@@ -13,7 +13,8 @@ namespace {
 
 NoiseEstimate estimate(const TriMesh& m) {
   const Vertices P = UnitBox::of(m.V).apply(m.V);
-  return estimate_noise(P, m.F, Topology::build(m.F, static_cast<std::int32_t>(P.rows())));
+  const Topology topo = Topology::build(m.F, static_cast<std::int32_t>(P.rows()));
+  return estimate_noise(P, m.F, topo, smoothed_normals(P, m.F, topo));
 }
 
 TEST(EstimateNoise, ACleanSurfaceHasNoNoise) {
