@@ -17,7 +17,9 @@
 namespace mdn {
 
 namespace {
-constexpr double kCleanNoiseEdges = 0.02;  // estimated noise below this many mean edge lengths: clean
+// An input is clean when one quadric pass reads less noise than this many mean edge lengths
+// (it reads 1.19x the noise at the median over the training cases: 0.02 of noise).
+constexpr double kCleanOnePassEdges = 0.024;
 }  // namespace
 
 struct RecorruptedScorer::Impl {
@@ -69,9 +71,10 @@ double RecorruptedScorer::score_positions(int draw, const Vertices& output) cons
   return count ? sum / static_cast<double>(count) : 0;
 }
 
-double RecorruptedScorer::score(const DenoiseParams& params, double* residual) {
+double RecorruptedScorer::score(const DenoiseParams& params, double* residual, int first, int last) {
+  if (last < 0) last = draws();
   double total = 0, squares = 0;
-  for (int d = 0; d < draws(); ++d) {
+  for (int d = first; d < last; ++d) {
     checkpoint(impl_->progress, Stage::SelectParameters, 0);  // cancellation between runs
     DenoiseReport scratch;
     const Vertices out = run_method(input(d), impl_->sample.F, impl_->sample.topo, params, impl_->executor, nullptr, scratch);
@@ -79,11 +82,12 @@ double RecorruptedScorer::score(const DenoiseParams& params, double* residual) {
     for (const std::int32_t v : impl_->sample.scored_vertices)
       squares += std::pow((input(d).row(v) - out.row(v)).dot(impl_->normals.row(v)), 2);
   }
+  const int used = std::max(1, last - first);
   if (residual) {
-    const double n = static_cast<double>(std::max<std::size_t>(1, impl_->sample.scored_vertices.size())) * std::max(1, draws());
+    const double n = static_cast<double>(std::max<std::size_t>(1, impl_->sample.scored_vertices.size())) * used;
     *residual = std::sqrt(std::max(0.0, squares / n - impl_->recorruption));
   }
-  return total / std::max(1, draws());
+  return total / used;
 }
 
 std::vector<ScoredCandidate> auto_candidates(const InputMeasures& measures, const DenoiseParams& requested) {
@@ -121,21 +125,40 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
   sel.noise = estimate_noise(sample.P, sample.F, sample.topo, normals, sample.scored_vertices, &executor);
   sel.candidates = auto_candidates(measures, requested);
   const auto score_all = [&](RecorruptedScorer& scorer) {
-    sel.chosen = 0;
+    // Decision 21: every candidate on the first draw; the best `refine` of them on the others.
+    const int draws = scorer.draws();
+    const bool staged = options.refine > 0 && draws > 1;
+    std::vector<std::size_t> order;
     for (std::size_t k = 0; k < sel.candidates.size(); ++k) {
       checkpoint(progress, Stage::SelectParameters, static_cast<double>(k) / static_cast<double>(sel.candidates.size()));
-      sel.candidates[k].score = scorer.score(sel.candidates[k].params, &sel.candidates[k].residual);
+      ScoredCandidate& c = sel.candidates[k];
+      c.draws = staged ? 1 : draws;
+      c.score = scorer.score(c.params, &c.residual, 0, c.draws);
       ++sel.evaluations;
-      if (sel.candidates[k].score < sel.candidates[static_cast<std::size_t>(sel.chosen)].score) sel.chosen = static_cast<int>(k);
+      order.push_back(k);
     }
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return sel.candidates[x].score < sel.candidates[y].score; });
+    if (staged) {
+      order.resize(std::min(order.size(), static_cast<std::size_t>(options.refine)));
+      for (const std::size_t k : order) {
+        ScoredCandidate& c = sel.candidates[k];
+        double residual = 0;
+        const double rest = scorer.score(c.params, &residual, 1, draws);
+        c.score = (c.score + rest * (draws - 1)) / draws;
+        c.residual = std::sqrt((c.residual * c.residual + residual * residual * (draws - 1)) / draws);
+        c.draws = draws;
+      }
+      std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return sel.candidates[x].score < sel.candidates[y].score; });
+    }
+    sel.chosen = static_cast<int>(order.front());
   };
   // Decision 20: below 2% of an edge, noise tilts a face by ~1 degree at most (no more than the
   // flattest shape detail): such a surface is taken as clean and left alone, without scoring.
-  if (options.sigma <= 0 && sel.noise.sigma_edges < kCleanNoiseEdges) {
+  if (options.sigma <= 0 && sel.noise.one_pass_edges < kCleanOnePassEdges) {
     return sel;  // chosen = 0, "identity", unscored
   }
-  auto scoring = std::make_unique<RecorruptedScorer>(sample, normals, options.sigma > 0 ? options.sigma : sel.noise.sigma, options,
-                                                    executor, progress);
+  auto scoring = std::make_unique<RecorruptedScorer>(sample, normals, options.sigma > 0 ? options.sigma : options.scale * sel.noise.sigma,
+                                                    options, executor, progress);
   score_all(*scoring);
   // Decision 20: the winner's residual on y1, less the recorruption's share, is the noise it
   // found. Far less than the estimate means the estimate read shape as noise (a clean or nearly
@@ -144,8 +167,8 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
   if (options.sigma <= 0 && found < 0.5 * sel.noise.sigma) {
     sel.noise.sigma = found;
     sel.noise.sigma_edges = sel.noise.edge_length > 0 ? found / sel.noise.edge_length : 0;
-    scoring = std::make_unique<RecorruptedScorer>(sample, normals, std::max(found, 1e-12 * sel.noise.edge_length), options,
-                                                  executor, progress);
+    scoring = std::make_unique<RecorruptedScorer>(sample, normals, std::max(options.scale * found, 1e-12 * sel.noise.edge_length),
+                                                  options, executor, progress);
     score_all(*scoring);
   }
   RecorruptedScorer& scorer = *scoring;
@@ -171,7 +194,7 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
     best.pinned = requested.pinned;
     sel.evaluations += d.evaluations;
     const double score = scorer.score(best);
-    sel.candidates.push_back({"search", best, score});
+    sel.candidates.push_back({"search", best, score, scorer.draws()});
     if (score < sel.candidates[static_cast<std::size_t>(sel.chosen)].score) sel.chosen = static_cast<int>(sel.candidates.size() - 1);
   }
   return sel;

@@ -27,7 +27,9 @@ struct SurfaceSample;
 struct SelectionOptions {
   std::int64_t max_faces = 8000;   // faces of the scoring sample (decision 21)
   double a = 1.0;                  // recorruption strength (decision 20)
-  int draws = 1;                   // recorrupted pairs averaged per score (decision 21)
+  int draws = 2;                   // recorrupted pairs averaged per score (decision 21)
+  int refine = 3;                  // > 0: only this many candidates, the best after one draw, get the other draws
+  double scale = 0.84;             // the recorruption's sigma over the estimated noise (decision 20)
   std::uint64_t seed = 1;          // of the recorruption draws
   double sigma = 0;                // > 0: the noise level to use (positions' units) instead of the estimate
   bool isotropic = true;           // recorrupt every coordinate (true) or along the normal only (false); decision 20
@@ -36,7 +38,8 @@ struct SelectionOptions {
 struct ScoredCandidate {
   std::string name;       // "identity", "paper", "prototype 3", "search"
   DenoiseParams params;   // mode Manual; what was scored
-  double score = 0;       // recorrupted normal error, mean over draws (lower is better)
+  double score = 0;       // recorrupted normal error, mean over `draws` draws (lower is better)
+  int draws = 0;          // draws the score averages: the pick is among those with the most
   double residual = 0;    // RMS of (y1 - f(y1)) along the normal, less the recorruption's share: the noise f removed
 };
 
@@ -61,9 +64,10 @@ class RecorruptedScorer {
   RecorruptedScorer(const RecorruptedScorer&) = delete;
   RecorruptedScorer& operator=(const RecorruptedScorer&) = delete;
 
-  // Mean over draws of the mean over scored faces of 1 - n_f(f(y1)) . n_f(y2); `residual`, if
-  // given, receives sqrt(max(0, mean over draws and scored vertices of ((y1 - f(y1)) . n)^2 - (a sigma)^2)).
-  double score(const DenoiseParams& params, double* residual = nullptr);
+  // Mean over draws [first, last) (last < 0: all) of the mean over scored faces of
+  // 1 - n_f(f(y1)) . n_f(y2); `residual`, if given, receives
+  // sqrt(max(0, mean over those draws and scored vertices of ((y1 - f(y1)) . n)^2 - (a sigma)^2)).
+  double score(const DenoiseParams& params, double* residual = nullptr, int first = 0, int last = -1);
   // The draws' inputs and the normals they are compared with (for core/tune.cpp's search).
   int draws() const;
   const Vertices& input(int draw) const;

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
+#include <optional>
 
 #include "core/parallel.h"
 
@@ -36,91 +37,224 @@ Vertices smoothed_normals(const Vertices& P, const Triangles& F, const Topology&
   return vertex_normals(umbrella_smooth(P, topo, 4, 0.5, executor), F);
 }
 
-std::vector<double> quadric_residuals(const Vertices& P, const Triangles&, const Topology& topo, const Vertices& N,
-                                      const std::vector<std::int32_t>& vertices, Executor* executor) {
+namespace {
+
+// Vertex i's leave-one-out fit: the ring, the prediction weights w (prediction = w . h over the
+// ring's heights in i's frame) and the error r = 0 - w . h; empty where no fit was possible.
+struct VertexFit {
+  std::vector<std::int32_t> ring;
+  std::vector<double> w;
+  double r = 0;
+};
+
+void fit_vertex(const Vertices& P, const Topology& topo, const Vertices& N, LocalFit fit, double l, std::int32_t i, VertexFit& out) {
+  out.ring.clear();
+  out.w.clear();
+  const Eigen::RowVector3d nrm = N.row(i);
+  if (nrm.squaredNorm() == 0) return;
+  // The k-ring of i, breadth first, without i; one ring more where a plane lacks its 5 points.
+  std::vector<std::int32_t>& ring = out.ring;
+  ring.assign(1, i);
+  for (std::size_t begin_ring = 0, r = 0; r < static_cast<std::size_t>(fit.rings) || (r == static_cast<std::size_t>(fit.rings) && ring.size() < 6); ++r) {
+    const std::size_t end_ring = ring.size();
+    for (std::size_t q = begin_ring; q < end_ring; ++q) {
+      const auto j = static_cast<std::size_t>(ring[q]);
+      for (auto a = topo.vv_offsets[j]; a < topo.vv_offsets[j + 1]; ++a) {
+        const std::int32_t v = topo.vv_vertices[static_cast<std::size_t>(a)];
+        if (std::find(ring.begin(), ring.end(), v) == ring.end()) ring.push_back(v);
+      }
+    }
+    begin_ring = end_ring;
+  }
+  ring.erase(ring.begin());
+  const int m = static_cast<int>(ring.size());
+  // The fit's degree, lowered until it has twice as many points as terms (a plane: 5 points).
+  int terms = 0;
+  for (int degree = fit.degree; degree >= 1 && terms == 0; --degree)
+    if (const int t = (degree + 1) * (degree + 2) / 2; m >= (t == 3 ? 5 : 2 * t)) terms = t;
+  if (terms == 0) return ring.clear();
+  // Tangent frame at vertex i.
+  const Eigen::Vector3d z = nrm.transpose();
+  const Eigen::Vector3d x = (std::abs(z.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(z).normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  const Eigen::RowVector3d o = P.row(i);
+  Eigen::MatrixXd A(m, terms);
+  Eigen::VectorXd h(m);
+  for (int r = 0; r < m; ++r) {
+    const Eigen::Vector3d d = (P.row(ring[static_cast<std::size_t>(r)]) - o).transpose() / l;
+    const double u = d.dot(x), v = d.dot(y);
+    h[r] = d.dot(z);
+    A(r, 0) = 1;
+    A(r, 1) = u;
+    A(r, 2) = v;
+    if (terms >= 6) {
+      A(r, 3) = u * u;
+      A(r, 4) = u * v;
+      A(r, 5) = v * v;
+    }
+    if (terms >= 10) {
+      A(r, 6) = u * u * u;
+      A(r, 7) = u * u * v;
+      A(r, 8) = u * v * v;
+      A(r, 9) = v * v * v;
+    }
+  }
+  // The prediction at i (u = v = 0) is the constant term: w = first row of (A^T A)^-1 A^T.
+  const Eigen::MatrixXd AtA = A.transpose() * A;
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(AtA);
+  if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-10)) return ring.clear();
+  const Eigen::VectorXd e0 = Eigen::VectorXd::Unit(terms, 0);
+  const Eigen::VectorXd wv = A * ldlt.solve(e0);
+  out.w.assign(wv.data(), wv.data() + m);
+  out.r = (0 - wv.dot(h)) * l;  // vertex i sits at height 0 in its own frame
+}
+
+}  // namespace
+
+std::vector<double> local_fit_residuals(const Vertices& P, const Topology& topo, const Vertices& N, LocalFit fit,
+                                        const std::vector<std::int32_t>& vertices, Executor* executor,
+                                        std::vector<double>* first_pass) {
   Executor serial(1);
   Executor& ex = executor ? *executor : serial;
   const double l = std::max(topo.mean_edge_length(P), 1e-300);
   const std::int64_t n = vertices.empty() ? P.rows() : static_cast<std::int64_t>(vertices.size());
+  const auto vertex = [&](std::int64_t k) {
+    return vertices.empty() ? static_cast<std::int32_t>(k) : vertices[static_cast<std::size_t>(k)];
+  };
   std::vector<double> out(static_cast<std::size_t>(n), std::nan(""));
-  ex.parallel_for(n, [&](std::int64_t begin, std::int64_t end) {
-    std::vector<std::int32_t> ring;
-    std::vector<std::int32_t> mark;  // small linear-scan dedupe: 2-rings hold ~20 vertices
-    for (std::int64_t k = begin; k < end; ++k) {
-      const std::int32_t i = vertices.empty() ? static_cast<std::int32_t>(k) : vertices[static_cast<std::size_t>(k)];
-      const Eigen::RowVector3d nrm = N.row(i);
-      if (nrm.squaredNorm() == 0) continue;
-      ring.clear();
-      const auto add = [&](std::int32_t v) {
-        if (v != i && std::find(ring.begin(), ring.end(), v) == ring.end()) ring.push_back(v);
-      };
-      for (auto a = topo.vv_offsets[static_cast<std::size_t>(i)]; a < topo.vv_offsets[static_cast<std::size_t>(i) + 1]; ++a) {
-        const std::int32_t j = topo.vv_vertices[static_cast<std::size_t>(a)];
-        add(j);
-        for (auto b = topo.vv_offsets[static_cast<std::size_t>(j)]; b < topo.vv_offsets[static_cast<std::size_t>(j) + 1]; ++b)
-          add(topo.vv_vertices[static_cast<std::size_t>(b)]);
+  if (fit.passes <= 1) {
+    ex.parallel_for(n, [&](std::int64_t begin, std::int64_t end) {
+      VertexFit f;
+      for (std::int64_t k = begin; k < end; ++k) {
+        fit_vertex(P, topo, N, fit, l, vertex(k), f);
+        double w2 = 0;
+        for (const double w : f.w) w2 += w * w;
+        if (!f.ring.empty()) out[static_cast<std::size_t>(k)] = f.r * f.r / (1 + w2);
       }
-      const int m = static_cast<int>(ring.size());
-      const int terms = m >= 12 ? 6 : (m >= 5 ? 3 : 0);  // quadric, else plane, else nothing
-      if (terms == 0) continue;
-      // Tangent frame at vertex i.
-      const Eigen::Vector3d z = nrm.transpose();
-      const Eigen::Vector3d x = (std::abs(z.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(z).normalized();
-      const Eigen::Vector3d y = z.cross(x);
-      const Eigen::RowVector3d o = P.row(i);
-      Eigen::MatrixXd A(m, terms);
-      Eigen::VectorXd h(m);
-      for (int r = 0; r < m; ++r) {
-        const Eigen::Vector3d d = (P.row(ring[static_cast<std::size_t>(r)]) - o).transpose() / l;
-        const double u = d.dot(x), v = d.dot(y);
-        h[r] = d.dot(z);
-        A(r, 0) = 1;
-        A(r, 1) = u;
-        A(r, 2) = v;
-        if (terms == 6) {
-          A(r, 3) = u * u;
-          A(r, 4) = u * v;
-          A(r, 5) = v * v;
+    });
+    return out;
+  }
+  // Passes > 1: the errors r_1 = (I - W) h of every vertex, then r_{p+1} = (I - W) r_p, and at
+  // the vertices asked for r_passes^2 over the squared norm of its row of (I - W)^passes (its
+  // variance under white noise). The shape's share of r_1 varies slowly over the surface and
+  // each pass removes most of it.
+  std::vector<VertexFit> fits(static_cast<std::size_t>(P.rows()));
+  ex.parallel_for(P.rows(), [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t v = begin; v < end; ++v) fit_vertex(P, topo, N, fit, l, static_cast<std::int32_t>(v), fits[static_cast<std::size_t>(v)]);
+  });
+  // W as compressed rows (a vertex without a fit has none and no defined error).
+  const double undefined = std::nan("");
+  std::vector<std::size_t> offsets(fits.size() + 1, 0);
+  for (std::size_t v = 0; v < fits.size(); ++v) offsets[v + 1] = offsets[v] + fits[v].ring.size();
+  std::vector<std::int32_t> columns(offsets.back());
+  std::vector<double> weights(offsets.back()), r(fits.size()), next(fits.size());
+  for (std::size_t v = 0; v < fits.size(); ++v) {
+    std::copy(fits[v].ring.begin(), fits[v].ring.end(), columns.begin() + static_cast<std::ptrdiff_t>(offsets[v]));
+    std::copy(fits[v].w.begin(), fits[v].w.end(), weights.begin() + static_cast<std::ptrdiff_t>(offsets[v]));
+    r[v] = fits[v].ring.empty() ? undefined : fits[v].r;
+  }
+  fits = {};
+  if (first_pass) {
+    first_pass->assign(static_cast<std::size_t>(n), undefined);
+    for (std::int64_t k = 0; k < n; ++k) {
+      const auto i = static_cast<std::size_t>(vertex(k));
+      double w2 = 0;
+      for (std::size_t a = offsets[i]; a < offsets[i + 1]; ++a) w2 += weights[a] * weights[a];
+      if (offsets[i] < offsets[i + 1]) (*first_pass)[static_cast<std::size_t>(k)] = r[i] * r[i] / (1 + w2);
+    }
+  }
+  const auto apply = [&](std::size_t i, const std::vector<double>& x) {
+    if (offsets[i] == offsets[i + 1]) return undefined;
+    double y = x[i];
+    for (std::size_t a = offsets[i]; a < offsets[i + 1]; ++a) y -= weights[a] * x[static_cast<std::size_t>(columns[a])];
+    return y;  // NaN propagates from undefined neighbours
+  };
+  for (int pass = 2; pass < fit.passes; ++pass) {
+    ex.parallel_for(P.rows(), [&](std::int64_t begin, std::int64_t end) {
+      for (std::int64_t v = begin; v < end; ++v) next[static_cast<std::size_t>(v)] = apply(static_cast<std::size_t>(v), r);
+    });
+    r.swap(next);
+  }
+  ex.parallel_for(n, [&](std::int64_t begin, std::int64_t end) {
+    // A row of (I - W)^p: its vertices and a dense scratch of their coefficients.
+    std::vector<std::int32_t> row, previous;
+    std::vector<double> coefficient(static_cast<std::size_t>(P.rows()), 0.0);
+    std::vector<std::uint8_t> in_row(static_cast<std::size_t>(P.rows()), 0);
+    std::vector<double> previous_c;
+    for (std::int64_t k = begin; k < end; ++k) {
+      const auto i = static_cast<std::size_t>(vertex(k));
+      const double y = apply(i, r);
+      if (std::isnan(y)) continue;
+      row.assign(1, static_cast<std::int32_t>(i));
+      coefficient[i] = 1;
+      in_row[i] = 1;
+      for (int pass = 0; pass < fit.passes; ++pass) {  // row <- row (I - W)
+        previous = row;
+        previous_c.resize(previous.size());
+        for (std::size_t q = 0; q < previous.size(); ++q) previous_c[q] = coefficient[static_cast<std::size_t>(previous[q])];
+        for (std::size_t q = 0; q < previous.size(); ++q) {
+          const auto v = static_cast<std::size_t>(previous[q]);
+          const double c = previous_c[q];
+          for (std::size_t b = offsets[v]; b < offsets[v + 1]; ++b) {
+            const auto u = static_cast<std::size_t>(columns[b]);
+            if (!in_row[u]) {
+              in_row[u] = 1;
+              row.push_back(columns[b]);
+            }
+            coefficient[u] -= c * weights[b];
+          }
         }
       }
-      // The prediction at i (u = v = 0) is the constant term: w = first row of (A^T A)^-1 A^T.
-      const Eigen::MatrixXd AtA = A.transpose() * A;
-      const Eigen::LDLT<Eigen::MatrixXd> ldlt(AtA);
-      if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-10)) continue;
-      const Eigen::VectorXd e0 = Eigen::VectorXd::Unit(terms, 0);
-      const Eigen::VectorXd g = ldlt.solve(e0);
-      const Eigen::VectorXd w = A * g;  // prediction = w . h
-      const double err = 0 - w.dot(h);  // vertex i sits at height 0 in its own frame
-      out[static_cast<std::size_t>(k)] = err * err * l * l / (1 + w.squaredNorm());
+      double norm2 = 0;
+      for (const std::int32_t v : row) {
+        norm2 += coefficient[static_cast<std::size_t>(v)] * coefficient[static_cast<std::size_t>(v)];
+        coefficient[static_cast<std::size_t>(v)] = 0;
+        in_row[static_cast<std::size_t>(v)] = 0;
+      }
+      if (norm2 > 0) out[static_cast<std::size_t>(k)] = y * y / norm2;
     }
   });
   return out;
 }
 
-NoiseEstimate estimate_noise(const Vertices& P, const Triangles& F, const Topology& topo, const Vertices& normals,
+NoiseEstimate estimate_noise(const Vertices& P, const Triangles&, const Topology& topo, const Vertices& normals,
                              const std::vector<std::int32_t>& vertices, Executor* executor) {
   const auto t0 = std::chrono::steady_clock::now();
-  std::vector<double> s = quadric_residuals(P, F, topo, normals, vertices, executor);
-  std::erase_if(s, [](double v) { return std::isnan(v); });
   NoiseEstimate est;
-  const double noisy_edge = topo.mean_edge_length(P);
-  if (!s.empty()) {
+  // Decision 19: planes over the 1-ring applied three times, quadrics over the 2-ring twice;
+  // each reads the noise plus what is left of the shape, so the smaller is kept.
+  // The mean reads the RMS of any noise, impulses included, but also creases; the median only
+  // the Gaussian core. Impulses put the mean at most ~3.2x the median (measured), creases on a
+  // clean CAD surface at any multiple of a median of ~0: cap the mean at 4x (decision 19).
+  struct Reading { double sigma, core; };
+  const auto read = [](std::vector<double> s) -> std::optional<Reading> {
+    std::erase_if(s, [](double v) { return std::isnan(v); });
+    if (s.empty()) return std::nullopt;
     const auto mid = s.begin() + static_cast<std::ptrdiff_t>(s.size() / 2);
     std::nth_element(s.begin(), mid, s.end());
-    est.gaussian_sigma = std::sqrt(*mid / 0.45493642311957);  // median of chi^2_1
-    // The mean reads the RMS of any noise, impulses included, but also creases; the median only
-    // the Gaussian core. Impulses put the mean at most ~3.2x the median (measured), creases on a
-    // clean CAD surface at any multiple of a median of ~0: cap the mean at 4x (decision 19).
+    const double core = std::sqrt(*mid / 0.45493642311957);  // median of chi^2_1
     const double rms = std::sqrt(std::accumulate(s.begin(), s.end(), 0.0) / static_cast<double>(s.size()));
-    // 0.84: the median of estimate / truth over the training cases was 1.19 (decision 19).
-    est.sigma = 0.84 * std::min(rms, 4 * est.gaussian_sigma);
+    return Reading{std::min(rms, 4 * core), core};
+  };
+  std::optional<Reading> best, one_pass;
+  for (const LocalFit fit : {LocalFit{1, 1, 3}, LocalFit{2, 2, 2}}) {
+    std::vector<double> first;
+    const std::optional<Reading> r = read(local_fit_residuals(P, topo, normals, fit, vertices, executor, &first));
+    if (r && (!best || r->sigma < best->sigma)) best = r;
+    if (fit.rings == 2) one_pass = read(std::move(first));
   }
+  if (best) {
+    est.sigma = best->sigma;
+    est.gaussian_sigma = best->core;
+  }
+  const double noisy_edge = topo.mean_edge_length(P);
   // Noise lengthens edges: |e + d|^2 = |e|^2 + 2 e.d + |d|^2 with E|d|^2 = 2 sigma^2 for the
   // difference d of two normal displacements, so the clean length is about
   // sqrt(l^2 - 2 sigma^2) (decision 19; at most halved, for estimates beyond the model).
   const double r = noisy_edge > 0 ? est.sigma / noisy_edge : 0;
   est.edge_length = noisy_edge * std::sqrt(std::max(0.25, 1 - 2 * r * r));
   est.sigma_edges = est.edge_length > 0 ? est.sigma / est.edge_length : 0;
+  est.one_pass_edges = one_pass && est.edge_length > 0 ? one_pass->sigma / est.edge_length : 0;
   est.estimate_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return est;
 }

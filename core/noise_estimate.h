@@ -16,22 +16,33 @@ struct NoiseEstimate {
   double sigma_edges = 0;    // sigma / edge_length: the noise in mean edge lengths
   double gaussian_sigma = 0; // the same read off the median residual (the Gaussian core, blind to impulses)
   double edge_length = 0;    // mean edge length of the clean surface, estimated (noise lengthens edges)
+  double one_pass_edges = 0; // the statistic of one quadric pass, in edge lengths: ~0 on a clean CAD surface (decision 20)
   double estimate_ms = 0;
 };
 
-// Leave-one-out local quadric fits: vertex i's height over the tangent plane of a smoothed
-// normal is predicted from its 2-ring by a least-squares quadric; the prediction error e_i
-// has variance sigma^2 (1 + |w_i|^2) under white noise (w_i: the fit's linear weights), while
-// smooth curvature is fitted away. Features and impulses give large errors; see decision 19
-// for how the per-vertex errors are combined. `vertices`: where to estimate (all if empty).
-// `normals`: smoothed_normals(P, F, topo), passed in by callers that need them too.
+// Leave-one-out local fits (decision 19): vertex i's height over the tangent plane of a
+// smoothed normal is predicted from its ring by least squares, and the prediction error,
+// filtered again by the same operator, is normalised by its variance under white noise.
+// Planes over the 1-ring (three passes) and quadrics over the 2-ring (two); the smaller
+// reading is kept. Features
+// and impulses give large errors; see decision 19 for how they are combined. `vertices`: where
+// to estimate (all if empty). `normals`: smoothed_normals(P, F, topo), passed in by callers
+// that need them too.
 NoiseEstimate estimate_noise(const Vertices& P, const Triangles& F, const Topology& topo, const Vertices& normals,
                              const std::vector<std::int32_t>& vertices = {}, Executor* executor = nullptr);
 
-// Per-vertex normalised squared errors e_i^2 / (1 + |w_i|^2) (NaN where no fit was possible),
-// in the order of `vertices` (or of all vertices). Exposed for the benchmark of the estimate.
-std::vector<double> quadric_residuals(const Vertices& P, const Triangles& F, const Topology& topo, const Vertices& normals,
-                                      const std::vector<std::int32_t>& vertices = {}, Executor* executor = nullptr);
+// Per-vertex squared errors of one fit, (I - W)^passes h, over their variance under white
+// noise (NaN where no fit was possible), in the order of `vertices` (or of all vertices).
+// Exposed for the benchmark of the estimate and its tests.
+struct LocalFit {
+  int rings = 2;   // the neighbourhood: vertices within this many edges
+  int degree = 2;  // of the height polynomial (1 plane, 2 quadric, 3 cubic), lowered where the ring is small
+  int passes = 1;  // how many times the fit's residual operator is applied (shape error varies slowly and cancels)
+};
+// `first_pass`, if given and passes > 1, receives the one-pass values at the same vertices.
+std::vector<double> local_fit_residuals(const Vertices& P, const Topology& topo, const Vertices& normals, LocalFit fit = {},
+                                        const std::vector<std::int32_t>& vertices = {}, Executor* executor = nullptr,
+                                        std::vector<double>* first_pass = nullptr);
 
 // Unit vertex normals of P after 4 umbrella steps (lambda 1/2): the frame of the quadric fits
 // and the recorruption's direction. The noisy normal tilts towards the very noise being

@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <cstdlib>
 #include <cmath>
 #include <cstdio>
@@ -40,6 +41,7 @@
 #include "cgal_data.h"
 #include "core/auto_params.h"
 #include "core/auto_select.h"
+#include "core/surface_sample.h"
 #include "core/parallel.h"
 #include "core/metrics.h"
 #include "core/noise.h"
@@ -388,46 +390,65 @@ int fit_command(const fs::path& data, int jobs, const fs::path& rows_path, const
 
 // The noise estimate (core/noise_estimate.h) against the truth on every case: the RMS of the
 // noisy-minus-clean displacement along the clean vertex normals, in clean mean edge lengths.
+// Besides the estimate itself, the statistic of decision 19 (min of the RMS and 4x the Gaussian
+// core, uncorrected) for each local fit, to compare fits.
 int noise_command(const fs::path& data, int jobs, const std::string& which) {
   std::vector<Case> cases = build_cases(data, which, "");
   std::erase_if(cases, [](const Case& c) { return c.config == "clean"; });
-  struct Out { double truth, l_noisy, l_smooth, q[5], mean, trim[3]; double ms; };
+  const LocalFit fits[] = {{2, 2, 1}, {1, 1, 2}, {1, 1, 3}, {2, 2, 2}, {2, 2, 3}};
+  constexpr int kFits = 5;
+  struct Out { double truth, est, stat[kFits], ms; };
   std::vector<Out> out(cases.size());
   run_parallel(cases.size(), jobs, [&](std::size_t i) {
     const Case& c = cases[i];
     const Framed fr = framed(c);
-    const Vertices& P = fr.P;
-    const Topology& topo = fr.topo;
-    const double lc = fr.edge;
     Out& o = out[i];
     o.truth = true_sigma_edges(c);
-    o.l_noisy = topo.mean_edge_length(P) / lc;
-    o.l_smooth = topo.mean_edge_length(umbrella_smooth(P, topo, 4, 0.5)) / lc;
+    const Vertices N = smoothed_normals(fr.P, c.noisy.F, fr.topo);
     const auto t0 = std::chrono::steady_clock::now();
-    std::vector<double> s = quadric_residuals(P, c.noisy.F, topo, smoothed_normals(P, c.noisy.F, topo));
+    o.est = estimate_noise(fr.P, c.noisy.F, fr.topo, N).sigma / fr.edge / o.truth;
     o.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    std::erase_if(s, [](double v) { return std::isnan(v); });
-    std::sort(s.begin(), s.end());
-    const double qs[5] = {0.5, 0.75, 0.9, 0.95, 0.99};
-    const double chi[5] = {0.454936, 1.323304, 2.705543, 3.841459, 6.634897};  // chi^2_1 quantiles
-    for (int k = 0; k < 5; ++k) o.q[k] = std::sqrt(s[static_cast<std::size_t>(qs[k] * (s.size() - 1))] / chi[k]) / lc;
-    o.mean = std::sqrt(std::accumulate(s.begin(), s.end(), 0.0) / s.size()) / lc;
-    const double keep[3] = {0.99, 0.95, 0.9};
-    for (int k = 0; k < 3; ++k) {
-      const std::size_t n = static_cast<std::size_t>(keep[k] * s.size());
-      o.trim[k] = std::sqrt(std::accumulate(s.begin(), s.begin() + n, 0.0) / n) / lc;
+    for (int k = 0; k < kFits; ++k) {
+      std::vector<double> s = local_fit_residuals(fr.P, fr.topo, N, fits[k]);
+      std::erase_if(s, [](double v) { return std::isnan(v); });
+      const double rms = std::sqrt(std::accumulate(s.begin(), s.end(), 0.0) / s.size());
+      std::nth_element(s.begin(), s.begin() + s.size() / 2, s.end());
+      const double core = std::sqrt(s[s.size() / 2] / 0.45493642311957);
+      o.stat[k] = std::min(rms, 4 * core) / fr.edge / o.truth;
     }
   });
-  std::printf("%-10s %-22s %-9s %7s %6s | %6s %6s | q50/true q75 q90 q95 q99 | mean trim99 trim95 trim90 | ms\n", "set", "mesh",
-              "config", "faces", "true", "lnoisy", "lsmooth");
+  std::printf("%-10s %-22s %-9s %7s %6s | %6s |", "set", "mesh", "config", "faces", "true", "est/t");
+  for (const LocalFit& f : fits) std::printf(" r%dd%dx%d", f.rings, f.degree, f.passes);
+  std::printf(" | ms\n");
   for (std::size_t i = 0; i < cases.size(); ++i) {
     const Out& o = out[i];
-    std::printf("%-10s %-22s %-9s %7lld %6.3f | %6.3f %6.3f | %5.2f %5.2f %5.2f %5.2f %5.2f | %5.2f %5.2f %5.2f %5.2f | %.1f\n",
-                cases[i].set.c_str(), cases[i].mesh.c_str(), cases[i].config.c_str(),
-                static_cast<long long>(cases[i].truth.num_faces()), o.truth, o.l_noisy, o.l_smooth, o.q[0] / o.truth,
-                o.q[1] / o.truth, o.q[2] / o.truth, o.q[3] / o.truth, o.q[4] / o.truth, o.mean / o.truth,
-                o.trim[0] / o.truth, o.trim[1] / o.truth, o.trim[2] / o.truth, o.ms);
+    std::printf("%-10s %-22s %-9s %7lld %6.3f | %6.3f |", cases[i].set.c_str(), cases[i].mesh.c_str(), cases[i].config.c_str(),
+                static_cast<long long>(cases[i].truth.num_faces()), o.truth, o.est);
+    for (int k = 0; k < kFits; ++k) std::printf(" %6.3f", o.stat[k]);
+    std::printf(" | %.1f\n", o.ms);
   }
+  // Per set: the share within +-15% and the extremes, for the estimate and for each fit scaled
+  // by the constant that puts its median ratio at 1 on that set, and for the minimum over fits.
+  const auto summary = [&](const std::string& name, const std::function<double(const Out&)>& ratio) {
+    for (const std::string set : {"train", "validation"}) {
+      std::vector<double> r;
+      for (std::size_t i = 0; i < cases.size(); ++i)
+        if (cases[i].set == set) r.push_back(ratio(out[i]));
+      if (r.empty()) continue;
+      const double med = median(r);
+      const auto within = [&](double scale) {
+        return 100.0 * std::count_if(r.begin(), r.end(), [&](double x) { return x * scale >= 0.85 && x * scale <= 1.15; }) / r.size();
+      };
+      std::printf("%-14s %-10s median %6.3f  within15 %4.0f%%  min %5.3f max %5.3f | scaled by 1/median: within15 %4.0f%% min %5.3f max %5.3f\n",
+                  name.c_str(), set.c_str(), med, within(1), *std::min_element(r.begin(), r.end()), *std::max_element(r.begin(), r.end()),
+                  within(1 / med), *std::min_element(r.begin(), r.end()) / med, *std::max_element(r.begin(), r.end()) / med);
+    }
+  };
+  std::printf("\n");
+  summary("estimate", [](const Out& o) { return o.est; });
+  for (int k = 0; k < kFits; ++k)
+    summary("r" + std::to_string(fits[k].rings) + "d" + std::to_string(fits[k].degree) + "x" + std::to_string(fits[k].passes),
+            [k](const Out& o) { return o.stat[k]; });
   return 0;
 }
 
@@ -437,10 +458,11 @@ int noise_command(const fs::path& data, int jobs, const std::string& which) {
 int select_command(const fs::path& data, int jobs, const std::string& which, const std::string& only) {
   std::vector<Case> cases = build_cases(data, which, only);
   std::erase_if(cases, [](const Case& c) { return c.config == "clean"; });
-  // Variants of the selection: noise level (estimated x factor, or the truth), draws, recorruption.
-  struct Variant { const char* name; std::int64_t faces; bool oracle; int draws; bool isotropic; double a; };
-  const Variant variants[] = {{"a 0.5", 8000, false, 1, true, 0.5}, {"a 1", 8000, false, 1, true, 1.0},
-                              {"a 1, 2 draws", 8000, false, 2, true, 1.0}, {"a 0.75", 8000, false, 1, true, 0.75}};
+  // Variants of the selection: draws, how many candidates get every draw, the recorruption's
+  // sigma over the estimate (or over the truth, for an oracle variant).
+  struct Variant { const char* name; int draws, refine; double scale; bool oracle; };
+  const Variant variants[] = {{"default", 2, 3, 0.84, false}, {"1 draw", 1, 0, 0.84, false},
+                              {"2dr all", 2, 0, 0.84, false}, {"1dr x1", 1, 0, 1.0, false}};
   constexpr int kVariants = 4;
   const char* names[kVariants] = {variants[0].name, variants[1].name, variants[2].name, variants[3].name};
   struct Out { double truth, est, refined; std::vector<double> msae; int pick[kVariants]; double ms, one_ms; std::vector<std::string> names; };
@@ -458,24 +480,21 @@ int select_command(const fs::path& data, int jobs, const std::string& which, con
     req.mode = ParamMode::Auto;
     const InputMeasures m = measure_input(P, c.noisy.F, topo, req);
     Executor ex(1);
-    SelectionOptions so;
-    so.max_faces = variants[0].faces;
-    so.draws = variants[0].draws;
-    so.isotropic = true;
+    const auto options = [&](const Variant& v) {
+      SelectionOptions so;
+      so.draws = v.draws;
+      so.refine = v.refine;
+      so.scale = v.scale;
+      so.sigma = v.oracle ? v.scale * sigma_true : 0;
+      return so;
+    };
     const auto t0 = std::chrono::steady_clock::now();
-    const Selection sel = select_parameters(P, c.noisy.F, topo, req, m, ex, nullptr, so);
+    const Selection sel = select_parameters(P, c.noisy.F, topo, req, m, ex, nullptr, options(variants[0]));
     o.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     o.est = sel.noise.sigma / lc;
     o.refined = sel.candidates[static_cast<std::size_t>(sel.chosen)].residual / lc;
-    for (int v = 0; v < kVariants; ++v) {
-      SelectionOptions vo = so;
-      vo.draws = variants[v].draws;
-      vo.isotropic = variants[v].isotropic;
-      vo.max_faces = variants[v].faces;
-      vo.a = variants[v].a;
-      vo.sigma = variants[v].oracle ? sigma_true : 0;
-      o.pick[v] = (v == 0) ? sel.chosen : select_parameters(P, c.noisy.F, topo, req, m, ex, nullptr, vo).chosen;
-    }
+    for (int v = 0; v < kVariants; ++v)
+      o.pick[v] = (v == 0) ? sel.chosen : select_parameters(P, c.noisy.F, topo, req, m, ex, nullptr, options(variants[v])).chosen;
     for (const auto& cand : sel.candidates) {
       const auto t1 = std::chrono::steady_clock::now();
       o.msae.push_back(msae(denoise(c.noisy, cand.params).mesh, c.truth));
@@ -484,8 +503,8 @@ int select_command(const fs::path& data, int jobs, const std::string& which, con
       o.names.push_back(cand.name);
     }
   });
-  std::printf("%-10s %-22s %-9s %7s %6s %6s %6s | %6s", "set", "mesh", "config", "faces",
-              "true", "est/t", "ref/t", "pap/b");
+  std::printf("%-10s %-22s %-9s %7s %6s %6s %6s | %6s %-12s %8s", "set", "mesh", "config", "faces",
+              "true", "est/t", "ref/t", "pap/b", "best", "msae e-2");
   for (const char* n : names) std::printf(" | %-12s %6s", n, "/best");
   std::printf(" | %7s %6s\n", "sel ms", "x run");
   std::map<std::string, std::vector<double>> ratio[kVariants], rpap, est, ref, cost;
@@ -493,8 +512,10 @@ int select_command(const fs::path& data, int jobs, const std::string& which, con
     const Out& o = out[i];
     const double best = *std::min_element(o.msae.begin(), o.msae.end());
     const double pap = o.msae[1] / best;
-    std::printf("%-10s %-22s %-9s %7lld %6.3f %6.3f %6.3f | %6.3f", cases[i].set.c_str(), cases[i].mesh.c_str(), cases[i].config.c_str(),
-                static_cast<long long>(cases[i].truth.num_faces()), o.truth, o.est / o.truth, o.refined / o.truth, pap);
+    const std::string& best_name = o.names[static_cast<std::size_t>(std::min_element(o.msae.begin(), o.msae.end()) - o.msae.begin())];
+    std::printf("%-10s %-22s %-9s %7lld %6.3f %6.3f %6.3f | %6.3f %-12s %8.4g", cases[i].set.c_str(), cases[i].mesh.c_str(),
+                cases[i].config.c_str(), static_cast<long long>(cases[i].truth.num_faces()), o.truth, o.est / o.truth,
+                o.refined / o.truth, pap, best_name.c_str(), best * 100);
     for (const std::string& set : {cases[i].set, std::string("all")}) {
       for (int v = 0; v < kVariants; ++v) ratio[v][set].push_back(o.msae[static_cast<std::size_t>(o.pick[v])] / best);
       rpap[set].push_back(pap);
