@@ -5,6 +5,7 @@
 #include <array>
 #include <cctype>
 #include <string>
+#include <utility>
 
 #include "core/io/detail.h"
 
@@ -102,6 +103,39 @@ std::string_view media_type(Format format) {
   for (const auto& info : kFormats)
     if (info.format == format) return info.media_type;
   return "application/octet-stream";
+}
+
+namespace {
+constexpr std::array<std::pair<Compression, std::string_view>, 4> kCompressions{{
+    {Compression::AsInput, "as_input"},
+    {Compression::None, "none"},
+    {Compression::Draco, "draco"},
+    {Compression::Meshopt, "meshopt"},
+}};
+}  // namespace
+
+std::string_view to_string(Compression compression) {
+  for (const auto& [value, name] : kCompressions)
+    if (value == compression) return name;
+  return "unknown";
+}
+
+std::optional<Compression> compression_from_string(std::string_view name) {
+  const std::string key = lower(name);
+  for (const auto& [value, known] : kCompressions)
+    if (known == key) return value;
+  return std::nullopt;
+}
+
+Compression resolve_compression(const EncodeOptions& options, Compression input) {
+  if (!options.compression) return options.draco ? Compression::Draco : Compression::None;
+  if (*options.compression != Compression::AsInput) {
+    if (*options.compression == Compression::Meshopt)
+      throw UnsupportedError("glTF output with EXT_meshopt_compression is not written yet; use \"none\" or \"draco\"");
+    return *options.compression;
+  }
+  if (input == Compression::Meshopt || input == Compression::AsInput) return Compression::None;
+  return input;
 }
 
 std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, const Limits& limits) {

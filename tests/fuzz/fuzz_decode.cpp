@@ -73,6 +73,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (m.V.rows() == 0 || m.F.rows() == 0) return 0;
   io::EncodeOptions options;
   options.draco = size % 2 == 0;
+  if (size % 3 == 0) options.compression = io::Compression::AsInput;  // follows the input's
   const io::Format other = kFormats[size ? data[size - 1] % std::size(kFormats) : 0];
   for (const io::Format target : {MDN_FUZZ_FORMAT, other}) {
     options.format = target;

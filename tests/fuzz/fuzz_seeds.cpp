@@ -1,6 +1,7 @@
 // Writes the fuzzers' seed corpora, all generated here (no third-party files): for each format
 // a directory of small valid files in its variants, written by mdn_io itself from procedural
-// meshes and the glTF test fixtures, plus parameter texts.
+// meshes and the glTF test fixtures (the meshopt one through libmeshoptimizer's encoders), plus
+// parameter texts.
 //   fuzz_seeds OUT_DIR   ->  OUT_DIR/{off,obj,ply,drc,glb,gltf,stl,params}/seed-N
 #include <cstdio>
 #include <filesystem>
@@ -10,6 +11,7 @@
 
 #include "core/io/document.h"
 #include "io/gltf_fixtures.h"
+#include "io/meshopt_fixture.h"
 #include "support/shapes.h"
 
 namespace {
@@ -85,6 +87,8 @@ int main(int argc, char** argv) {
     write(out / "gltf", io::decode(glb, io::Format::Glb)->encode(gltf));
   }
   write(out / "glb", test_io::strip_and_fan_glb(3));
+  // EXT_meshopt_compression (every mode and filter, KHR_mesh_quantization positions).
+  write(out / "glb", test_io::meshopt_sphere_glb(fixture, true));
   // Parameters.
   for (const char* text :
        {"{}", R"({"mode":"manual"})", R"({"n_normal":30,"n_vertex":20,"output":{"position_bits":14}})",
