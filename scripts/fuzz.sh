@@ -19,7 +19,7 @@ case "$mode" in
 esac
 shift $(( $# > 1 ? 2 : $# ))
 harnesses=("$@")
-[ ${#harnesses[@]} -gt 0 ] || harnesses=(off obj ply drc glb gltf params)
+[ ${#harnesses[@]} -gt 0 ] || harnesses=(off obj ply drc glb gltf stl params)
 
 build="$root/build/fuzz"
 cmake --preset fuzz -S "$root" >/dev/null

@@ -16,6 +16,12 @@ std::unique_ptr<MeshDocument> decode_obj(std::string_view bytes, const Limits& l
 std::unique_ptr<MeshDocument> decode_ply(std::string_view bytes, const Limits& limits);
 std::unique_ptr<MeshDocument> decode_drc(std::string_view bytes, const Limits& limits);
 std::unique_ptr<MeshDocument> decode_gltf(std::string_view bytes, Format format, const Limits& limits);
+std::unique_ptr<MeshDocument> decode_stl(std::string_view bytes, const Limits& limits);
+
+// STL detection (sniff_format and decode_stl): the binary size identity 84 + 50 n, and ASCII
+// text that really reads "solid [name] facet normal" (or an empty "solid ... endsolid").
+bool is_binary_stl_size(std::string_view bytes);
+bool looks_like_ascii_stl(std::string_view bytes);
 
 // Shortest decimal text that reads back to exactly the same double (std::to_chars), so the
 // text outputs are deterministic and lose nothing.

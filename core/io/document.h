@@ -1,7 +1,7 @@
 // Format adapters: bytes <-> meshes to denoise. The algorithms never include this folder.
 //
 // A MeshDocument is a decoded asset. It exposes the triangle surfaces to denoise (for glTF:
-// one welded surface per mesh, whatever its instancing; for OFF/OBJ/PLY/DRC: one surface)
+// one welded surface per mesh, whatever its instancing; for OFF/OBJ/PLY/DRC/STL: one surface)
 // and re-encodes the asset after their positions were replaced, keeping everything else.
 #pragma once
 
@@ -18,9 +18,11 @@
 
 namespace mdn::io {
 
-enum class Format { Off, Obj, Ply, Drc, Glb, Gltf };
-std::string_view to_string(Format format);                     // "off", "obj", "ply", "drc", "glb", "gltf"
-std::optional<Format> format_from_string(std::string_view name);  // inverse of to_string
+enum class Format { Off, Obj, Ply, Drc, Glb, Gltf, Stl };
+std::string_view to_string(Format format);  // "off", "obj", "ply", "drc", "glb", "gltf", "stl"
+// Inverse of to_string for the formats the service's contract names (not yet "stl": the
+// server/CLI wiring phase turns it on with the contract, see FormatInfo::by_name).
+std::optional<Format> format_from_string(std::string_view name);
 std::optional<Format> format_from_extension(std::string_view path);  // by file name ending
 std::optional<Format> sniff_format(std::string_view bytes);       // by content (magic numbers / keywords)
 std::string_view media_type(Format format);  // model/gltf-binary, model/gltf+json, application/octet-stream ...
@@ -43,6 +45,12 @@ class LimitError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// glTF output compression. A decoded document records its input's (MeshDocument::compression:
+// None, Draco or Meshopt); AsInput asks for that one again.
+enum class Compression { AsInput, None, Draco, Meshopt };
+std::string_view to_string(Compression compression);                      // "as_input", "none", "draco", "meshopt"
+std::optional<Compression> compression_from_string(std::string_view name);  // inverse of to_string
+
 struct Limits {
   std::int64_t max_faces = 5'000'000;
   std::int64_t max_vertices = 5'000'000;
@@ -56,7 +64,11 @@ struct Limits {
 
 struct EncodeOptions {
   std::optional<Format> format;  // default: the input's container
-  bool draco = true;             // glTF: KHR_draco_mesh_compression; DRC is always Draco
+  // glTF output compression. Unset: `draco` decides (what the HTTP API and the CLI pass today).
+  // Set, it wins over `draco`; AsInput follows the input (glTF-Transform keeps what it read).
+  // The choice is made in one place: resolve_compression().
+  std::optional<Compression> compression;
+  bool draco = true;             // glTF: KHR_draco_mesh_compression when `compression` is unset; DRC is always Draco
   // Draco quantisation bits. Positions: [8, 30] (11 bits costs about 0.8 mm on a 2 m scan).
   // The other attributes: [1, 30], or 0 = stored losslessly. UVs, colours, joints and weights
   // default to 0, so they come back bit for bit (the assets' other data is untouched, and
@@ -79,7 +91,16 @@ class MeshDocument {
   virtual std::string encode(const EncodeOptions& options) const = 0;
   // Notes for the caller about what was changed besides positions (e.g. "TANGENT dropped").
   virtual std::vector<std::string> notes() const { return {}; }
+  // The input's compression (glTF: Draco if a primitive used KHR_draco_mesh_compression,
+  // Meshopt if a buffer view used EXT_meshopt_compression; DRC: Draco; others None).
+  virtual Compression compression() const { return Compression::None; }
 };
+
+// The glTF compression an encode writes, given the options and the input's compression:
+// `compression` if set (AsInput: `input`), else Draco or None by `draco`. Meshopt is not
+// written yet: as the input's it resolves to None, asked for explicitly it is an
+// UnsupportedError (HTTP 422).
+Compression resolve_compression(const EncodeOptions& options, Compression input);
 
 // Decodes bytes of the given format. Throws FormatError, UnsupportedError or LimitError.
 std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, const Limits& limits = {});

@@ -20,6 +20,7 @@ class DrcDocument final : public MeshDocument {
       notes.emplace_back("Draco NORMAL recomputed from the denoised surface");
     return notes;
   }
+  Compression compression() const override { return Compression::Draco; }
   std::string encode(const EncodeOptions& options) const override {
     check_surface_sizes(surfaces_, {welded_count_});
     if (options.format && *options.format != Format::Drc) return encode_plain(surfaces_, *options.format, options);

@@ -4,8 +4,9 @@
 // no images); every accessor read here is bounds-checked against its buffer view and buffer
 // and against Limits before anything is allocated. KHR_draco_mesh_compression payloads are
 // decoded with Draco's core Decoder; KHR_mesh_quantization component types, sparse
-// accessors, strips and fans and non-indexed primitives are read. EXT_meshopt_compression is
-// refused with an error naming it.
+// accessors, strips and fans and non-indexed primitives are read. EXT_meshopt_compression buffer
+// views are decoded with libmeshoptimizer (meshopt_codec.h) before anything reads them; the
+// output is written without it (its views hold the decoded bytes).
 //
 // Surfaces: one per mesh that has TRIANGLES / TRIANGLE_STRIP / TRIANGLE_FAN primitives
 // (however many nodes instance it); all those primitives' vertices are welded by position.
@@ -32,6 +33,7 @@
 
 #include "core/io/detail.h"
 #include "core/io/draco_codec.h"
+#include "core/io/meshopt_codec.h"
 #include "core/io/plain.h"
 #include "core/io/tinygltf_load.h"
 #include "core/io/weld.h"
@@ -41,6 +43,7 @@ namespace {
 
 using Json = nlohmann::ordered_json;
 constexpr const char* kDraco = "KHR_draco_mesh_compression";
+constexpr const char* kMeshopt = "EXT_meshopt_compression";
 constexpr int kFloat = 5126, kUInt = 5125, kUShort = 5123, kUByte = 5121, kShort = 5122, kByte = 5120;
 constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
 
@@ -333,6 +336,7 @@ class GltfDocument final : public MeshDocument {
   Format format() const override { return format_; }
   std::vector<TriMesh>& surfaces() override { return meshes_; }
   std::vector<std::string> notes() const override { return notes_; }
+  Compression compression() const override { return compression_; }
   std::string encode(const EncodeOptions& options) const override {
     try {
       return encode_json(options);
@@ -343,6 +347,7 @@ class GltfDocument final : public MeshDocument {
   std::string encode_json(const EncodeOptions& options) const;
 
   Format format_ = Format::Glb;
+  Compression compression_ = Compression::None;  // the input's
   Json json_;
   tinygltf::Model model_;
   std::vector<Surface> surfaces_;
@@ -422,6 +427,14 @@ void for_each_view_ref(Json& node, F&& f) {
   } else if (node.is_array()) {
     for (auto& value : node) for_each_view_ref(value, f);
   }
+}
+
+// Removes extensions[name] from a JSON object, and "extensions" if that leaves it empty.
+void erase_extension(Json& object, const char* name) {
+  const auto it = object.find("extensions");
+  if (it == object.end() || !it->is_object()) return;
+  it->erase(name);
+  if (it->empty()) object.erase("extensions");
 }
 
 void pad_to_4(std::string& bytes, char fill) {
@@ -511,6 +524,7 @@ std::string GltfDocument::encode_json(const EncodeOptions& options) const {
   const Format target = options.format.value_or(format_);
   if (target != Format::Glb && target != Format::Gltf) return encode_plain(meshes_, target, options);
   check_float_coordinates(meshes_, target);
+  const Compression compression = resolve_compression(options, compression_);
 
   Output out;
   out.json = json_;
@@ -585,7 +599,7 @@ std::string GltfDocument::encode_json(const EncodeOptions& options) const {
       }
       if (prim.tangent >= 0) pj["attributes"].erase("TANGENT");
 
-      const bool draco = options.draco && !prim.has_targets;
+      const bool draco = compression == Compression::Draco && !prim.has_targets;
       if (draco) {
         // Build the Draco mesh from the points this primitive's triangles use (primitives
         // often share one vertex array), all attributes, as a triangle list.
@@ -690,9 +704,11 @@ std::string GltfDocument::encode_json(const EncodeOptions& options) const {
   for (const auto& mesh : out.json.value("meshes", Json::array()))
     for (const auto& prim : mesh.value("primitives", Json::array()))
       if (prim.contains("extensions") && prim["extensions"].contains(kDraco)) any_draco = true;
+  // EXT_meshopt_compression views were decoded: the output's views hold plain bytes.
   for (const char* list : {"extensionsUsed", "extensionsRequired"}) {
     Json names = out.json.value(list, Json::array());
     names.erase(std::remove(names.begin(), names.end(), Json(kDraco)), names.end());
+    names.erase(std::remove(names.begin(), names.end(), Json(kMeshopt)), names.end());
     if (any_draco) names.push_back(kDraco);
     if (names.empty()) out.json.erase(list);
     else out.json[list] = names;
@@ -718,6 +734,7 @@ std::string GltfDocument::encode_json(const EncodeOptions& options) const {
       bytes = out.new_views[i - static_cast<std::size_t>(out.old_views)];
     }
     pad_to_4(bin, '\0');
+    erase_extension(view, kMeshopt);
     view["buffer"] = 0;
     view["byteOffset"] = bin.size();
     view["byteLength"] = bytes.size();
@@ -736,6 +753,7 @@ std::string GltfDocument::encode_json(const EncodeOptions& options) const {
   pad_to_4(bin, '\0');
   Json buffer = json_.contains("buffers") && !json_["buffers"].empty() ? json_["buffers"][0] : Json::object();
   buffer.erase("uri");
+  erase_extension(buffer, kMeshopt);  // a fallback buffer's mark
   buffer["byteLength"] = bin.size();
   if (target == Format::Gltf && !bin.empty()) buffer["uri"] = "data:application/octet-stream;base64," + base64_encode(bin);
   if (bin.empty()) out.json.erase("buffers");
@@ -781,7 +799,7 @@ namespace {
 // loader must refuse any other required extension (glTF 2.0, 3.12).
 bool understood_extension(std::string_view name) {
   static constexpr std::string_view kKnown[] = {
-      kDraco, "KHR_mesh_quantization", "KHR_texture_transform", "KHR_texture_basisu", "KHR_lights_punctual",
+      kDraco, kMeshopt, "KHR_mesh_quantization", "KHR_texture_transform", "KHR_texture_basisu", "KHR_lights_punctual",
       "KHR_materials_variants", "EXT_mesh_gpu_instancing", "EXT_texture_webp", "EXT_texture_avif"};
   for (const auto known : kKnown)
     if (name == known) return true;
@@ -919,6 +937,94 @@ Json parse_bounded(std::string_view text, const Limits& limits, std::int64_t& by
 
 static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes, Format format, const Limits& limits);
 
+namespace {
+
+bool uses_meshopt(const Json& json) {
+  for (const char* list : {"extensionsUsed", "extensionsRequired"})
+    for (const auto& name : json.value(list, Json::array()))
+      if (name == kMeshopt) return true;
+  for (const auto& view : json.value("bufferViews", Json::array()))
+    if (view.is_object() && view.contains("extensions") && view["extensions"].is_object() && view["extensions"].contains(kMeshopt))
+      return true;
+  return false;
+}
+
+// A non-negative integer property of an extension object (or `fallback` if absent and given).
+std::int64_t unsigned_property(const Json& ext, const char* key, const std::string& where, std::optional<std::int64_t> fallback = {}) {
+  const auto it = ext.find(key);
+  if (it == ext.end()) {
+    if (fallback) return *fallback;
+    throw FormatError(where + ": EXT_meshopt_compression has no \"" + key + "\"");
+  }
+  if (!it->is_number_unsigned() || it->get<std::uint64_t>() > (std::uint64_t{1} << 53))
+    throw FormatError(where + ": EXT_meshopt_compression \"" + key + "\" is not a non-negative integer");
+  return static_cast<std::int64_t>(it->get<std::uint64_t>());
+}
+
+// Decodes every EXT_meshopt_compression buffer view into a buffer of its own and points the
+// model's view at it, so that everything downstream (accessors, sparse, the output's copy of
+// every view) reads the decoded bytes through the same bounds checks. The declared layout is
+// checked against the compressed data's bounds, the parent view and the limits before any
+// byte is decoded (the extension's validity rules, "JSON schema updates"). Returns how many
+// views were decoded.
+int decode_meshopt_views(const Json& json, tinygltf::Model& model, Reader& reader) {
+  int decoded_views = 0;
+  const Json views = json.value("bufferViews", Json::array());
+  for (std::size_t i = 0; i < views.size() && i < model.bufferViews.size(); ++i) {
+    if (!views[i].is_object() || !views[i].contains("extensions") || !views[i]["extensions"].is_object()) continue;
+    const auto found = views[i]["extensions"].find(kMeshopt);
+    if (found == views[i]["extensions"].end()) continue;
+    const std::string where = "glTF buffer view " + std::to_string(i);
+    const Json& ext = *found;
+    if (!ext.is_object()) throw FormatError(where + ": EXT_meshopt_compression is not an object");
+    const std::int64_t buffer = unsigned_property(ext, "buffer", where);
+    const std::int64_t offset = unsigned_property(ext, "byteOffset", where, 0);
+    const std::int64_t length = unsigned_property(ext, "byteLength", where);
+    MeshoptView layout;
+    layout.byte_stride = unsigned_property(ext, "byteStride", where);
+    layout.count = unsigned_property(ext, "count", where);
+    const std::string mode = ext.value("mode", std::string());
+    if (mode == "ATTRIBUTES") layout.mode = MeshoptMode::Attributes;
+    else if (mode == "TRIANGLES") layout.mode = MeshoptMode::Triangles;
+    else if (mode == "INDICES") layout.mode = MeshoptMode::Indices;
+    else throw FormatError(where + ": EXT_meshopt_compression mode '" + mode.substr(0, 32) + "' is not ATTRIBUTES, TRIANGLES or INDICES");
+    const std::string filter = ext.value("filter", std::string("NONE"));
+    if (filter == "NONE") layout.filter = MeshoptFilter::None;
+    else if (filter == "OCTAHEDRAL") layout.filter = MeshoptFilter::Octahedral;
+    else if (filter == "QUATERNION") layout.filter = MeshoptFilter::Quaternion;
+    else if (filter == "EXPONENTIAL") layout.filter = MeshoptFilter::Exponential;
+    else throw FormatError(where + ": EXT_meshopt_compression filter '" + filter.substr(0, 32) + "' is not NONE, OCTAHEDRAL, QUATERNION or EXPONENTIAL");
+    check_meshopt_view(layout, where);
+    // The decoded size, bounded before it is multiplied or allocated.
+    const Limits& limits = reader.limits();
+    if (layout.count > 3 * std::max(limits.max_vertices, limits.max_faces))
+      throw LimitError(where + ": EXT_meshopt_compression declares " + std::to_string(layout.count) + " elements, more than the limits allow");
+    const std::int64_t decoded = layout.count * layout.byte_stride;
+    tinygltf::BufferView& view = model.bufferViews[i];
+    if (static_cast<std::int64_t>(view.byteLength) != decoded || (view.byteStride != 0 && static_cast<std::int64_t>(view.byteStride) != layout.byte_stride))
+      throw FormatError(where + ": byteLength " + std::to_string(view.byteLength) + " / byteStride " + std::to_string(view.byteStride) +
+                        " disagree with EXT_meshopt_compression's " + std::to_string(layout.count) + " elements of " +
+                        std::to_string(layout.byte_stride) + " bytes");
+    if (buffer >= static_cast<std::int64_t>(model.buffers.size()))
+      throw FormatError(where + ": EXT_meshopt_compression names buffer " + std::to_string(buffer) + ", which does not exist");
+    const auto& source = model.buffers[static_cast<std::size_t>(buffer)].data;
+    if (offset > static_cast<std::int64_t>(source.size()) || length > static_cast<std::int64_t>(source.size()) - offset)
+      throw FormatError(where + ": EXT_meshopt_compression's " + std::to_string(length) + " bytes at " + std::to_string(offset) +
+                        " reach past the end of buffer " + std::to_string(buffer) + " (" + std::to_string(source.size()) + " bytes)");
+    reader.charge(decoded, where);
+    const std::string_view compressed(reinterpret_cast<const char*>(source.data()) + offset, static_cast<std::size_t>(length));
+    tinygltf::Buffer plain;
+    plain.data = meshopt_decode(compressed, layout, where);
+    model.buffers.push_back(std::move(plain));
+    view.buffer = static_cast<int>(model.buffers.size()) - 1;
+    view.byteOffset = 0;
+    ++decoded_views;
+  }
+  return decoded_views;
+}
+
+}  // namespace
+
 std::unique_ptr<MeshDocument> decode_gltf(std::string_view bytes, Format format, const Limits& limits) {
   try {
     return decode_gltf_checked(bytes, format, limits);
@@ -938,7 +1044,7 @@ static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes,
   refuse_external(doc->json_, "images");
   for (const char* list : {"extensionsUsed", "extensionsRequired"})
     for (const auto& name : doc->json_.value(list, Json::array()))
-      if (name == "EXT_meshopt_compression" || name == "KHR_meshopt_compression")
+      if (name == "KHR_meshopt_compression")
         throw UnsupportedError("glTF extension " + name.get<std::string>() + " is not supported; decompress the asset first");
   for (const auto& name : doc->json_.value("extensionsRequired", Json::array()))
     if (!understood_extension(name.get<std::string>()))
@@ -956,6 +1062,17 @@ static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes,
           if (prim.is_object() && prim.contains("extensions") && prim["extensions"].is_object() &&
               prim["extensions"].contains(kDraco))
             changed |= prim.erase("indices") > 0;
+  // EXT_meshopt_compression's placeholder buffers have no data (no uri, not the GLB chunk),
+  // which tinygltf refuses: it is given a one-byte buffer instead. The views that name one are
+  // decoded from their extension's buffer below; any other view on it reaches past its end.
+  const bool meshopt = uses_meshopt(doc->json_);
+  if (meshopt && for_loader.contains("buffers") && for_loader["buffers"].is_array())
+    for (std::size_t b = 0; b < for_loader["buffers"].size(); ++b) {
+      Json& buffer = for_loader["buffers"][b];
+      if (!buffer.is_object() || buffer.contains("uri") || (format == Format::Glb && b == 0)) continue;
+      buffer = Json{{"byteLength", 1}, {"uri", "data:application/octet-stream;base64,AA=="}};
+      changed = true;
+    }
   if (!changed) {
     doc->model_ = load_tinygltf(bytes, format == Format::Glb);
   } else if (format == Format::Gltf) {
@@ -983,6 +1100,7 @@ static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes,
 
   Reader reader(model, limits);
   reader.charge(scene_bytes, "glTF");
+  if (meshopt && decode_meshopt_views(doc->json_, doc->model_, reader) > 0) doc->compression_ = Compression::Meshopt;
   // Every buffer view is copied into the output, used by a surface or not (images, animations):
   // each must lie inside its buffer, and tinygltf's list must be the JSON's.
   if (doc->json_.value("bufferViews", Json::array()).size() != model.bufferViews.size() ||
@@ -1011,6 +1129,7 @@ static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes,
       const Json ext = pj.value("extensions", Json::object()).value(kDraco, Json());
       if (!ext.is_null()) {
         read_draco_primitive(reader, ext, prim, out, what);
+        if (doc->compression_ == Compression::None) doc->compression_ = Compression::Draco;
         if (out.has_targets) throw UnsupportedError(what + ": morph targets on a Draco-compressed primitive");
       } else {
         const auto pos = prim.attributes.find("POSITION");

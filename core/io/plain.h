@@ -3,14 +3,16 @@
 // triangles only; what the input carried besides geometry stays with same-format outputs.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/io/document.h"
 
 namespace mdn::io::detail {
 
-// Surfaces are concatenated into one mesh for the single-mesh formats (OFF, OBJ, PLY, DRC)
+// Surfaces are concatenated into one mesh for the single-mesh formats (OFF, OBJ, PLY, DRC, STL)
 // and become one glTF mesh each (one node per mesh) for GLB / glTF.
 std::string encode_plain(const std::vector<TriMesh>& surfaces, Format format, const EncodeOptions& options);
 
@@ -18,6 +20,11 @@ std::string write_off(const TriMesh& mesh);
 std::string write_obj(const TriMesh& mesh);
 std::string write_ply(const TriMesh& mesh);  // binary little endian, float positions, int indices
 std::string write_drc(const TriMesh& mesh, const EncodeOptions& options);
+// Binary STL: `header` (80 bytes, padded) and per-facet attribute bytes (0 where absent);
+// ASCII STL: `name` after "solid". Facet normals from the written corners.
+std::string write_stl_binary(const TriMesh& mesh, std::string_view header = {},
+                             const std::vector<std::uint16_t>& attributes = {});
+std::string write_stl_ascii(const TriMesh& mesh, std::string_view name);
 std::string write_plain_gltf(const std::vector<TriMesh>& surfaces, Format format, const EncodeOptions& options);
 
 // Throws UnsupportedError (HTTP 422) if a coordinate does not fit in the float32 that `format`

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <iterator>
 #include <string_view>
 
 #include "core/errors.h"
@@ -55,8 +56,8 @@ bool client_error_or_ok(F&& f, const char* stage) {
   return false;
 }
 
-constexpr io::Format kFormats[] = {io::Format::Off, io::Format::Obj, io::Format::Ply,
-                                   io::Format::Drc, io::Format::Glb, io::Format::Gltf};
+constexpr io::Format kFormats[] = {io::Format::Off, io::Format::Obj, io::Format::Ply, io::Format::Drc,
+                                   io::Format::Glb, io::Format::Gltf, io::Format::Stl};
 
 }  // namespace
 
@@ -72,7 +73,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (m.V.rows() == 0 || m.F.rows() == 0) return 0;
   io::EncodeOptions options;
   options.draco = size % 2 == 0;
-  const io::Format other = kFormats[size ? data[size - 1] % 6 : 0];
+  if (size % 3 == 0) options.compression = io::Compression::AsInput;  // follows the input's
+  const io::Format other = kFormats[size ? data[size - 1] % std::size(kFormats) : 0];
   for (const io::Format target : {MDN_FUZZ_FORMAT, other}) {
     options.format = target;
     std::string out;

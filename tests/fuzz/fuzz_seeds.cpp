@@ -1,7 +1,8 @@
 // Writes the fuzzers' seed corpora, all generated here (no third-party files): for each format
 // a directory of small valid files in its variants, written by mdn_io itself from procedural
-// meshes and the glTF test fixtures, plus parameter texts.
-//   fuzz_seeds OUT_DIR   ->  OUT_DIR/{off,obj,ply,drc,glb,gltf,params}/seed-N
+// meshes and the glTF test fixtures (the meshopt one through libmeshoptimizer's encoders), plus
+// parameter texts.
+//   fuzz_seeds OUT_DIR   ->  OUT_DIR/{off,obj,ply,drc,glb,gltf,stl,params}/seed-N
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,7 @@
 
 #include "core/io/document.h"
 #include "io/gltf_fixtures.h"
+#include "io/meshopt_fixture.h"
 #include "support/shapes.h"
 
 namespace {
@@ -51,6 +53,11 @@ int main(int argc, char** argv) {
     write(out / "glb", encode(off, io::Format::Glb, false));
     write(out / "gltf", encode(off, io::Format::Gltf, false));
     write(out / "gltf", encode(off, io::Format::Gltf, true));
+    const std::string stl = encode(off, io::Format::Stl, false);  // binary
+    write(out / "stl", stl);
+    std::string solid_header = stl;  // binary whose header starts with "solid" (the sniffing trap)
+    solid_header.replace(0, 11, "solid trap ");
+    write(out / "stl", solid_header);
   }
   // Text variants the writers above do not produce.
   write(out / "off", "COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n3 0 1 2 9 9 9\n");
@@ -64,6 +71,9 @@ int main(int argc, char** argv) {
   write(out / "ply", "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
                      "property double z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n" +
                          std::string(72, '\0') + std::string("\x03\0\0\0\0\0\0\0\x01\0\0\0\x02", 13));
+  write(out / "stl", "solid tri\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n   vertex 0 1 0\n"
+                     "  endloop\n endfacet\n facet normal 0 0 1\n  outer loop\n   vertex 1 0 0\n   vertex 1 1 0\n"
+                     "   vertex 0 1 0\n  endloop\n endfacet\nendsolid tri\nsolid second\nendsolid second\n");
   // The glTF fixture scene: two primitives, a texture, instancing, extras; quantized, sparse,
   // strips and fans.
   const test_io::SphereFixture fixture = test_io::make_sphere();
@@ -77,6 +87,8 @@ int main(int argc, char** argv) {
     write(out / "gltf", io::decode(glb, io::Format::Glb)->encode(gltf));
   }
   write(out / "glb", test_io::strip_and_fan_glb(3));
+  // EXT_meshopt_compression (every mode and filter, KHR_mesh_quantization positions).
+  write(out / "glb", test_io::meshopt_sphere_glb(fixture, true));
   // Parameters.
   for (const char* text :
        {"{}", R"({"mode":"manual"})", R"({"n_normal":30,"n_vertex":20,"output":{"position_bits":14}})",

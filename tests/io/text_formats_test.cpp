@@ -26,7 +26,7 @@ TEST(FormatDetection, NamesExtensionsAndMediaTypes) {
   EXPECT_EQ(format_from_extension("scan/Bunny.GLB"), Format::Glb);
   EXPECT_EQ(format_from_extension("a.b/mesh.off"), Format::Off);
   EXPECT_EQ(format_from_extension("mesh"), std::nullopt);
-  EXPECT_EQ(format_from_extension("mesh.stl"), std::nullopt);
+  EXPECT_EQ(format_from_extension("mesh.3mf"), std::nullopt);
   EXPECT_EQ(media_type(Format::Glb), "model/gltf-binary");
   EXPECT_EQ(media_type(Format::Gltf), "model/gltf+json");
 }
