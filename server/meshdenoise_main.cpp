@@ -32,6 +32,7 @@
 #include "core/params.h"
 #include "core/progress.h"
 #include "core/tune.h"
+#include "server/job_json.h"
 #include "server/job_runner.h"
 #include "server/params_json.h"
 
@@ -615,7 +616,7 @@ int run_batch(const CliOptions& options) {
         const std::string in_bytes = read_file(inputs[i]);
         const io::Format in_format = input_format(inputs[i], in_bytes);
         service::JobOutput output = denoise_input(inputs[i], in_bytes, in_format, params, threads_per_job, cancel);
-        reports[i] = service::job_summary_json(output);
+        reports[i] = service::output_to_json(output);
         add_paths(reports[i], inputs[i], in_format, outputs[i]);
         write_file(outputs[i], output.bytes);
         codes[i] = kExitOk;
@@ -797,7 +798,7 @@ int run(int argc, char** argv) {
     install_sigint_handler();
     CliProgress progress(options.progress && ::isatty(STDERR_FILENO));
     service::JobOutput output = denoise_input(in_path, in_bytes, in_format, params, threads, progress);
-    summary = service::job_summary_json(output);  // before the bytes move out
+    summary = service::output_to_json(output);  // before the bytes move out
     out_bytes = std::move(output.bytes);
     if (truth) result = merge_surfaces(output.surfaces);
   }

@@ -25,6 +25,7 @@
 #include "server/http/problem.h"
 #include "server/http/redis_queue.h"
 #include "server/http/web_routes.h"
+#include "server/job_json.h"
 #include "server/params_json.h"
 
 namespace mdn::http {
@@ -164,36 +165,24 @@ io::Format resolve_format(const std::string& content_type, std::string_view byte
 // One report per surface: what ran (auto mode: the chosen parameters and the measurements).
 json reports_json(const JobSnapshot& s) {
   if (s.reports) return *s.reports;
-  const service::JobOutput& out = *s.output;
-  json reports = json::array();
-  for (const DenoiseReport& r : out.reports) reports.push_back(service::report_to_json(r));
-  return reports;
+  return service::reports_to_json(s.output->reports);
 }
 
 // `bytes`: the result's size (the shared store loads the bytes themselves only for /result).
-json output_summary(const JobSnapshot& s) {
-  const service::JobOutput& out = *s.output;
-  const std::int64_t bytes = s.output_bytes;
-  json reports = reports_json(s);
-  return {{"media_type", out.media_type},
-          {"format", std::string(io::to_string(out.format))},
-          {"bytes", bytes},
-          {"vertices", out.vertices},
-          {"faces", out.faces},
-          {"params", service::to_json(out.effective)},
-          {"notes", out.notes},
-          {"reports", reports},
-          {"timings_ms",
-           {{"decode", out.decode_ms},
-            {"setup", out.stages.setup_ms},
-            {"measure", out.stages.measure_ms},
-            {"initial_prefilter", out.stages.initial_ms},
-            {"region_prefilter", out.stages.region_ms},
-            {"anisotropic_prefilter", out.stages.anisotropic_ms},
-            {"normal_filter", out.stages.normal_ms},
-            {"vertex_update", out.stages.vertex_ms},
-            {"denoise", out.denoise_ms},
-            {"encode", out.encode_ms}}}};
+json output_summary(const JobSnapshot& s) { return service::output_to_json(*s.output, s.output_bytes, reports_json(s)); }
+
+// Server-Timing (W3C): queue wait, the job's steps grouped as kTimingFields says, total.
+std::string server_timing(const JobSnapshot& s) {
+  std::vector<std::pair<std::string_view, double>> groups;
+  for (const service::TimingField& f : service::kTimingFields) {
+    if (f.server_timing.empty()) continue;
+    auto it = std::find_if(groups.begin(), groups.end(), [&](const auto& g) { return g.first == f.server_timing; });
+    if (it == groups.end()) it = groups.insert(groups.end(), {f.server_timing, 0.0});
+    it->second += s.output->timings.*f.member;
+  }
+  std::string out = "queue;dur=" + format_ms(s.queue_wait_s * 1000);
+  for (const auto& [name, ms] : groups) out += ", " + std::string(name) + ";dur=" + format_ms(ms);
+  return out + ", total;dur=" + format_ms((s.queue_wait_s + s.run_s) * 1000);
 }
 
 struct Context {
@@ -252,6 +241,7 @@ struct HttpService::Impl {
         {"GET", "/openapi.yaml", "/openapi.yaml", &Impl::openapi, false, {}},
         {"GET", "/v1/params", "/v1/params", &Impl::params, false, {}},
         {"GET", "/v1/params/schema", "/v1/params/schema", &Impl::params_schema, false, {}},
+        {"GET", "/v1/report/schema", "/v1/report/schema", &Impl::report_schema, false, {}},
         {"POST", "/v1/denoise", "/v1/denoise", &Impl::denoise, true, {}},
         {"POST", "/v1/jobs", "/v1/jobs", &Impl::create_job, true, {}},
         {"GET", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", &Impl::get_job, false, {}},
@@ -679,12 +669,7 @@ struct HttpService::Impl {
       res.set_header("X-Denoise-Notes", header_safe(notes));
     }
     // Server-Timing (W3C): per-stage milliseconds, shown by browsers' developer tools.
-    res.set_header("Server-Timing",
-                   "queue;dur=" + format_ms(s.queue_wait_s * 1000) + ", decode;dur=" + format_ms(out.decode_ms) +
-                       ", prefilter;dur=" + format_ms(out.stages.setup_ms + out.stages.prefilter_ms()) +
-                       ", normal;dur=" + format_ms(out.stages.normal_ms) + ", vertex;dur=" +
-                       format_ms(out.stages.vertex_ms) + ", encode;dur=" + format_ms(out.encode_ms) +
-                       ", total;dur=" + format_ms((s.queue_wait_s + s.run_s) * 1000));
+    res.set_header("Server-Timing", server_timing(s));
   }
 
   json job_json(const JobSnapshot& s, const std::string& request_id) const {
@@ -808,6 +793,12 @@ struct HttpService::Impl {
   void params_schema(Context& ctx) {
     ctx.res.status = 200;
     const auto doc = embedded::params_schema_json();
+    ctx.res.set_content(doc.data(), doc.size(), "application/schema+json");
+  }
+
+  void report_schema(Context& ctx) {
+    ctx.res.status = 200;
+    const auto doc = embedded::report_schema_json();
     ctx.res.set_content(doc.data(), doc.size(), "application/schema+json");
   }
 

@@ -19,6 +19,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "server/job_json.h"
 #include "server/params_json.h"
 
 namespace mdn::http {
@@ -463,57 +464,14 @@ std::optional<Problem> problem_from_text(const std::string& text) {
   return p;
 }
 
-// The summary of a result that every replica needs to answer for it (all but the bytes). The
-// reports are stored as rendered (service::report_to_json), exactly what the memory store shows.
-std::string output_text(const service::JobOutput& o) {
-  json reports = json::array();
-  for (const DenoiseReport& r : o.reports) reports.push_back(service::report_to_json(r));
-  return json{{"format", std::string(io::to_string(o.format))},
-              {"media_type", o.media_type},
-              {"effective", service::to_json(o.effective)},
-              {"reports", reports},
-              {"notes", o.notes},
-              {"vertices", o.vertices},
-              {"faces", o.faces},
-              {"decode_ms", o.decode_ms},
-              {"denoise_ms", o.denoise_ms},
-              {"encode_ms", o.encode_ms},
-              {"stages",
-               {{"setup", o.stages.setup_ms},
-                {"measure", o.stages.measure_ms},
-                {"initial", o.stages.initial_ms},
-                {"region", o.stages.region_ms},
-                {"anisotropic", o.stages.anisotropic_ms},
-                {"normal", o.stages.normal_ms},
-                {"vertex", o.stages.vertex_ms},
-                {"total", o.stages.total_ms}}}}
-      .dump();
-}
+// The summary of a result that every replica needs to answer for it (all but the bytes): the
+// job's JSON view (server/job_json.h), reports as rendered, exactly what the memory store shows.
+std::string output_text(const service::JobOutput& o) { return service::output_to_json(o).dump(); }
 
 // The output (without bytes) and the rendered reports of a stored summary.
 std::shared_ptr<service::JobOutput> output_from_text(const std::string& text, json& reports) {
-  const json j = json::parse(text);
-  auto o = std::make_shared<service::JobOutput>();
-  o->format = io::format_from_string(j.at("format").get<std::string>()).value_or(io::Format::Off);
-  o->media_type = j.at("media_type").get<std::string>();
-  o->effective = service::job_params_from_json(j.at("effective"));
-  reports = j.at("reports");
-  o->notes = j.at("notes").get<std::vector<std::string>>();
-  o->vertices = j.value("vertices", std::int64_t{0});
-  o->faces = j.value("faces", std::int64_t{0});
-  o->decode_ms = j.value("decode_ms", 0.0);
-  o->denoise_ms = j.value("denoise_ms", 0.0);
-  o->encode_ms = j.value("encode_ms", 0.0);
-  const json& s = j.at("stages");
-  o->stages.setup_ms = s.value("setup", 0.0);
-  o->stages.measure_ms = s.value("measure", 0.0);
-  o->stages.initial_ms = s.value("initial", 0.0);
-  o->stages.region_ms = s.value("region", 0.0);
-  o->stages.anisotropic_ms = s.value("anisotropic", 0.0);
-  o->stages.normal_ms = s.value("normal", 0.0);
-  o->stages.vertex_ms = s.value("vertex", 0.0);
-  o->stages.total_ms = s.value("total", 0.0);
-  return o;
+  std::int64_t bytes = 0;
+  return std::make_shared<service::JobOutput>(service::output_from_json(json::parse(text), reports, bytes));
 }
 
 std::optional<JobState> state_from_string(std::string_view s) {
