@@ -128,7 +128,7 @@ std::string accepted_media_types() {
 }
 
 Problem unsupported_media_type(const std::string& detail) {
-  Problem p = make_problem(415, "unsupported-media-type", "Unsupported media type", detail);
+  Problem p = make_problem(ProblemType::UnsupportedMediaType, detail);
   p.extensions["accepted"] = accepted_media_types();
   return p;
 }
@@ -386,25 +386,21 @@ struct HttpService::Impl {
     // connection closed after the answer.
     if (req.has_header("Transfer-Encoding") && req.has_header("Content-Length")) {
       close_after_response(req, res);
-      return reject(make_problem(400, "bad-request", "Bad request",
-                                 "the request has both Transfer-Encoding and Content-Length"));
+      return reject(make_problem(ProblemType::BadRequest, "the request has both Transfer-Encoding and Content-Length"));
     }
     if (req.headers.size() > kMaxRequestHeaders)
-      return reject(make_problem(431, "too-many-headers", "Request header fields too large",
-                                 "the request has " + std::to_string(req.headers.size()) + " header fields, more than the limit of " +
+      return reject(make_problem(ProblemType::TooManyHeaders, "the request has " + std::to_string(req.headers.size()) + " header fields, more than the limit of " +
                                      std::to_string(kMaxRequestHeaders)));
     // Several ranges could multiply a result's size (one 1 MB result became 209 MB with 200
     // ranges in 0.11.4): refuse them; single ranges are honoured on result downloads only.
     if (req.ranges.size() > 1)
-      return reject(make_problem(416, "multiple-ranges", "Multiple ranges not supported",
-                                 "send at most one byte range"));
+      return reject(make_problem(ProblemType::MultipleRanges, "send at most one byte range"));
     static const std::regex result_path("/v1/jobs/[^/]+/result");
     if (!req.ranges.empty() && !(req.method == "GET" && std::regex_match(req.path, result_path)))
       const_cast<httplib::Request&>(req).ranges.clear();
     if (!config.auth_token.empty() && req.method != "OPTIONS" && req.path.rfind("/v1/", 0) == 0) {
       if (!authorized(req.get_header_value("Authorization")))
-        return reject(make_problem(401, "unauthorized", "Unauthorized",
-                                   "this server requires 'Authorization: Bearer <token>' on /v1 routes"));
+        return reject(make_problem(ProblemType::Unauthorized, "this server requires 'Authorization: Bearer <token>' on /v1 routes"));
     }
     return httplib::Server::HandlerResponse::Unhandled;
   }
@@ -431,36 +427,34 @@ struct HttpService::Impl {
           if (std::regex_match(req.path, r.regex) && allow.find(r.method) == std::string::npos)
             allow += (allow.empty() ? "" : ", ") + r.method;
         if (!allow.empty()) {
-          p = make_problem(405, "method-not-allowed", "Method not allowed",
-                           req.method + " is not allowed on " + req.path + "; allowed: " + allow);
+          p = make_problem(ProblemType::MethodNotAllowed, req.method + " is not allowed on " + req.path + "; allowed: " + allow);
           replace_header(res, "Allow", allow + ", OPTIONS");
         } else {
-          p = make_problem(404, "not-found", "Not found", "no route " + req.method + " " + req.path);
+          p = make_problem(ProblemType::NotFound, "no route " + req.method + " " + req.path);
         }
         break;
       }
       case 413:
-        p = make_problem(413, "too-large", "Content too large",
-                         "the body exceeds the limit of " + std::to_string(config.max_body_bytes) + " bytes");
+        p = make_problem(ProblemType::TooLarge, "the body exceeds the limit of " + std::to_string(config.max_body_bytes) + " bytes");
         close_after_response(req, res);
         break;
       case 414:
-        p = make_problem(414, "uri-too-long", "URI too long", "the request target is too long");
+        p = make_problem(ProblemType::UriTooLong, "the request target is too long");
         close_after_response(req, res);  // a body, if any, stays unread
         break;
       case 416:
-        p = make_problem(416, "range-not-satisfiable", "Range not satisfiable", "the Range header is invalid");
+        p = make_problem(ProblemType::RangeNotSatisfiable, "the Range header is invalid");
         break;
       case 400:
         // cpp-httplib could not parse the request line, the headers or the body's framing: what
         // follows on the connection is not a request we can find the start of (0.11.4 would
         // parse each following line as a request of its own).
-        p = make_problem(400, "bad-request", "Bad request", "the HTTP request could not be parsed");
+        p = make_problem(ProblemType::BadRequest, "the HTTP request could not be parsed");
         close_after_response(req, res);
         break;
       default:
-        p = make_problem(res.status, "http-error", "HTTP error", "the request failed with status " +
-                                                                     std::to_string(res.status));
+        p = make_problem(ProblemType::HttpError, "the request failed with status " + std::to_string(res.status));
+        p.status = res.status;
     }
     write_problem(req, res, p, id);
     return httplib::Server::HandlerResponse::Handled;
@@ -536,14 +530,13 @@ struct HttpService::Impl {
     metrics.add_bytes_in(std::int64_t(body.size()));
     if (over) throw_too_large(ctx);
     ctx.body_consumed = ok;
-    if (!ok) throw HttpError(make_problem(400, "bad-body", "Unreadable body", "the request body could not be read"));
+    if (!ok) throw HttpError(make_problem(ProblemType::BadBody, "the request body could not be read"));
     return body;
   }
 
   [[noreturn]] void throw_too_large(Context& ctx) {
     close_after_response(ctx.req, ctx.res);  // the rest of the body stays unread
-    throw HttpError(make_problem(413, "too-large", "Content too large",
-                                 "the body exceeds the limit of " + std::to_string(config.max_body_bytes) + " bytes"));
+    throw HttpError(make_problem(ProblemType::TooLarge, "the body exceeds the limit of " + std::to_string(config.max_body_bytes) + " bytes"));
   }
 
   void check_declared_length(Context& ctx) {
@@ -551,8 +544,7 @@ struct HttpService::Impl {
     if (chunked) return;
     if (!ctx.req.has_header("Content-Length")) {
       close_after_response(ctx.req, ctx.res);
-      throw HttpError(make_problem(411, "length-required", "Length required",
-                                   "send Content-Length or Transfer-Encoding: chunked"));
+      throw HttpError(make_problem(ProblemType::LengthRequired, "send Content-Length or Transfer-Encoding: chunked"));
     }
     const std::string text = ctx.req.get_header_value("Content-Length");
     std::uint64_t n = 0;
@@ -560,7 +552,7 @@ struct HttpService::Impl {
     if (ec == std::errc::result_out_of_range) throw_too_large(ctx);
     if (ec != std::errc() || ptr != text.data() + text.size() || text.empty()) {
       close_after_response(ctx.req, ctx.res);
-      throw HttpError(make_problem(400, "bad-request", "Bad request", "Content-Length is not a number"));
+      throw HttpError(make_problem(ProblemType::BadRequest, "Content-Length is not a number"));
     }
     if (n > std::uint64_t(config.max_body_bytes)) throw_too_large(ctx);
   }
@@ -571,8 +563,7 @@ struct HttpService::Impl {
     std::optional<std::string> params_text;
     auto set_params = [&](std::string text, const char* where) {
       if (params_text)
-        throw HttpError(make_problem(400, "invalid-params", "Invalid parameters",
-                                     std::string("parameters given twice (") + where +
+        throw HttpError(make_problem(ProblemType::InvalidParams, std::string("parameters given twice (") + where +
                                          "); use one of ?params=, X-Denoise-Params or the params form field"));
       params_text = std::move(text);
     };
@@ -614,10 +605,9 @@ struct HttpService::Impl {
       if (over) throw_too_large(ctx);
       ctx.body_consumed = ok && !unexpected;
       if (unexpected)
-        throw HttpError(make_problem(400, "bad-form", "Bad form",
-                                     "unexpected form field '" + unexpected_name + "'; expected 'mesh' and 'params'"));
-      if (!ok) throw HttpError(make_problem(400, "bad-form", "Bad form", "the multipart body could not be parsed"));
-      if (!has_mesh) throw HttpError(make_problem(400, "bad-form", "Bad form", "the form has no 'mesh' field"));
+        throw HttpError(make_problem(ProblemType::BadForm, "unexpected form field '" + unexpected_name + "'; expected 'mesh' and 'params'"));
+      if (!ok) throw HttpError(make_problem(ProblemType::BadForm, "the multipart body could not be parsed"));
+      if (!has_mesh) throw HttpError(make_problem(ProblemType::BadForm, "the form has no 'mesh' field"));
       if (has_params) set_params(std::move(params_part), "form field");
       input.format = resolve_format(mesh_type, mesh, mesh_name);
       input.bytes = std::move(mesh);
@@ -628,7 +618,7 @@ struct HttpService::Impl {
             "application/x-www-form-urlencoded is not a mesh (curl -d sets it: use --data-binary with "
             "-H 'Content-Type: ...')"));
       input.bytes = read_body(ctx, *ctx.reader);
-      if (input.bytes.empty()) throw HttpError(make_problem(400, "empty-body", "Empty body", "the request body is empty"));
+      if (input.bytes.empty()) throw HttpError(make_problem(ProblemType::EmptyBody, "the request body is empty"));
       input.format = resolve_format(content_type, input.bytes);
     }
     input.params = params_text ? service::job_params_from_text(*params_text) : service::JobParams{};
@@ -646,8 +636,7 @@ struct HttpService::Impl {
       const bool ok = (first >= 0 && first < size && (last < 0 || last >= first)) || (first < 0 && last > 0);
       if (!ok) {
         replace_header(res, "Content-Range", "bytes */" + std::to_string(size));
-        throw HttpError(make_problem(416, "range-not-satisfiable", "Range not satisfiable",
-                                     "the result has " + std::to_string(size) + " bytes"));
+        throw HttpError(make_problem(ProblemType::RangeNotSatisfiable, "the result has " + std::to_string(size) + " bytes"));
       }
       res.status = 206;
     } else {
@@ -700,8 +689,7 @@ struct HttpService::Impl {
 
   static JobSnapshot found(const std::string& id, std::optional<JobSnapshot> job) {
     if (!job)
-      throw HttpError(make_problem(404, "job-not-found", "Job not found",
-                                   "no job '" + header_safe(id) + "' (unknown, deleted or expired)"));
+      throw HttpError(job_not_found(id));
     return std::move(*job);
   }
 
@@ -714,8 +702,7 @@ struct HttpService::Impl {
     double seconds = -1;
     const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), seconds);
     if (ec != std::errc() || end != text.data() + text.size() || !(seconds >= 0 && seconds <= kMaxWaitS)) {
-      Problem p = make_problem(400, "invalid-query", "Invalid query parameter",
-                               "wait must be a number of seconds from 0 to " + std::to_string(int(kMaxWaitS)) +
+      Problem p = make_problem(ProblemType::InvalidQuery, "wait must be a number of seconds from 0 to " + std::to_string(int(kMaxWaitS)) +
                                    " (got '" + header_safe(text) + "')");
       p.extensions["field"] = "wait";
       p.extensions["minimum"] = 0;
@@ -739,12 +726,12 @@ struct HttpService::Impl {
 
   void readyz(Context& ctx) {
     if (queue.draining()) {
-      Problem p = make_problem(503, "draining", "Server draining", "the server is shutting down");
+      Problem p = make_problem(ProblemType::Draining, "the server is shutting down");
       p.retry_after_s = 5;
       throw HttpError(p);
     }
     if (queue.saturated()) {
-      Problem p = make_problem(503, "queue-full", "Job queue full", "the job queue is full");
+      Problem p = make_problem(ProblemType::QueueFull, "the job queue is full");
       p.retry_after_s = queue.retry_after_s();
       throw HttpError(p);
     }
@@ -816,7 +803,7 @@ struct HttpService::Impl {
     }
     const JobSnapshot s = job->snapshot();
     if (s.state == JobState::Succeeded) return write_result(ctx, s);
-    throw HttpError(s.error.value_or(make_problem(500, "internal", "Internal server error", "the job failed")));
+    throw HttpError(s.error.value_or(make_problem(ProblemType::Internal, "the job failed")));
   }
 
   void create_job(Context& ctx) {
@@ -826,8 +813,7 @@ struct HttpService::Impl {
       if (key->empty() || key->size() > 255 || !std::all_of(key->begin(), key->end(), [](char c) {
             return c > 0x20 && c < 0x7f;
           }))
-        throw HttpError(make_problem(400, "bad-idempotency-key", "Bad Idempotency-Key",
-                                     "Idempotency-Key must be 1 to 255 visible ASCII characters"));
+        throw HttpError(make_problem(ProblemType::BadIdempotencyKey, "Idempotency-Key must be 1 to 255 visible ASCII characters"));
     }
     service::JobInput input = read_job_input(ctx);
     // What can be refused at once is refused before the job is accepted (not 202 and a failed
@@ -868,10 +854,10 @@ struct HttpService::Impl {
     }
     Problem p;
     if (!is_terminal(s.state)) {
-      p = make_problem(409, "job-not-finished", "Job not finished", "the job is " + std::string(to_string(s.state)));
+      p = make_problem(ProblemType::JobNotFinished, "the job is " + std::string(to_string(s.state)));
       p.retry_after_s = 1;
     } else {
-      p = make_problem(409, "job-" + std::string(to_string(s.state)), "Job has no result",
+      p = make_problem(s.state == JobState::Cancelled ? ProblemType::JobCancelled : ProblemType::JobFailed,
                        "the job " + std::string(to_string(s.state)) + (s.error ? ": " + s.error->detail : ""));
       if (s.error) p.extensions["job_error"] = s.error->to_json("/v1/jobs/" + s.id, ctx.request_id);
     }
@@ -884,8 +870,7 @@ struct HttpService::Impl {
     const JobStore::CancelResult r = store->cancel(id);
     switch (r.outcome) {
       case JobQueue::CancelOutcome::NotFound:
-        throw HttpError(make_problem(404, "job-not-found", "Job not found",
-                                     "no job '" + header_safe(id) + "' (unknown, deleted or expired)"));
+        throw HttpError(job_not_found(id));
       case JobQueue::CancelOutcome::CancelledQueued:
         return set_json(ctx.res, job_json(r.job, ctx.request_id), 200);
       case JobQueue::CancelOutcome::CancelRequested:
@@ -899,7 +884,7 @@ struct HttpService::Impl {
   // GET / and GET /web/{path}: the web page (web_routes.h), unless --web off.
   void web_page(Context& ctx) {
     if (!config.web)
-      throw HttpError(make_problem(404, "not-found", "Not found", "no route GET " + ctx.req.path + " (--web off)"));
+      throw HttpError(make_problem(ProblemType::NotFound, "no route GET " + ctx.req.path + " (--web off)"));
     serve_web_file(ctx.req, ctx.res, ctx.req.matches.size() > 1 ? ctx.req.matches[1].str() : "index.html");
   }
 

@@ -457,7 +457,7 @@ std::string problem_text(const Problem& p) {
 std::optional<Problem> problem_from_text(const std::string& text) {
   if (text.empty()) return std::nullopt;
   const json j = json::parse(text, nullptr, false);
-  if (!j.is_object()) return make_problem(500, "internal", "Internal server error", "unreadable stored error");
+  if (!j.is_object()) return make_problem(ProblemType::Internal, "unreadable stored error");
   Problem p = make_problem(j.value("status", 500), j.value("type", "internal"), j.value("title", ""),
                            j.value("detail", ""));
   if (j.contains("extensions") && j["extensions"].is_object()) p.extensions = j["extensions"];
@@ -566,17 +566,15 @@ class RedisJobStore final : public JobStore {
     gethostname(host, sizeof host - 1);
     consumer_ = std::string(host) + "-" + std::to_string(getpid()) + "-" + random_hex(rng_, 1).substr(0, 6);
     exhausted_problem_ = problem_text([&] {
-      Problem p = make_problem(500, "attempts-exhausted", "Job failed on every attempt",
-                               "the job was started " + std::to_string(c.queue_max_attempts) +
+      Problem p = make_problem(ProblemType::AttemptsExhausted, "the job was started " + std::to_string(c.queue_max_attempts) +
                                    " times and its worker stopped answering each time (crash, kill or lost "
                                    "node); it is not run again");
       p.extensions["attempts"] = c.queue_max_attempts;
       return p;
     }());
-    cancelled_problem_ =
-        problem_text(make_problem(409, "cancelled", "Job cancelled", "cancelled by DELETE before it started"));
+    cancelled_problem_ = problem_text(cancelled_before_start());
     lost_problem_ = problem_text(
-        make_problem(500, "input-lost", "Job input lost", "the job's input is no longer in the job store"));
+        make_problem(ProblemType::InputLost, "the job's input is no longer in the job store"));
     if (const char* v = std::getenv("MDN_TEST_HANDOFF_PICKUP_DELAY_MS"))
       handoff_pickup_delay_ = std::chrono::milliseconds(std::atoi(v));
     const int slots = c.effective_workers();
@@ -607,7 +605,7 @@ class RedisJobStore final : public JobStore {
   Submitted submit(service::JobInput input, const std::optional<std::string>& key,
                    const std::string& fingerprint) override {
     if (queue_.draining() || draining_) {
-      Problem p = make_problem(503, "draining", "Server draining", "the server is shutting down and accepts no new jobs");
+      Problem p = make_problem(ProblemType::Draining, "the server is shutting down and accepts no new jobs");
       p.retry_after_s = 5;
       throw HttpError(std::move(p));
     }
@@ -673,16 +671,14 @@ class RedisJobStore final : public JobStore {
         outcome = "ok";
       }
     } catch (const std::exception& e) {
-      throw HttpError(make_problem(500, "queue-error", "Job store error", e.what()));
+      throw HttpError(make_problem(ProblemType::QueueError, e.what()));
     }
     if (outcome == "noinput")
-      throw HttpError(make_problem(500, "queue-error", "Job store error", "the job's input could not be stored"));
+      throw HttpError(make_problem(ProblemType::QueueError, "the job's input could not be stored"));
     if (outcome == "reused")
-      throw HttpError(make_problem(422, "idempotency-key-reused", "Idempotency-Key reused",
-                                   "this Idempotency-Key was already used with a different body or parameters"));
+      throw HttpError(make_problem(ProblemType::IdempotencyKeyReused, "this Idempotency-Key was already used with a different body or parameters"));
     if (outcome == "full") {
-      Problem p = make_problem(503, "queue-full", "Job queue full",
-                               "all " + capacity + " slots of the shared queue are taken; retry later");
+      Problem p = make_problem(ProblemType::QueueFull, "all " + capacity + " slots of the shared queue are taken; retry later");
       p.retry_after_s = 5;
       throw HttpError(std::move(p));
     }
@@ -735,8 +731,7 @@ class RedisJobStore final : public JobStore {
     try {
       return snapshot_from_hash(id, std::move(h), result);
     } catch (const std::exception& e) {
-      throw HttpError(make_problem(500, "queue-error", "Job store error",
-                                   std::string("the stored job could not be read: ") + e.what()));
+      throw HttpError(make_problem(ProblemType::QueueError, std::string("the stored job could not be read: ") + e.what()));
     }
   }
 
@@ -775,11 +770,9 @@ class RedisJobStore final : public JobStore {
   CancelResult cancel(const std::string& id) override {
     CancelResult r;
     if (!valid_id(id)) return r;
-    const std::string problem =
-        problem_text(make_problem(409, "cancelled", "Job cancelled", "cancelled by DELETE before it started"));
     auto reply = run([&](Connection& c) {
       return c.checked({"EVAL", kFinishHelpers + std::string(kCancel), "3", job_key(id), input_key(id), result_key(id),
-                        problem, std::to_string(now_ms()), ttl_ms_});
+                        cancelled_problem_, std::to_string(now_ms()), ttl_ms_});
     });
     const std::string_view outcome = str(reply.get());
     if (outcome == "none") return r;
@@ -796,8 +789,7 @@ class RedisJobStore final : public JobStore {
 
   std::optional<Problem> unavailable() const override {
     if (up_) return std::nullopt;
-    Problem p = make_problem(503, "queue-unavailable", "Job store unavailable",
-                             "the shared job store (Redis) cannot be reached; the server reconnects by itself");
+    Problem p = make_problem(ProblemType::QueueUnavailable, "the shared job store (Redis) cannot be reached; the server reconnects by itself");
     p.retry_after_s = kRetryAfterS;
     return p;
   }
@@ -893,7 +885,7 @@ class RedisJobStore final : public JobStore {
   }
 
   [[noreturn]] void throw_unavailable(const std::string& detail) const {
-    Problem p = make_problem(503, "queue-unavailable", "Job store unavailable", detail);
+    Problem p = make_problem(ProblemType::QueueUnavailable, detail);
     p.retry_after_s = kRetryAfterS;
     throw HttpError(std::move(p));
   }
@@ -915,8 +907,7 @@ class RedisJobStore final : public JobStore {
     } catch (const RedisReplyError& e) {
       pool_.give(std::move(c));
       if (transient_reply(e.what())) throw_unavailable(std::string("the shared job store (Redis) is busy: ") + e.what());
-      throw HttpError(make_problem(500, "queue-error", "Job store error",
-                                   std::string("the shared job store (Redis) refused: ") + e.what()));
+      throw HttpError(make_problem(ProblemType::QueueError, std::string("the shared job store (Redis) refused: ") + e.what()));
     }
   }
 
@@ -1372,15 +1363,14 @@ class RedisJobStore final : public JobStore {
       state = s.state;
       error = s.error;
       if (state == JobState::Cancelled && cancel_by_user)
-        error = make_problem(409, "cancelled", "Job cancelled", "cancelled by DELETE while running");
+        error = make_problem(ProblemType::Cancelled, "cancelled by DELETE while running");
       else if (state == JobState::Cancelled && end == End::Finished)  // cancelled by this replica's stop
         end = End::Released;
       if (state == JobState::Succeeded) {
         result_bytes = std::int64_t(s.output->bytes.size());
         if (result_bytes > config_.queue_max_result_bytes) {
           state = JobState::Failed;
-          error = make_problem(422, "result-too-large", "Result too large",
-                               "the result has " + std::to_string(result_bytes) + " bytes; the job store keeps at most " +
+          error = make_problem(ProblemType::ResultTooLarge, "the result has " + std::to_string(result_bytes) + " bytes; the job store keeps at most " +
                                    std::to_string(config_.queue_max_result_bytes) + " (--queue-max-result)");
           error->extensions["maximum"] = config_.queue_max_result_bytes;
         } else {
