@@ -20,10 +20,8 @@
 #include "core/params.h"
 #include "server/http/connection_probe.h"
 #include "server/http/embedded.h"
-#include "server/http/job_store.h"
-#include "server/http/metrics.h"
 #include "server/http/problem.h"
-#include "server/http/redis_queue.h"
+#include "server/http/service_parts.h"
 #include "server/http/web_routes.h"
 #include "server/job_json.h"
 #include "server/params_json.h"
@@ -206,29 +204,19 @@ struct HttpService::Impl {
     std::regex regex;
   };
 
-  Impl(const ServerConfig& c, std::shared_ptr<const EventLog> l)
+  Impl(const ServerConfig& c, std::shared_ptr<const EventLog> l, ServiceParts p)
       : config(c),
         log(std::move(l)),
-        queue(make_queue_options(c),
-              [this](const JobSnapshot& s) {
-                metrics.job_finished(std::string(to_string(s.state)), s.queue_wait_s, s.run_s);
-                if (log) {
-                  json fields = {{"job_id", s.id}, {"state", to_string(s.state)}, {"queue_wait_s", s.queue_wait_s},
-                                 {"run_s", s.run_s}, {"async", s.asynchronous}};
-                  if (s.error) fields["error"] = s.error->type, fields["detail"] = s.error->detail;
-                  log->info("job_finished", fields);
-                }
-              }) {
+        parts(std::move(p)),
+        metrics(*parts.metrics),
+        queue(*parts.queue),
+        store(parts.store.get()) {
     std::random_device rd;
     char buf[16];
     std::snprintf(buf, sizeof buf, "%08x", unsigned(rd()));
     id_prefix = buf;
     routes = make_routes();
     for (Route& r : routes) r.regex = std::regex(r.pattern);
-    if (config.queue == "memory")
-      store = std::make_unique<MemoryJobStore>(queue);
-    else
-      store = make_redis_job_store(config, queue, log);
     install();
   }
 
@@ -250,19 +238,6 @@ struct HttpService::Impl {
         {"GET", "/", "/", &Impl::web_page, false, {}},
         {"GET", "/web/(.+)", "/web/{path}", &Impl::web_page, false, {}},
     };
-  }
-
-  static JobQueueOptions make_queue_options(const ServerConfig& c) {
-    JobQueueOptions o;
-    o.workers = c.effective_workers();
-    o.threads_per_job = c.threads_per_job;
-    o.capacity = c.queue_capacity;
-    o.time_limit = std::chrono::milliseconds(std::int64_t(c.job_time_limit_s * 1000));
-    o.result_ttl = std::chrono::milliseconds(std::int64_t(c.result_ttl_s * 1000));
-    o.max_stored = c.max_stored_jobs;
-    o.limits.max_faces = c.max_faces;
-    o.limits.max_vertices = c.max_vertices;
-    return o;
   }
 
   // ---------------------------------------------------------------- wiring
@@ -891,9 +866,10 @@ struct HttpService::Impl {
   // ---------------------------------------------------------------- state
   const ServerConfig config;
   const std::shared_ptr<const EventLog> log;
-  Metrics metrics;  // before queue: the queue's hook uses it until the queue is destroyed
-  JobQueue queue;
-  std::unique_ptr<JobStore> store;  // after queue: the Redis store runs its jobs on it
+  ServiceParts parts;  // owns what the three below refer to
+  Metrics& metrics;
+  JobQueue& queue;
+  JobStore* store;
   httplib::Server svr;
   std::vector<Route> routes;
   std::string id_prefix;
@@ -920,8 +896,8 @@ struct HttpService::Impl {
   } overload_log;
 };
 
-HttpService::HttpService(const ServerConfig& config, std::shared_ptr<const EventLog> log)
-    : impl_(std::make_unique<Impl>(config, std::move(log))) {}
+HttpService::HttpService(const ServerConfig& config, std::shared_ptr<const EventLog> log, ServiceParts parts)
+    : impl_(std::make_unique<Impl>(config, std::move(log), std::move(parts))) {}
 
 HttpService::~HttpService() {
   stop();

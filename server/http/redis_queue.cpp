@@ -553,7 +553,7 @@ class RedisJobStore final : public JobStore {
       : config_(c),
         queue_(queue),
         log_(std::move(log)),
-        pool_(parse_redis_url(c.queue), 10s),
+        pool_(c.queue.value(), 10s),
         prefix_(c.queue_prefix),
         stream_(prefix_ + "queue"),
         ttl_ms_(std::to_string(std::max<std::int64_t>(1, std::int64_t(std::llround(c.result_ttl_s * 1000))))),
