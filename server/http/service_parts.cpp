@@ -3,7 +3,7 @@
 #include <string>
 #include <utility>
 
-#include "server/http/redis_queue.h"
+#include "server/http/redis/store.h"
 
 namespace mdn::http {
 
