@@ -17,6 +17,7 @@
 
 #include "server/http/redis/connection.h"
 #include "server/http/redis/job_codec.h"
+#include "server/http/redis/recent_results.h"
 #include "server/http/redis/scripts.h"
 #include "server/params_json.h"
 
@@ -944,55 +945,6 @@ class RedisJobStore final : public JobStore {
         log_->warn("job_lost", {{"job_id", f.job_id}, {"detail", "another replica took the job over"}});
     }
   }
-
-  // Results this replica stored lately, so that GET /result through it need not read them
-  // back (a megabyte through Redis costs a few milliseconds each way). find() serves one only
-  // while Redis holds its job as succeeded with the same finish time: deleted and expired jobs
-  // are never served from here. Oldest first out, within kBytes and kPlaces.
-  class RecentResults {
-   public:
-    struct Entry {
-      std::string finished_ms;
-      std::shared_ptr<const std::string> bytes;
-    };
-    static constexpr std::size_t kBytes = 64u << 20, kLargest = kBytes / 4, kPlaces = 4096;
-    void add(const std::string& id, const std::string& finished_ms, std::string bytes) {
-      if (bytes.size() > kLargest) return;
-      std::lock_guard lock(mutex_);
-      erase_locked(id);
-      total_ += bytes.size();
-      entries_[id] = {finished_ms, std::make_shared<const std::string>(std::move(bytes))};
-      order_.push_back(id);
-      // Places of erased entries count too, so that order_ stays bounded however many results
-      // DELETE removed meanwhile.
-      while (!order_.empty() && (total_ > kBytes || order_.size() > kPlaces)) {
-        erase_locked(order_.front());
-        order_.pop_front();
-      }
-    }
-    std::optional<Entry> find(const std::string& id) const {
-      std::lock_guard lock(mutex_);
-      auto it = entries_.find(id);
-      if (it == entries_.end()) return std::nullopt;
-      return it->second;
-    }
-    void erase(const std::string& id) {
-      std::lock_guard lock(mutex_);
-      erase_locked(id);  // its place in order_ goes when it comes first
-    }
-
-   private:
-    void erase_locked(const std::string& id) {
-      auto it = entries_.find(id);
-      if (it == entries_.end()) return;
-      total_ -= it->second.bytes->size();
-      entries_.erase(it);
-    }
-    mutable std::mutex mutex_;
-    std::unordered_map<std::string, Entry> entries_;
-    std::deque<std::string> order_;
-    std::size_t total_ = 0;
-  };
 
   // ---------------------------------------------------------------- state
   const ServerConfig config_;
