@@ -20,7 +20,9 @@
 #include "core/params.h"
 #include "server/http/connection_probe.h"
 #include "server/http/embedded.h"
+#include "server/http/job_resource.h"
 #include "server/http/problem.h"
+#include "server/http/request_body.h"
 #include "server/http/service_parts.h"
 #include "server/http/web_routes.h"
 #include "server/job_json.h"
@@ -41,156 +43,6 @@ constexpr const char* kAllowedRequestHeaders =
 // Header fields a request may carry (431 beyond; cpp-httplib 0.11.4 has no such limit).
 constexpr std::size_t kMaxRequestHeaders = 100;
 
-std::string lower(std::string s) {
-  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
-std::string trim(std::string_view s) {
-  const auto b = s.find_first_not_of(" \t");
-  if (b == std::string_view::npos) return {};
-  const auto e = s.find_last_not_of(" \t");
-  return std::string(s.substr(b, e - b + 1));
-}
-
-// "model/gltf-binary; charset=x" -> "model/gltf-binary"
-std::string base_media_type(std::string_view content_type) {
-  return lower(trim(content_type.substr(0, content_type.find(';'))));
-}
-
-void replace_header(httplib::Response& res, const std::string& key, const std::string& value) {
-  res.headers.erase(key);
-  res.set_header(key, value);
-}
-
-// Set when this thread's current request leaves bytes unread on its connection. cpp-httplib runs
-// a request from pre-routing (or, for a request it cannot parse, the error handler) to the
-// logger on one thread, so access_log reads it for the same request.
-thread_local bool t_bytes_left_unread = false;
-
-// Answers this request, then closes the connection (access_log does it once the response is
-// written, with a lingering close): used when the request body stays unread, or when what
-// follows on the connection cannot be told apart from the rest of an unparseable request.
-void close_after_response(const httplib::Request&, httplib::Response& res) {
-  replace_header(res, "Connection", "close");
-  t_bytes_left_unread = true;
-}
-
-// A header value must not carry CR/LF (response splitting) nor other control characters.
-std::string header_safe(std::string_view text) {
-  std::string out;
-  for (char c : text) out += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? ' ' : c;
-  return out;
-}
-
-std::string format_ms(double ms) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3f", ms);
-  return buf;
-}
-
-std::string iso8601(std::chrono::system_clock::time_point t) {
-  const std::time_t tt = std::chrono::system_clock::to_time_t(t);
-  std::tm tm{};
-  gmtime_r(&tt, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
-bool has_request_body(const httplib::Request& req) {
-  if (lower(req.get_header_value("Transfer-Encoding")).find("chunked") != std::string::npos) return true;
-  return req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0";
-}
-
-// Media types accepted for mesh bodies; nullopt means "recognise the bytes" (sniffing).
-struct InputMediaType {
-  std::string_view media_type;
-  std::optional<io::Format> format;
-};
-constexpr InputMediaType kInputMediaTypes[] = {
-    {"model/gltf-binary", io::Format::Glb},
-    {"model/gltf+json", io::Format::Gltf},
-    {"model/x-off", io::Format::Off},
-    {"model/obj", io::Format::Obj},
-    {"model/x-ply", io::Format::Ply},
-    {"model/x-draco", io::Format::Drc},
-    {"application/octet-stream", std::nullopt},  // .drc, or any format recognised by content
-    {"text/plain", std::nullopt},                // OFF/OBJ/PLY ASCII recognised by content
-};
-
-std::string accepted_media_types() {
-  std::string out;
-  for (const auto& t : kInputMediaTypes) out += (out.empty() ? "" : ", ") + std::string(t.media_type);
-  return out;
-}
-
-Problem unsupported_media_type(const std::string& detail) {
-  Problem p = make_problem(ProblemType::UnsupportedMediaType, detail);
-  p.extensions["accepted"] = accepted_media_types();
-  return p;
-}
-
-// The container of a mesh body: from its declared media type, else from its bytes.
-io::Format resolve_format(const std::string& content_type, std::string_view bytes,
-                          const std::string& filename = {}) {
-  const std::string type = base_media_type(content_type);
-  bool sniff = type.empty();
-  for (const auto& t : kInputMediaTypes) {
-    if (type == t.media_type) {
-      if (t.format) return *t.format;
-      sniff = true;
-    }
-  }
-  if (!sniff) {
-    // Whatever media type the io adapters emit is accepted too (a result can be sent back).
-    for (io::Format f : {io::Format::Off, io::Format::Obj, io::Format::Ply, io::Format::Drc, io::Format::Glb,
-                         io::Format::Gltf}) {
-      if (type == io::media_type(f)) {
-        if (type == "application/octet-stream" || type == "text/plain") break;
-        return f;
-      }
-    }
-    throw HttpError(unsupported_media_type("media type '" + type + "' is not a mesh format this service reads"));
-  }
-  if (!filename.empty())
-    if (auto f = io::format_from_extension(filename)) return *f;
-  if (auto f = io::sniff_format(bytes)) return *f;
-  throw HttpError(unsupported_media_type(
-      "the body is not recognisable as glTF, GLB, Draco, OFF, OBJ or PLY; declare its media type"));
-}
-
-// One report per surface: what ran (auto mode: the chosen parameters and the measurements).
-json reports_json(const JobSnapshot& s) {
-  if (s.reports) return *s.reports;
-  return service::reports_to_json(s.output->reports);
-}
-
-// `bytes`: the result's size (the shared store loads the bytes themselves only for /result).
-json output_summary(const JobSnapshot& s) { return service::output_to_json(*s.output, s.output_bytes, reports_json(s)); }
-
-// Server-Timing (W3C): queue wait, the job's steps grouped as kTimingFields says, total.
-std::string server_timing(const JobSnapshot& s) {
-  std::vector<std::pair<std::string_view, double>> groups;
-  for (const service::TimingField& f : service::kTimingFields) {
-    if (f.server_timing.empty()) continue;
-    auto it = std::find_if(groups.begin(), groups.end(), [&](const auto& g) { return g.first == f.server_timing; });
-    if (it == groups.end()) it = groups.insert(groups.end(), {f.server_timing, 0.0});
-    it->second += s.output->timings.*f.member;
-  }
-  std::string out = "queue;dur=" + format_ms(s.queue_wait_s * 1000);
-  for (const auto& [name, ms] : groups) out += ", " + std::string(name) + ";dur=" + format_ms(ms);
-  return out + ", total;dur=" + format_ms((s.queue_wait_s + s.run_s) * 1000);
-}
-
-struct Context {
-  const httplib::Request& req;
-  httplib::Response& res;
-  const httplib::ContentReader* reader;  // POST routes only
-  std::string request_id;
-  bool body_consumed = false;  // POST routes: the whole body was read
-};
-
 }  // namespace
 
 struct HttpService::Impl {
@@ -210,7 +62,8 @@ struct HttpService::Impl {
         parts(std::move(p)),
         metrics(*parts.metrics),
         queue(*parts.queue),
-        store(parts.store.get()) {
+        store(parts.store.get()),
+        bodies(config.max_body_bytes, metrics) {
     std::random_device rd;
     char buf[16];
     std::snprintf(buf, sizeof buf, "%08x", unsigned(rd()));
@@ -340,7 +193,7 @@ struct HttpService::Impl {
   }
 
   httplib::Server::HandlerResponse pre_routing(const httplib::Request& req, httplib::Response& res) {
-    t_bytes_left_unread = false;
+    take_bytes_left_unread();
     {
       std::lock_guard lock(start_mutex);
       request_start[std::this_thread::get_id()] = Clock::now();
@@ -458,7 +311,7 @@ struct HttpService::Impl {
     // when the client itself asked for "Connection: close": it may still be sending, and
     // cpp-httplib's plain close would then reset the connection under it (its next write fails
     // and it never reads the answer).
-    if (std::exchange(t_bytes_left_unread, false))
+    if (take_bytes_left_unread())
       if (auto probe = ConnectionProbe::current(req.remote_port)) probe->linger_close(1000);
     const std::string route = route_name(req);
     metrics.count_request(route, req.method, res.status);
@@ -485,171 +338,6 @@ struct HttpService::Impl {
               {"duration_ms", ms},
               {"bytes_out", res.body.size()},
               {"remote", req.remote_addr}});
-  }
-
-  // ---------------------------------------------------------------- request bodies
-  // Reads the body through the ContentReader, counting bytes ourselves: cpp-httplib 0.11.4
-  // applies set_payload_max_length to Content-Length bodies only, not to chunked uploads.
-  std::string read_body(Context& ctx, const httplib::ContentReader& reader) {
-    std::string body;
-    check_declared_length(ctx);
-    bool over = false;
-    const bool ok = reader([&](const char* data, std::size_t n) {
-      if (std::int64_t(body.size() + n) > config.max_body_bytes) {
-        over = true;
-        return false;
-      }
-      body.append(data, n);
-      return true;
-    });
-    metrics.add_bytes_in(std::int64_t(body.size()));
-    if (over) throw_too_large(ctx);
-    ctx.body_consumed = ok;
-    if (!ok) throw HttpError(make_problem(ProblemType::BadBody, "the request body could not be read"));
-    return body;
-  }
-
-  [[noreturn]] void throw_too_large(Context& ctx) {
-    close_after_response(ctx.req, ctx.res);  // the rest of the body stays unread
-    throw HttpError(make_problem(ProblemType::TooLarge, "the body exceeds the limit of " + std::to_string(config.max_body_bytes) + " bytes"));
-  }
-
-  void check_declared_length(Context& ctx) {
-    const bool chunked = lower(ctx.req.get_header_value("Transfer-Encoding")).find("chunked") != std::string::npos;
-    if (chunked) return;
-    if (!ctx.req.has_header("Content-Length")) {
-      close_after_response(ctx.req, ctx.res);
-      throw HttpError(make_problem(ProblemType::LengthRequired, "send Content-Length or Transfer-Encoding: chunked"));
-    }
-    const std::string text = ctx.req.get_header_value("Content-Length");
-    std::uint64_t n = 0;
-    auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), n);
-    if (ec == std::errc::result_out_of_range) throw_too_large(ctx);
-    if (ec != std::errc() || ptr != text.data() + text.size() || text.empty()) {
-      close_after_response(ctx.req, ctx.res);
-      throw HttpError(make_problem(ProblemType::BadRequest, "Content-Length is not a number"));
-    }
-    if (n > std::uint64_t(config.max_body_bytes)) throw_too_large(ctx);
-  }
-
-  // Body, container and parameters of a job, from a raw body or a multipart form.
-  service::JobInput read_job_input(Context& ctx) {
-    const httplib::Request& req = ctx.req;
-    std::optional<std::string> params_text;
-    auto set_params = [&](std::string text, const char* where) {
-      if (params_text)
-        throw HttpError(make_problem(ProblemType::InvalidParams, std::string("parameters given twice (") + where +
-                                         "); use one of ?params=, X-Denoise-Params or the params form field"));
-      params_text = std::move(text);
-    };
-    if (req.has_param("params")) set_params(req.get_param_value("params"), "query");
-    if (req.has_header("X-Denoise-Params")) set_params(req.get_header_value("X-Denoise-Params"), "header");
-
-    service::JobInput input;
-    if (req.is_multipart_form_data()) {
-      check_declared_length(ctx);
-      std::string current, mesh, params_part, mesh_type, mesh_name;
-      bool has_mesh = false, has_params = false, over = false, unexpected = false;
-      std::string unexpected_name;
-      std::int64_t total = 0;
-      const bool ok = (*ctx.reader)(
-          [&](const httplib::MultipartFormData& part) {
-            current = part.name;
-            if (current == "mesh") {
-              if (has_mesh) return unexpected = true, unexpected_name = "mesh (twice)", false;
-              has_mesh = true;
-              mesh_type = part.content_type;
-              mesh_name = part.filename;
-            } else if (current == "params") {
-              if (has_params) return unexpected = true, unexpected_name = "params (twice)", false;
-              has_params = true;
-            } else {
-              unexpected = true;
-              unexpected_name = current;
-              return false;
-            }
-            return true;
-          },
-          [&](const char* data, std::size_t n) {
-            total += std::int64_t(n);
-            if (total > config.max_body_bytes) return over = true, false;
-            (current == "mesh" ? mesh : params_part).append(data, n);
-            return true;
-          });
-      metrics.add_bytes_in(total);
-      if (over) throw_too_large(ctx);
-      ctx.body_consumed = ok && !unexpected;
-      if (unexpected)
-        throw HttpError(make_problem(ProblemType::BadForm, "unexpected form field '" + unexpected_name + "'; expected 'mesh' and 'params'"));
-      if (!ok) throw HttpError(make_problem(ProblemType::BadForm, "the multipart body could not be parsed"));
-      if (!has_mesh) throw HttpError(make_problem(ProblemType::BadForm, "the form has no 'mesh' field"));
-      if (has_params) set_params(std::move(params_part), "form field");
-      input.format = resolve_format(mesh_type, mesh, mesh_name);
-      input.bytes = std::move(mesh);
-    } else {
-      std::string content_type = req.get_header_value("Content-Type");
-      if (base_media_type(content_type) == "application/x-www-form-urlencoded")
-        throw HttpError(unsupported_media_type(
-            "application/x-www-form-urlencoded is not a mesh (curl -d sets it: use --data-binary with "
-            "-H 'Content-Type: ...')"));
-      input.bytes = read_body(ctx, *ctx.reader);
-      if (input.bytes.empty()) throw HttpError(make_problem(ProblemType::EmptyBody, "the request body is empty"));
-      input.format = resolve_format(content_type, input.bytes);
-    }
-    input.params = params_text ? service::job_params_from_text(*params_text) : service::JobParams{};
-    return input;
-  }
-
-  // ---------------------------------------------------------------- responses
-  void write_result(Context& ctx, const JobSnapshot& s) {
-    const service::JobOutput& out = *s.output;
-    httplib::Response& res = ctx.res;
-    // A single byte range of a result is honoured (resumable downloads); httplib slices it.
-    if (ctx.req.ranges.size() == 1) {
-      const auto [first, last] = ctx.req.ranges.front();
-      const auto size = std::int64_t(out.bytes.size());
-      const bool ok = (first >= 0 && first < size && (last < 0 || last >= first)) || (first < 0 && last > 0);
-      if (!ok) {
-        replace_header(res, "Content-Range", "bytes */" + std::to_string(size));
-        throw HttpError(make_problem(ProblemType::RangeNotSatisfiable, "the result has " + std::to_string(size) + " bytes"));
-      }
-      res.status = 206;
-    } else {
-      res.status = 200;
-    }
-    res.set_content(out.bytes, out.media_type);
-    res.set_header("Content-Disposition", "attachment; filename=\"denoised." + std::string(io::to_string(out.format)) + "\"");
-    res.set_header("X-Denoise-Params", service::to_json(out.effective).dump());
-    res.set_header("X-Denoise-Input-Bytes", std::to_string(s.input_bytes));
-    res.set_header("X-Denoise-Output-Bytes", std::to_string(out.bytes.size()));
-    res.set_header("X-Denoise-Vertices", std::to_string(out.vertices));
-    res.set_header("X-Denoise-Faces", std::to_string(out.faces));
-    // The job's JSON always has the reports; the header only when it stays small.
-    if (std::string report = reports_json(s).dump(); report.size() <= 8192)
-      res.set_header("X-Denoise-Report", report);
-    if (!out.notes.empty()) {
-      std::string notes;
-      for (const auto& n : out.notes) notes += (notes.empty() ? "" : "; ") + n;
-      res.set_header("X-Denoise-Notes", header_safe(notes));
-    }
-    // Server-Timing (W3C): per-stage milliseconds, shown by browsers' developer tools.
-    res.set_header("Server-Timing", server_timing(s));
-  }
-
-  json job_json(const JobSnapshot& s, const std::string& request_id) const {
-    const std::string self = "/v1/jobs/" + s.id;
-    json j = {{"id", s.id},
-              {"state", to_string(s.state)},
-              {"progress", {{"stage", s.stage}, {"fraction", s.fraction}}},
-              {"cancel_requested", s.cancel_requested},
-              {"created_at", iso8601(s.created_wall)},
-              {"timings_s", {{"queue_wait", s.queue_wait_s}, {"run", s.run_s}}},
-              {"input_bytes", s.input_bytes},
-              {"links", {{"self", self}, {"result", self + "/result"}}}};
-    if (s.output) j["result"] = output_summary(s);
-    if (s.attempts > 1) j["attempts"] = s.attempts;
-    if (s.error) j["error"] = s.error->to_json(self, request_id);
-    return j;
   }
 
   static void set_json(httplib::Response& res, const json& j, int status = 200) {
@@ -765,7 +453,7 @@ struct HttpService::Impl {
   }
 
   void denoise(Context& ctx) {
-    service::JobInput input = read_job_input(ctx);
+    service::JobInput input = bodies.read_job_input(ctx);
     std::shared_ptr<Job> job = queue.submit(std::move(input), false).job;
     const auto probe = ConnectionProbe::current(ctx.req.remote_port);
     while (!job->wait_for(std::chrono::milliseconds(50))) {
@@ -790,7 +478,7 @@ struct HttpService::Impl {
           }))
         throw HttpError(make_problem(ProblemType::BadIdempotencyKey, "Idempotency-Key must be 1 to 255 visible ASCII characters"));
     }
-    service::JobInput input = read_job_input(ctx);
+    service::JobInput input = bodies.read_job_input(ctx);
     // What can be refused at once is refused before the job is accepted (not 202 and a failed
     // job later): parameters that do not validate (400), a body that is not the declared
     // container (415).
@@ -870,6 +558,7 @@ struct HttpService::Impl {
   Metrics& metrics;
   JobQueue& queue;
   JobStore* store;
+  BodyReader bodies;
   httplib::Server svr;
   std::vector<Route> routes;
   std::string id_prefix;
