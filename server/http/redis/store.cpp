@@ -18,7 +18,7 @@
 #include "server/http/redis/connection.h"
 #include "server/http/redis/job_codec.h"
 #include "server/http/redis/recent_results.h"
-#include "server/http/redis/scripts.h"
+#include "server/http/redis/script_args.h"
 #include "server/params_json.h"
 
 namespace mdn::http {
@@ -29,14 +29,6 @@ using namespace redis;
 using nlohmann::json;
 using namespace std::chrono_literals;
 
-// The Lua scripts (scripts.h): each file names its KEYS and ARGV.
-const std::string kSubmitJob = lua_script("submit_job"), kSubmit = lua_script("submit"),
-    kFinishHelpers = lua_script("finish_helpers"), kStartJob = lua_script("start_job"),
-    kTake = lua_script("take"), kSubmitStart = lua_script("submit_start"),
-    kStart = lua_script("start"), kBeat = lua_script("beat"),
-    kCheck = lua_script("check"), kFinish = lua_script("finish"),
-    kRelease = lua_script("release"), kCancel = lua_script("cancel"),
-    kForgetConsumers = lua_script("forget_consumers");
 
 
 std::string random_hex(std::mt19937_64& rng, int words) {
@@ -142,22 +134,12 @@ class RedisJobStore final : public JobStore {
     const std::int64_t input_bytes = std::int64_t(input.bytes.size());
     const std::string input_length = std::to_string(input_bytes), input_name = input_key(id);
     auto reply = run([&](Connection& c) {
-      // The input by a plain SET, then the script (see kSubmitJob), in one round trip.
+      // The input by a plain SET, then the script (see lua/submit_job.lua), in one round trip.
       const std::vector<std::string_view> set = {"SET", input_name, input.bytes, "PX", kUnacceptedInputMs};
-      if (!slot) {
-        return std::move(c.checked_pipeline({set, {"EVAL", kSubmitJob + std::string(kSubmit), "4", job_key(id),
-                                                   input_name, stream_, idem, id, input_length, format, params,
-                                                   created, capacity, fingerprint, kGroup, key ? "1" : "0",
-                                                   job_prefix}})
-                             .back());
-      }
-      auto args = start_args(kSubmitJob + std::string(kSubmitStart));
-      args[2] = "4";
-      args.insert(args.begin() + 4, {job_key(id), input_name, idem});
-      for (const std::string& v : {id, input_length, format, params, created, capacity, fingerprint,
-                                   std::string(key ? "1" : "0")})
-        args.push_back(v);
-      return std::move(c.checked_pipeline({set, std::vector<std::string_view>(args.begin(), args.end())}).back());
+      const SubmitFields job{id, input_length, format, params, created, capacity, fingerprint, key ? "1" : "0"};
+      const Argv args = slot ? SubmitStartArgs{stream_, job_key(id), input_name, idem, start_fields(), job}.to_argv()
+                             : SubmitArgs{job_key(id), input_name, stream_, idem, job, kGroup, job_prefix}.to_argv();
+      return std::move(c.checked_pipeline({set, views(args)}).back());
     });
     std::string_view outcome;
     try {
@@ -275,8 +257,8 @@ class RedisJobStore final : public JobStore {
     CancelResult r;
     if (!valid_id(id)) return r;
     auto reply = run([&](Connection& c) {
-      return c.checked({"EVAL", kFinishHelpers + std::string(kCancel), "3", job_key(id), input_key(id), result_key(id),
-                        cancelled_problem_, std::to_string(now_ms()), ttl_ms_});
+      return c.checked(views(CancelArgs{job_key(id), input_key(id), result_key(id), cancelled_problem_,
+                                        std::to_string(now_ms()), ttl_ms_}.to_argv()));
     });
     const std::string_view outcome = str(reply.get());
     if (outcome == "none") return r;
@@ -374,7 +356,7 @@ class RedisJobStore final : public JobStore {
 
  private:
   static constexpr const char* kGroup = "workers";
-  // Expiry of an input SET before its job is accepted (kSubmitJob removes it, or deletes the
+  // Expiry of an input SET before its job is accepted (lua/submit_job.lua removes it, or deletes the
   // input of a refused job): only an input whose script never ran expires.
   static constexpr const char* kUnacceptedInputMs = "600000";
   static constexpr int kRetryAfterS = 2;
@@ -463,7 +445,7 @@ class RedisJobStore final : public JobStore {
         mark_up();
         if (Clock::now() >= next_forget) {
           next_forget = Clock::now() + 60s;
-          Reply f = c->command({"EVAL", kForgetConsumers, "1", stream_, kGroup, "3600000"});
+          Reply f = c->command(views(ForgetConsumersArgs{stream_, kGroup, "3600000"}.to_argv()));
           if (f->type == REDIS_REPLY_INTEGER && f->integer > 0 && log_)
             log_->info("redis_consumers_forgotten", {{"count", f->integer}});
         }
@@ -520,7 +502,7 @@ class RedisJobStore final : public JobStore {
     std::string job_id, entry_id, state, error, summary, result, finished_ms, result_bytes;
   };
 
-  // What kTake or kStart answered.
+  // What lua/take.lua or lua/start.lua answered.
   struct Taken {
     std::string outcome;  // run, none, gone, done, cancelled, exhausted, lost
     int attempt = 0;
@@ -530,8 +512,8 @@ class RedisJobStore final : public JobStore {
   };
 
   // A worker slot of this replica reserved by submit() for a job it accepts and starts in one
-  // step (kSubmitStart); released unused when the job could not start at once (others waited).
-  // Rarely, the reserved slot takes another job meanwhile (kTake in flight): the handed job then
+  // step (lua/submit_start.lua); released unused when the job could not start at once (others waited).
+  // Rarely, the reserved slot takes another job meanwhile (lua/take.lua in flight): the handed job then
   // waits for the first free slot of this replica.
   class SlotReservation {
    public:
@@ -617,19 +599,15 @@ class RedisJobStore final : public JobStore {
     return t;
   }
 
-  std::vector<std::string> start_args(const std::string& script) const {
-    return {"EVAL", kFinishHelpers + std::string(kStartJob) + script, "1", stream_, consumer_, std::to_string(now_ms()),
-            std::to_string(config_.queue_max_attempts), "", kGroup, exhausted_problem_, cancelled_problem_, ttl_ms_,
-            lost_problem_, prefix_ + "job:"};
+  StartFields start_fields() const {
+    return {consumer_, std::to_string(now_ms()), std::to_string(config_.queue_max_attempts), kGroup, exhausted_problem_,
+            cancelled_problem_, ttl_ms_, lost_problem_, prefix_ + "job:"};
   }
 
-  static Reply eval(Connection& c, const std::vector<std::string>& args) {
-    std::vector<std::string_view> views(args.begin(), args.end());
-    return c.checked(views);
-  }
+  static Reply eval(Connection& c, const Argv& args) { return c.checked(views(args)); }
 
   // The next job for this slot: one taken over from a silent worker (XAUTOCLAIM, at most every
-  // half idle threshold), else the next new one (kTake). `last_id`: where XREAD should wait.
+  // half idle threshold), else the next new one (lua/take.lua). `last_id`: where XREAD should wait.
   Taken next_job(Connection& c, std::string& last_id) {
     const auto now = Clock::now();
     bool reclaim = false;
@@ -652,15 +630,12 @@ class RedisJobStore final : public JobStore {
         if (fields && fields->type == REDIS_REPLY_ARRAY)
           for (std::size_t k = 0; k + 1 < fields->elements; k += 2)
             if (str(fields->element[k]) == "id") job_id = std::string(str(fields->element[k + 1]));
-        auto args = start_args(kStart);
-        args.push_back(entry_id);
-        args.push_back(job_id);
-        Taken t = parse_taken(eval(c, args));
+        Taken t = parse_taken(eval(c, StartArgs{stream_, start_fields(), entry_id, job_id}.to_argv()));
         t.reclaimed = true;
         return t;
       }
     }
-    Taken t = parse_taken(eval(c, start_args(kTake)));
+    Taken t = parse_taken(eval(c, TakeArgs{stream_, start_fields()}.to_argv()));
     if (t.outcome == "none") last_id = t.entry_id;
     return t;
   }
@@ -694,7 +669,7 @@ class RedisJobStore final : public JobStore {
         Taken t = next_job(*c, last_id);
         backoff = 100ms;
         if (t.outcome == "none") {
-          // A job submit() started for this slot after kTake looked (its entry is the last one,
+          // A job submit() started for this slot after lua/take.lua looked (its entry is the last one,
           // so XREAD would not wake for it): run it now.
           if (std::optional<Taken> handed = take_handoff(idle, true)) {
             run_taken(c, std::move(*handed));
@@ -734,8 +709,7 @@ class RedisJobStore final : public JobStore {
   // Hands a started job back to the queue (this replica stops), not counted as an attempt.
   void release(std::unique_ptr<Connection>& c, const Taken& e) {
     retry(c, [&](Connection& conn) {
-      conn.checked({"EVAL", kFinishHelpers + std::string(kRelease), "2", job_key(e.job_id), stream_, consumer_,
-                    e.entry_id, kGroup, e.job_id});
+      conn.checked(views(ReleaseArgs{job_key(e.job_id), stream_, consumer_, e.entry_id, kGroup, e.job_id}.to_argv()));
     });
     if (log_) log_->info("job_released", {{"job_id", e.job_id}, {"detail", "this replica stopped; back in the queue"}});
   }
@@ -840,9 +814,10 @@ class RedisJobStore final : public JobStore {
             beat.reset();
             beat = std::make_unique<Connection>(pool_.address(), pool_.timeout());
           }
-          Reply b = due ? beat->checked({"EVAL", kBeat, "2", job_key(e.job_id), stream_, consumer_,
-                                         changed ? s.stage : std::string(), fraction, e.entry_id, kGroup})
-                        : beat->checked({"EVAL", kCheck, "1", job_key(e.job_id), consumer_});
+          Reply b = beat->checked(views(due ? BeatArgs{job_key(e.job_id), stream_, consumer_, changed ? s.stage : "",
+                                                       fraction, e.entry_id, kGroup}
+                                                  .to_argv()
+                                            : CheckArgs{job_key(e.job_id), consumer_}.to_argv()));
           if (due) {
             last_beat = Clock::now();
             last_stage = s.stage;
@@ -921,13 +896,13 @@ class RedisJobStore final : public JobStore {
       bool done = false;
       try {
         done = retry(c, [&](Connection& conn) {
-          static const std::string script = kFinishHelpers + std::string(kFinish);
-          const std::string hash = job_key(f.job_id), input = input_key(f.job_id), result = result_key(f.job_id),
-                            staged = result + ":" + consumer_;
-          const std::vector<std::string_view> finish = {
-              "EVAL", script, "5", hash, input, stream_, result, staged, consumer_, f.state, f.error, f.summary, "", ttl_ms_, f.finished_ms, f.entry_id, kGroup,
-              f.result_bytes};
-          // The result by a plain SET, then the script (see kFinish), in one round trip.
+          const std::string result = result_key(f.job_id), staged = result + ":" + consumer_;
+          const Argv args = FinishArgs{job_key(f.job_id), input_key(f.job_id), stream_, result, staged, consumer_,
+                                       f.state, f.error, f.summary, ttl_ms_, f.finished_ms, f.entry_id, kGroup,
+                                       f.result_bytes}
+                                .to_argv();
+          const std::vector<std::string_view> finish = views(args);
+          // The result by a plain SET, then the script (see lua/finish.lua), in one round trip.
           std::vector<Reply> r = f.state == "succeeded"
                                      ? conn.checked_pipeline({{"SET", staged, f.result, "PX", ttl_ms_}, finish})
                                      : conn.checked_pipeline({finish});
@@ -984,7 +959,7 @@ class RedisJobStore final : public JobStore {
   std::unordered_map<std::string, Waiters> waiters_;
   std::thread subscriber_;
 
-  // Jobs submit() started for this replica's idle slots (kSubmitStart).
+  // Jobs submit() started for this replica's idle slots (lua/submit_start.lua).
   std::mutex handoff_mutex_;
   std::condition_variable handoff_cv_;
   std::deque<Taken> handoffs_;
