@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "server/http/redis/connection.h"
+#include "server/http/redis/finish_waiters.h"
 #include "server/http/redis/job_codec.h"
 #include "server/http/redis/recent_results.h"
 #include "server/http/redis/script_args.h"
@@ -226,28 +227,11 @@ class RedisJobStore final : public JobStore {
     // Registered before the first read, so that a "done" message between the read and the wait
     // is not missed. Without messages (the subscriber reconnecting), the job is read again every
     // kWaitRecheck.
-    std::unique_lock lock(wait_mutex_);
-    Waiters& w = waiters_[id];
-    ++w.count;
-    struct Unregister {
-      RedisJobStore& s;
-      const std::string& id;
-      ~Unregister() {
-        std::lock_guard l(s.wait_mutex_);
-        if (auto it = s.waiters_.find(id); it != s.waiters_.end() && --it->second.count == 0) s.waiters_.erase(it);
-      }
-    };
-    std::uint64_t seen = w.done;
-    lock.unlock();
-    Unregister unregister{*this, id};
+    FinishWaiters::Ticket ticket = waiters_.enter(id);
     for (;;) {
       std::optional<JobSnapshot> s = find(id, false);
       if (!s || is_terminal(s->state) || draining_ || Clock::now() >= deadline) return s;
-      lock.lock();
-      wait_cv_.wait_until(lock, std::min(deadline, Clock::now() + kWaitRecheck),
-                          [&] { return waiters_[id].done != seen || draining_ || stopping_; });
-      seen = waiters_[id].done;
-      lock.unlock();
+      waiters_.wait(ticket, std::min(deadline, Clock::now() + kWaitRecheck), [&] { return draining_ || stopping_; });
     }
   }
 
@@ -479,11 +463,7 @@ class RedisJobStore final : public JobStore {
         // ["message", channel, job id]
         if (!m || m->type != REDIS_REPLY_ARRAY || m->elements != 3 || str(m->element[0]) != "message") continue;
         const std::string id(str(m->element[2]));
-        std::lock_guard lock(wait_mutex_);
-        if (auto it = waiters_.find(id); it != waiters_.end()) {
-          ++it->second.done;
-          wait_cv_.notify_all();
-        }
+        waiters_.done(id);
       } catch (const std::exception&) {
         c.reset();
         sleep_unless_stopping(500ms);
@@ -491,11 +471,7 @@ class RedisJobStore final : public JobStore {
     }
   }
 
-  void wake_waiters() {
-    std::lock_guard lock(wait_mutex_);
-    for (auto& [id, w] : waiters_) ++w.done;
-    wait_cv_.notify_all();
-  }
+  void wake_waiters() { waiters_.wake_all(); }
 
   // ---------------------------------------------------------------- worker slots
   struct Finish {
@@ -947,16 +923,9 @@ class RedisJobStore final : public JobStore {
   bool finisher_stop_ = false;
   std::thread finisher_;
 
-  // Long polls waiting on this replica, per job: how many, and a counter bumped by each "done"
-  // message (or reconnection) for the job.
-  struct Waiters {
-    int count = 0;
-    std::uint64_t done = 0;
-  };
+  // Long polls waiting on this replica; each reads its job again at least every kWaitRecheck.
   static constexpr std::chrono::seconds kWaitRecheck{5};
-  std::mutex wait_mutex_;
-  std::condition_variable wait_cv_;
-  std::unordered_map<std::string, Waiters> waiters_;
+  FinishWaiters waiters_;
   std::thread subscriber_;
 
   // Jobs submit() started for this replica's idle slots (lua/submit_start.lua).
