@@ -20,6 +20,7 @@
 #include "server/http/redis/job_codec.h"
 #include "server/http/redis/recent_results.h"
 #include "server/http/redis/script_args.h"
+#include "server/http/redis/work_queue.h"
 #include "server/params_json.h"
 
 namespace mdn::http {
@@ -293,11 +294,7 @@ class RedisJobStore final : public JobStore {
         if (log_) log_->warn("job_unreleased", {{"job_id", handoffs_.front().job_id}, {"detail", ex.what()}});
       }
     }
-    {
-      std::lock_guard finish_lock(finish_mutex_);
-      finisher_stop_ = true;
-    }
-    finish_cv_.notify_all();
+    finishes_.close();  // the finisher stores what is queued, then ends
     if (finisher_.joinable()) finisher_.join();
     monitor_wake_.notify_all();
     if (monitor_.joinable()) monitor_.join();
@@ -848,11 +845,7 @@ class RedisJobStore final : public JobStore {
     Finish f{e.job_id, e.entry_id, std::string(to_string(state)), error ? problem_text(*error) : std::string(),
              std::move(summary), std::move(result), std::to_string(now_ms()), std::to_string(result_bytes)};
     ++busy_;
-    {
-      std::lock_guard lock(finish_mutex_);
-      finishes_.push_back(std::move(f));
-    }
-    finish_cv_.notify_one();
+    finishes_.push(std::move(f));
   }
 
   // Stores finished jobs' results and states in order; on stop, stores what is left while
@@ -860,14 +853,9 @@ class RedisJobStore final : public JobStore {
   void finisher_loop() {
     std::unique_ptr<Connection> c;
     for (;;) {
-      Finish f;
-      {
-        std::unique_lock lock(finish_mutex_);
-        finish_cv_.wait(lock, [&] { return !finishes_.empty() || finisher_stop_; });
-        if (finishes_.empty()) return;
-        f = std::move(finishes_.front());
-        finishes_.pop_front();
-      }
+      std::optional<Finish> next = finishes_.pop();
+      if (!next) return;
+      Finish& f = *next;
       std::string stored;
       bool done = false;
       try {
@@ -917,10 +905,7 @@ class RedisJobStore final : public JobStore {
 
   RecentResults recent_;
 
-  std::mutex finish_mutex_;
-  std::condition_variable finish_cv_;
-  std::deque<Finish> finishes_;
-  bool finisher_stop_ = false;
+  WorkQueue<Finish> finishes_;  // slots -> the finisher
   std::thread finisher_;
 
   // Long polls waiting on this replica; each reads its job again at least every kWaitRecheck.
