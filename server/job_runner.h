@@ -8,6 +8,7 @@
 
 #include "core/io/document.h"
 #include "core/pipeline.h"
+#include "server/job_timings.h"
 #include "server/params_json.h"
 
 namespace mdn::service {
@@ -27,11 +28,10 @@ struct JobOutput {
   std::vector<DenoiseReport> reports;   // one per surface
   std::vector<std::string> notes;       // from the adapter (e.g. TANGENT dropped)
   std::int64_t vertices = 0, faces = 0; // summed over surfaces
-  double decode_ms = 0, denoise_ms = 0, encode_ms = 0;
-  StageTimings stages;                  // summed over surfaces
-  // Added by the cli engineer (additive): the denoised surfaces in the document's order, in the
-  // input frame, exactly as encoded (before any quantisation of the output format). Moved out
-  // of the document after encoding, so it costs nothing; the CLI's --metrics measures these.
+  JobTimings timings;                   // summed over surfaces
+  // The denoised surfaces in the document's order, in the input frame, exactly as encoded
+  // (before any quantisation of the output format). Moved out of the document after encoding,
+  // so it costs nothing; the CLI's --metrics measures these.
   std::vector<TriMesh> surfaces;
 };
 
@@ -39,16 +39,6 @@ struct JobOutput {
 // InvalidMeshError, InvalidParamsError, SolverError, CancelledError).
 JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObserver* progress = nullptr);
 
-// Added by the cli engineer (additive): the JSON summary of a finished job, the same shape the
-// CLI prints with --report and the HTTP server may echo:
-//   { "format": "off", "media_type": ..., "bytes": N, "vertices": N, "faces": N,
-//     "params": to_json(effective), "timings_ms": { "decode", "denoise", "encode", "setup", "measure",
-//     "initial", "region", "anisotropic", "normal", "vertex", "prefilter", "total" },
-//     "surfaces": [ report_to_json(r) ... ], "notes": [ ... ] }
-// Timings are wall-clock and vary between runs; everything else is deterministic.
-// fold_ratio, cluster_area_ratio, region_*, "mode", "params" (what ran: the six parameters and
-// region_mode, as a manual-mode params object) and, in auto mode, "measures".
-nlohmann::json report_to_json(const DenoiseReport& report);
-nlohmann::json job_summary_json(const JobOutput& output);
+// Its JSON view (CLI --report, HTTP, Redis) is server/job_json.h.
 
 }  // namespace mdn::service

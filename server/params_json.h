@@ -41,8 +41,7 @@ nlohmann::json to_json(const JobParams& p);
 // the API accept in manual mode, with "mode": "manual").
 nlohmann::json method_params_json(const DenoiseParams& p);
 
-// Added by the cli engineer (additive; the HTTP server may call these for JobParams it builds
-// itself rather than parses): range checks of the "output" object (position_bits [8, 30],
+// For JobParams built rather than parsed: range checks of the "output" object (position_bits [8, 30],
 // normal_bits [1, 30], texcoord/color/generic_bits [0, 30] with 0 = lossless,
 // compression_level [0, 10]) and of everything (DenoiseParams::validate() plus the output
 // checks). Throw InvalidParamsError with the JSON path, e.g. "output.position_bits".
@@ -50,7 +49,7 @@ nlohmann::json method_params_json(const DenoiseParams& p);
 void validate_output_options(const io::EncodeOptions& options);
 void validate(const JobParams& params);
 
-// Added by the cli engineer (additive): synthetic noise for experiments (meshdenoise --add-noise),
+// Synthetic noise for experiments (meshdenoise --add-noise),
 //   { "kind": "along_normal" | "per_coordinate" | "random_direction", "sigma": 0.2,
 //     "seed": 1, "impulse_fraction": 0 }
 // Missing fields keep NoiseSpec's defaults; sigma in [0, 10] mean edge lengths, impulse_fraction

@@ -87,20 +87,13 @@ const std::vector<Setting>& settings() {
        [](const ServerConfig& c) { return std::to_string(c.max_stored_jobs); }},
       {"queue", "MDN_QUEUE", "job store: memory (this process) or redis://[:password@]host[:port][/db] (shared by replicas)",
        [](ServerConfig& c, const std::string& n, const std::string& v) {
-         if (v != "memory") {
-           try {
-             parse_redis_url(v);
-           } catch (const ConfigError& e) {
-             throw ConfigError(n + ": " + e.what());
-           }
+         try {
+           c.queue = parse_queue_setting(v);
+         } catch (const ConfigError& e) {
+           throw ConfigError(n + ": " + e.what());
          }
-         c.queue = v;
        },
-       [](const ServerConfig& c) {
-         // Never print a password.
-         const auto at = c.queue.rfind('@');
-         return at == std::string::npos ? c.queue : "redis://(credentials)" + c.queue.substr(at);
-       }},
+       [](const ServerConfig& c) { return show_queue_setting(c.queue); }},
       {"queue-prefix", "MDN_QUEUE_PREFIX", "Redis key prefix of this service's jobs and stream",
        [](ServerConfig& c, const std::string& n, const std::string& v) {
          if (v.empty() || v.size() > 64 || v.find_first_of(" \t\r\n") != std::string::npos)
@@ -221,6 +214,18 @@ RedisAddress parse_redis_url(const std::string& url) {
   return a;
 }
 
+std::optional<RedisAddress> parse_queue_setting(const std::string& text) {
+  if (text == "memory") return std::nullopt;
+  return parse_redis_url(text);
+}
+
+std::string show_queue_setting(const std::optional<RedisAddress>& queue) {
+  if (!queue) return "memory";
+  const std::string host = queue->host.find(':') == std::string::npos ? queue->host : "[" + queue->host + "]";
+  return "redis://" + std::string(queue->password.empty() ? "" : "(credentials)@") + host + ":" +
+         std::to_string(queue->port) + "/" + std::to_string(queue->db);
+}
+
 int ServerConfig::effective_workers() const {
   if (workers > 0) return workers;
   const unsigned cores = std::thread::hardware_concurrency();
@@ -257,7 +262,7 @@ ParsedCommandLine parse_command_line(const std::vector<std::string>& args,
     found->set(out.config, "--" + name, value);
   }
   // Redis keeps a value of at most 512 MiB (proto-max-bulk-len): a request body is one.
-  if (out.config.queue != "memory" && out.config.max_body_bytes > (std::int64_t{512} << 20))
+  if (out.config.queue && out.config.max_body_bytes > (std::int64_t{512} << 20))
     throw ConfigError("--max-body: at most 536870912 (512M) with --queue redis://, got " +
                       std::to_string(out.config.max_body_bytes));
   return out;

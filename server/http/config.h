@@ -13,6 +13,20 @@ namespace mdn::http {
 
 enum class LogFormat { Text, Json };
 
+// Where a redis:// --queue points. Parsed at startup; a malformed URL is a ConfigError.
+struct RedisAddress {
+  std::string host = "127.0.0.1";
+  int port = 6379;
+  int db = 0;
+  std::string password;  // empty: no AUTH
+};
+// Parses redis://[[user]:password@]host[:port][/db] (db in [0, 15]). Throws ConfigError.
+RedisAddress parse_redis_url(const std::string& url);
+// The --queue setting: "memory" -> nullopt, else parse_redis_url. Throws ConfigError.
+std::optional<RedisAddress> parse_queue_setting(const std::string& text);
+// As --help and the logs show it: "memory" or the URL, the password never printed.
+std::string show_queue_setting(const std::optional<RedisAddress>& queue);
+
 struct ServerConfig {
   // --- Listening ---
   std::string host = "127.0.0.1";  // --host / MDN_HOST; 0.0.0.0 to listen on every interface
@@ -28,9 +42,9 @@ struct ServerConfig {
   int max_stored_jobs = 1024;      // --max-stored-jobs; finished jobs kept at most (oldest evicted)
 
   // --- Job store (asynchronous jobs; see docker/README.md "Job store") ---
-  // --queue / MDN_QUEUE: "memory" (this process only, the default) or
-  // redis://[:password@]host[:port][/db] (shared by every replica; Redis Streams).
-  std::string queue = "memory";
+  // --queue / MDN_QUEUE: "memory" (this process only, the default: nullopt) or
+  // redis://[:password@]host[:port][/db] (shared by every replica; Redis Streams), parsed once.
+  std::optional<RedisAddress> queue;
   std::string queue_prefix = "mdn:";    // --queue-prefix; Redis key prefix (several services per Redis)
   double queue_reclaim_idle_s = 10;     // --queue-reclaim-idle; a job silent this long is taken over
   int queue_max_attempts = 3;           // --queue-max-attempts; runs of one job before it fails
@@ -58,16 +72,6 @@ struct ServerConfig {
 
   int effective_workers() const;
 };
-
-// Where a redis:// --queue points. Parsed at startup; a malformed URL is a ConfigError.
-struct RedisAddress {
-  std::string host = "127.0.0.1";
-  int port = 6379;
-  int db = 0;
-  std::string password;  // empty: no AUTH
-};
-// Parses redis://[[user]:password@]host[:port][/db] (db in [0, 15]). Throws ConfigError.
-RedisAddress parse_redis_url(const std::string& url);
 
 // A bad flag, environment variable or value; what() names it.
 class ConfigError : public std::runtime_error {

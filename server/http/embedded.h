@@ -10,6 +10,7 @@ namespace mdn::http::embedded {
 
 std::string_view openapi_yaml();        // proto/openapi.yaml
 std::string_view params_schema_json();  // proto/params.schema.json
+std::string_view report_schema_json();  // proto/report.schema.json
 
 // One embedded file of a table: its URL path and its bytes.
 struct File {

@@ -20,11 +20,12 @@
 #include "core/params.h"
 #include "server/http/connection_probe.h"
 #include "server/http/embedded.h"
-#include "server/http/job_store.h"
-#include "server/http/metrics.h"
+#include "server/http/job_resource.h"
 #include "server/http/problem.h"
-#include "server/http/redis_queue.h"
+#include "server/http/request_body.h"
+#include "server/http/service_parts.h"
 #include "server/http/web_routes.h"
+#include "server/job_json.h"
 #include "server/params_json.h"
 
 namespace mdn::http {
@@ -42,168 +43,6 @@ constexpr const char* kAllowedRequestHeaders =
 // Header fields a request may carry (431 beyond; cpp-httplib 0.11.4 has no such limit).
 constexpr std::size_t kMaxRequestHeaders = 100;
 
-std::string lower(std::string s) {
-  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
-std::string trim(std::string_view s) {
-  const auto b = s.find_first_not_of(" \t");
-  if (b == std::string_view::npos) return {};
-  const auto e = s.find_last_not_of(" \t");
-  return std::string(s.substr(b, e - b + 1));
-}
-
-// "model/gltf-binary; charset=x" -> "model/gltf-binary"
-std::string base_media_type(std::string_view content_type) {
-  return lower(trim(content_type.substr(0, content_type.find(';'))));
-}
-
-void replace_header(httplib::Response& res, const std::string& key, const std::string& value) {
-  res.headers.erase(key);
-  res.set_header(key, value);
-}
-
-// Set when this thread's current request leaves bytes unread on its connection. cpp-httplib runs
-// a request from pre-routing (or, for a request it cannot parse, the error handler) to the
-// logger on one thread, so access_log reads it for the same request.
-thread_local bool t_bytes_left_unread = false;
-
-// Answers this request, then closes the connection (access_log does it once the response is
-// written, with a lingering close): used when the request body stays unread, or when what
-// follows on the connection cannot be told apart from the rest of an unparseable request.
-void close_after_response(const httplib::Request&, httplib::Response& res) {
-  replace_header(res, "Connection", "close");
-  t_bytes_left_unread = true;
-}
-
-// A header value must not carry CR/LF (response splitting) nor other control characters.
-std::string header_safe(std::string_view text) {
-  std::string out;
-  for (char c : text) out += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? ' ' : c;
-  return out;
-}
-
-std::string format_ms(double ms) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3f", ms);
-  return buf;
-}
-
-std::string iso8601(std::chrono::system_clock::time_point t) {
-  const std::time_t tt = std::chrono::system_clock::to_time_t(t);
-  std::tm tm{};
-  gmtime_r(&tt, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
-bool has_request_body(const httplib::Request& req) {
-  if (lower(req.get_header_value("Transfer-Encoding")).find("chunked") != std::string::npos) return true;
-  return req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0";
-}
-
-// Media types accepted for mesh bodies; nullopt means "recognise the bytes" (sniffing).
-struct InputMediaType {
-  std::string_view media_type;
-  std::optional<io::Format> format;
-};
-constexpr InputMediaType kInputMediaTypes[] = {
-    {"model/gltf-binary", io::Format::Glb},
-    {"model/gltf+json", io::Format::Gltf},
-    {"model/x-off", io::Format::Off},
-    {"model/obj", io::Format::Obj},
-    {"model/x-ply", io::Format::Ply},
-    {"model/x-draco", io::Format::Drc},
-    {"application/octet-stream", std::nullopt},  // .drc, or any format recognised by content
-    {"text/plain", std::nullopt},                // OFF/OBJ/PLY ASCII recognised by content
-};
-
-std::string accepted_media_types() {
-  std::string out;
-  for (const auto& t : kInputMediaTypes) out += (out.empty() ? "" : ", ") + std::string(t.media_type);
-  return out;
-}
-
-Problem unsupported_media_type(const std::string& detail) {
-  Problem p = make_problem(415, "unsupported-media-type", "Unsupported media type", detail);
-  p.extensions["accepted"] = accepted_media_types();
-  return p;
-}
-
-// The container of a mesh body: from its declared media type, else from its bytes.
-io::Format resolve_format(const std::string& content_type, std::string_view bytes,
-                          const std::string& filename = {}) {
-  const std::string type = base_media_type(content_type);
-  bool sniff = type.empty();
-  for (const auto& t : kInputMediaTypes) {
-    if (type == t.media_type) {
-      if (t.format) return *t.format;
-      sniff = true;
-    }
-  }
-  if (!sniff) {
-    // Whatever media type the io adapters emit is accepted too (a result can be sent back).
-    for (io::Format f : {io::Format::Off, io::Format::Obj, io::Format::Ply, io::Format::Drc, io::Format::Glb,
-                         io::Format::Gltf}) {
-      if (type == io::media_type(f)) {
-        if (type == "application/octet-stream" || type == "text/plain") break;
-        return f;
-      }
-    }
-    throw HttpError(unsupported_media_type("media type '" + type + "' is not a mesh format this service reads"));
-  }
-  if (!filename.empty())
-    if (auto f = io::format_from_extension(filename)) return *f;
-  if (auto f = io::sniff_format(bytes)) return *f;
-  throw HttpError(unsupported_media_type(
-      "the body is not recognisable as glTF, GLB, Draco, OFF, OBJ or PLY; declare its media type"));
-}
-
-// One report per surface: what ran (auto mode: the chosen parameters and the measurements).
-json reports_json(const JobSnapshot& s) {
-  if (s.reports) return *s.reports;
-  const service::JobOutput& out = *s.output;
-  json reports = json::array();
-  for (const DenoiseReport& r : out.reports) reports.push_back(service::report_to_json(r));
-  return reports;
-}
-
-// `bytes`: the result's size (the shared store loads the bytes themselves only for /result).
-json output_summary(const JobSnapshot& s) {
-  const service::JobOutput& out = *s.output;
-  const std::int64_t bytes = s.output_bytes;
-  json reports = reports_json(s);
-  return {{"media_type", out.media_type},
-          {"format", std::string(io::to_string(out.format))},
-          {"bytes", bytes},
-          {"vertices", out.vertices},
-          {"faces", out.faces},
-          {"params", service::to_json(out.effective)},
-          {"notes", out.notes},
-          {"reports", reports},
-          {"timings_ms",
-           {{"decode", out.decode_ms},
-            {"setup", out.stages.setup_ms},
-            {"measure", out.stages.measure_ms},
-            {"initial_prefilter", out.stages.initial_ms},
-            {"region_prefilter", out.stages.region_ms},
-            {"anisotropic_prefilter", out.stages.anisotropic_ms},
-            {"normal_filter", out.stages.normal_ms},
-            {"vertex_update", out.stages.vertex_ms},
-            {"denoise", out.denoise_ms},
-            {"encode", out.encode_ms}}}};
-}
-
-struct Context {
-  const httplib::Request& req;
-  httplib::Response& res;
-  const httplib::ContentReader* reader;  // POST routes only
-  std::string request_id;
-  bool body_consumed = false;  // POST routes: the whole body was read
-};
-
 }  // namespace
 
 struct HttpService::Impl {
@@ -217,29 +56,20 @@ struct HttpService::Impl {
     std::regex regex;
   };
 
-  Impl(const ServerConfig& c, std::shared_ptr<const EventLog> l)
+  Impl(const ServerConfig& c, std::shared_ptr<const EventLog> l, ServiceParts p)
       : config(c),
         log(std::move(l)),
-        queue(make_queue_options(c),
-              [this](const JobSnapshot& s) {
-                metrics.job_finished(std::string(to_string(s.state)), s.queue_wait_s, s.run_s);
-                if (log) {
-                  json fields = {{"job_id", s.id}, {"state", to_string(s.state)}, {"queue_wait_s", s.queue_wait_s},
-                                 {"run_s", s.run_s}, {"async", s.asynchronous}};
-                  if (s.error) fields["error"] = s.error->type, fields["detail"] = s.error->detail;
-                  log->info("job_finished", fields);
-                }
-              }) {
+        parts(std::move(p)),
+        metrics(*parts.metrics),
+        queue(*parts.queue),
+        store(parts.store.get()),
+        bodies(config.max_body_bytes, metrics) {
     std::random_device rd;
     char buf[16];
     std::snprintf(buf, sizeof buf, "%08x", unsigned(rd()));
     id_prefix = buf;
     routes = make_routes();
     for (Route& r : routes) r.regex = std::regex(r.pattern);
-    if (config.queue == "memory")
-      store = std::make_unique<MemoryJobStore>(queue);
-    else
-      store = make_redis_job_store(config, queue, log);
     install();
   }
 
@@ -252,6 +82,7 @@ struct HttpService::Impl {
         {"GET", "/openapi.yaml", "/openapi.yaml", &Impl::openapi, false, {}},
         {"GET", "/v1/params", "/v1/params", &Impl::params, false, {}},
         {"GET", "/v1/params/schema", "/v1/params/schema", &Impl::params_schema, false, {}},
+        {"GET", "/v1/report/schema", "/v1/report/schema", &Impl::report_schema, false, {}},
         {"POST", "/v1/denoise", "/v1/denoise", &Impl::denoise, true, {}},
         {"POST", "/v1/jobs", "/v1/jobs", &Impl::create_job, true, {}},
         {"GET", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", &Impl::get_job, false, {}},
@@ -260,19 +91,6 @@ struct HttpService::Impl {
         {"GET", "/", "/", &Impl::web_page, false, {}},
         {"GET", "/web/(.+)", "/web/{path}", &Impl::web_page, false, {}},
     };
-  }
-
-  static JobQueueOptions make_queue_options(const ServerConfig& c) {
-    JobQueueOptions o;
-    o.workers = c.effective_workers();
-    o.threads_per_job = c.threads_per_job;
-    o.capacity = c.queue_capacity;
-    o.time_limit = std::chrono::milliseconds(std::int64_t(c.job_time_limit_s * 1000));
-    o.result_ttl = std::chrono::milliseconds(std::int64_t(c.result_ttl_s * 1000));
-    o.max_stored = c.max_stored_jobs;
-    o.limits.max_faces = c.max_faces;
-    o.limits.max_vertices = c.max_vertices;
-    return o;
   }
 
   // ---------------------------------------------------------------- wiring
@@ -375,7 +193,7 @@ struct HttpService::Impl {
   }
 
   httplib::Server::HandlerResponse pre_routing(const httplib::Request& req, httplib::Response& res) {
-    t_bytes_left_unread = false;
+    take_bytes_left_unread();
     {
       std::lock_guard lock(start_mutex);
       request_start[std::this_thread::get_id()] = Clock::now();
@@ -396,25 +214,21 @@ struct HttpService::Impl {
     // connection closed after the answer.
     if (req.has_header("Transfer-Encoding") && req.has_header("Content-Length")) {
       close_after_response(req, res);
-      return reject(make_problem(400, "bad-request", "Bad request",
-                                 "the request has both Transfer-Encoding and Content-Length"));
+      return reject(make_problem(ProblemType::BadRequest, "the request has both Transfer-Encoding and Content-Length"));
     }
     if (req.headers.size() > kMaxRequestHeaders)
-      return reject(make_problem(431, "too-many-headers", "Request header fields too large",
-                                 "the request has " + std::to_string(req.headers.size()) + " header fields, more than the limit of " +
+      return reject(make_problem(ProblemType::TooManyHeaders, "the request has " + std::to_string(req.headers.size()) + " header fields, more than the limit of " +
                                      std::to_string(kMaxRequestHeaders)));
     // Several ranges could multiply a result's size (one 1 MB result became 209 MB with 200
     // ranges in 0.11.4): refuse them; single ranges are honoured on result downloads only.
     if (req.ranges.size() > 1)
-      return reject(make_problem(416, "multiple-ranges", "Multiple ranges not supported",
-                                 "send at most one byte range"));
+      return reject(make_problem(ProblemType::MultipleRanges, "send at most one byte range"));
     static const std::regex result_path("/v1/jobs/[^/]+/result");
     if (!req.ranges.empty() && !(req.method == "GET" && std::regex_match(req.path, result_path)))
       const_cast<httplib::Request&>(req).ranges.clear();
     if (!config.auth_token.empty() && req.method != "OPTIONS" && req.path.rfind("/v1/", 0) == 0) {
       if (!authorized(req.get_header_value("Authorization")))
-        return reject(make_problem(401, "unauthorized", "Unauthorized",
-                                   "this server requires 'Authorization: Bearer <token>' on /v1 routes"));
+        return reject(make_problem(ProblemType::Unauthorized, "this server requires 'Authorization: Bearer <token>' on /v1 routes"));
     }
     return httplib::Server::HandlerResponse::Unhandled;
   }
@@ -441,36 +255,34 @@ struct HttpService::Impl {
           if (std::regex_match(req.path, r.regex) && allow.find(r.method) == std::string::npos)
             allow += (allow.empty() ? "" : ", ") + r.method;
         if (!allow.empty()) {
-          p = make_problem(405, "method-not-allowed", "Method not allowed",
-                           req.method + " is not allowed on " + req.path + "; allowed: " + allow);
+          p = make_problem(ProblemType::MethodNotAllowed, req.method + " is not allowed on " + req.path + "; allowed: " + allow);
           replace_header(res, "Allow", allow + ", OPTIONS");
         } else {
-          p = make_problem(404, "not-found", "Not found", "no route " + req.method + " " + req.path);
+          p = make_problem(ProblemType::NotFound, "no route " + req.method + " " + req.path);
         }
         break;
       }
       case 413:
-        p = make_problem(413, "too-large", "Content too large",
-                         "the body exceeds the limit of " + std::to_string(config.max_body_bytes) + " bytes");
+        p = make_problem(ProblemType::TooLarge, "the body exceeds the limit of " + std::to_string(config.max_body_bytes) + " bytes");
         close_after_response(req, res);
         break;
       case 414:
-        p = make_problem(414, "uri-too-long", "URI too long", "the request target is too long");
+        p = make_problem(ProblemType::UriTooLong, "the request target is too long");
         close_after_response(req, res);  // a body, if any, stays unread
         break;
       case 416:
-        p = make_problem(416, "range-not-satisfiable", "Range not satisfiable", "the Range header is invalid");
+        p = make_problem(ProblemType::RangeNotSatisfiable, "the Range header is invalid");
         break;
       case 400:
         // cpp-httplib could not parse the request line, the headers or the body's framing: what
         // follows on the connection is not a request we can find the start of (0.11.4 would
         // parse each following line as a request of its own).
-        p = make_problem(400, "bad-request", "Bad request", "the HTTP request could not be parsed");
+        p = make_problem(ProblemType::BadRequest, "the HTTP request could not be parsed");
         close_after_response(req, res);
         break;
       default:
-        p = make_problem(res.status, "http-error", "HTTP error", "the request failed with status " +
-                                                                     std::to_string(res.status));
+        p = make_problem(ProblemType::HttpError, "the request failed with status " + std::to_string(res.status));
+        p.status = res.status;
     }
     write_problem(req, res, p, id);
     return httplib::Server::HandlerResponse::Handled;
@@ -499,7 +311,7 @@ struct HttpService::Impl {
     // when the client itself asked for "Connection: close": it may still be sending, and
     // cpp-httplib's plain close would then reset the connection under it (its next write fails
     // and it never reads the answer).
-    if (std::exchange(t_bytes_left_unread, false))
+    if (take_bytes_left_unread())
       if (auto probe = ConnectionProbe::current(req.remote_port)) probe->linger_close(1000);
     const std::string route = route_name(req);
     metrics.count_request(route, req.method, res.status);
@@ -528,181 +340,6 @@ struct HttpService::Impl {
               {"remote", req.remote_addr}});
   }
 
-  // ---------------------------------------------------------------- request bodies
-  // Reads the body through the ContentReader, counting bytes ourselves: cpp-httplib 0.11.4
-  // applies set_payload_max_length to Content-Length bodies only, not to chunked uploads.
-  std::string read_body(Context& ctx, const httplib::ContentReader& reader) {
-    std::string body;
-    check_declared_length(ctx);
-    bool over = false;
-    const bool ok = reader([&](const char* data, std::size_t n) {
-      if (std::int64_t(body.size() + n) > config.max_body_bytes) {
-        over = true;
-        return false;
-      }
-      body.append(data, n);
-      return true;
-    });
-    metrics.add_bytes_in(std::int64_t(body.size()));
-    if (over) throw_too_large(ctx);
-    ctx.body_consumed = ok;
-    if (!ok) throw HttpError(make_problem(400, "bad-body", "Unreadable body", "the request body could not be read"));
-    return body;
-  }
-
-  [[noreturn]] void throw_too_large(Context& ctx) {
-    close_after_response(ctx.req, ctx.res);  // the rest of the body stays unread
-    throw HttpError(make_problem(413, "too-large", "Content too large",
-                                 "the body exceeds the limit of " + std::to_string(config.max_body_bytes) + " bytes"));
-  }
-
-  void check_declared_length(Context& ctx) {
-    const bool chunked = lower(ctx.req.get_header_value("Transfer-Encoding")).find("chunked") != std::string::npos;
-    if (chunked) return;
-    if (!ctx.req.has_header("Content-Length")) {
-      close_after_response(ctx.req, ctx.res);
-      throw HttpError(make_problem(411, "length-required", "Length required",
-                                   "send Content-Length or Transfer-Encoding: chunked"));
-    }
-    const std::string text = ctx.req.get_header_value("Content-Length");
-    std::uint64_t n = 0;
-    auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), n);
-    if (ec == std::errc::result_out_of_range) throw_too_large(ctx);
-    if (ec != std::errc() || ptr != text.data() + text.size() || text.empty()) {
-      close_after_response(ctx.req, ctx.res);
-      throw HttpError(make_problem(400, "bad-request", "Bad request", "Content-Length is not a number"));
-    }
-    if (n > std::uint64_t(config.max_body_bytes)) throw_too_large(ctx);
-  }
-
-  // Body, container and parameters of a job, from a raw body or a multipart form.
-  service::JobInput read_job_input(Context& ctx) {
-    const httplib::Request& req = ctx.req;
-    std::optional<std::string> params_text;
-    auto set_params = [&](std::string text, const char* where) {
-      if (params_text)
-        throw HttpError(make_problem(400, "invalid-params", "Invalid parameters",
-                                     std::string("parameters given twice (") + where +
-                                         "); use one of ?params=, X-Denoise-Params or the params form field"));
-      params_text = std::move(text);
-    };
-    if (req.has_param("params")) set_params(req.get_param_value("params"), "query");
-    if (req.has_header("X-Denoise-Params")) set_params(req.get_header_value("X-Denoise-Params"), "header");
-
-    service::JobInput input;
-    if (req.is_multipart_form_data()) {
-      check_declared_length(ctx);
-      std::string current, mesh, params_part, mesh_type, mesh_name;
-      bool has_mesh = false, has_params = false, over = false, unexpected = false;
-      std::string unexpected_name;
-      std::int64_t total = 0;
-      const bool ok = (*ctx.reader)(
-          [&](const httplib::MultipartFormData& part) {
-            current = part.name;
-            if (current == "mesh") {
-              if (has_mesh) return unexpected = true, unexpected_name = "mesh (twice)", false;
-              has_mesh = true;
-              mesh_type = part.content_type;
-              mesh_name = part.filename;
-            } else if (current == "params") {
-              if (has_params) return unexpected = true, unexpected_name = "params (twice)", false;
-              has_params = true;
-            } else {
-              unexpected = true;
-              unexpected_name = current;
-              return false;
-            }
-            return true;
-          },
-          [&](const char* data, std::size_t n) {
-            total += std::int64_t(n);
-            if (total > config.max_body_bytes) return over = true, false;
-            (current == "mesh" ? mesh : params_part).append(data, n);
-            return true;
-          });
-      metrics.add_bytes_in(total);
-      if (over) throw_too_large(ctx);
-      ctx.body_consumed = ok && !unexpected;
-      if (unexpected)
-        throw HttpError(make_problem(400, "bad-form", "Bad form",
-                                     "unexpected form field '" + unexpected_name + "'; expected 'mesh' and 'params'"));
-      if (!ok) throw HttpError(make_problem(400, "bad-form", "Bad form", "the multipart body could not be parsed"));
-      if (!has_mesh) throw HttpError(make_problem(400, "bad-form", "Bad form", "the form has no 'mesh' field"));
-      if (has_params) set_params(std::move(params_part), "form field");
-      input.format = resolve_format(mesh_type, mesh, mesh_name);
-      input.bytes = std::move(mesh);
-    } else {
-      std::string content_type = req.get_header_value("Content-Type");
-      if (base_media_type(content_type) == "application/x-www-form-urlencoded")
-        throw HttpError(unsupported_media_type(
-            "application/x-www-form-urlencoded is not a mesh (curl -d sets it: use --data-binary with "
-            "-H 'Content-Type: ...')"));
-      input.bytes = read_body(ctx, *ctx.reader);
-      if (input.bytes.empty()) throw HttpError(make_problem(400, "empty-body", "Empty body", "the request body is empty"));
-      input.format = resolve_format(content_type, input.bytes);
-    }
-    input.params = params_text ? service::job_params_from_text(*params_text) : service::JobParams{};
-    return input;
-  }
-
-  // ---------------------------------------------------------------- responses
-  void write_result(Context& ctx, const JobSnapshot& s) {
-    const service::JobOutput& out = *s.output;
-    httplib::Response& res = ctx.res;
-    // A single byte range of a result is honoured (resumable downloads); httplib slices it.
-    if (ctx.req.ranges.size() == 1) {
-      const auto [first, last] = ctx.req.ranges.front();
-      const auto size = std::int64_t(out.bytes.size());
-      const bool ok = (first >= 0 && first < size && (last < 0 || last >= first)) || (first < 0 && last > 0);
-      if (!ok) {
-        replace_header(res, "Content-Range", "bytes */" + std::to_string(size));
-        throw HttpError(make_problem(416, "range-not-satisfiable", "Range not satisfiable",
-                                     "the result has " + std::to_string(size) + " bytes"));
-      }
-      res.status = 206;
-    } else {
-      res.status = 200;
-    }
-    res.set_content(out.bytes, out.media_type);
-    res.set_header("Content-Disposition", "attachment; filename=\"denoised." + std::string(io::to_string(out.format)) + "\"");
-    res.set_header("X-Denoise-Params", service::to_json(out.effective).dump());
-    res.set_header("X-Denoise-Input-Bytes", std::to_string(s.input_bytes));
-    res.set_header("X-Denoise-Output-Bytes", std::to_string(out.bytes.size()));
-    res.set_header("X-Denoise-Vertices", std::to_string(out.vertices));
-    res.set_header("X-Denoise-Faces", std::to_string(out.faces));
-    // The job's JSON always has the reports; the header only when it stays small.
-    if (std::string report = reports_json(s).dump(); report.size() <= 8192)
-      res.set_header("X-Denoise-Report", report);
-    if (!out.notes.empty()) {
-      std::string notes;
-      for (const auto& n : out.notes) notes += (notes.empty() ? "" : "; ") + n;
-      res.set_header("X-Denoise-Notes", header_safe(notes));
-    }
-    // Server-Timing (W3C): per-stage milliseconds, shown by browsers' developer tools.
-    res.set_header("Server-Timing",
-                   "queue;dur=" + format_ms(s.queue_wait_s * 1000) + ", decode;dur=" + format_ms(out.decode_ms) +
-                       ", prefilter;dur=" + format_ms(out.stages.setup_ms + out.stages.prefilter_ms()) +
-                       ", normal;dur=" + format_ms(out.stages.normal_ms) + ", vertex;dur=" +
-                       format_ms(out.stages.vertex_ms) + ", encode;dur=" + format_ms(out.encode_ms) +
-                       ", total;dur=" + format_ms((s.queue_wait_s + s.run_s) * 1000));
-  }
-
-  json job_json(const JobSnapshot& s, const std::string& request_id) const {
-    const std::string self = "/v1/jobs/" + s.id;
-    json j = {{"id", s.id},
-              {"state", to_string(s.state)},
-              {"progress", {{"stage", s.stage}, {"fraction", s.fraction}}},
-              {"cancel_requested", s.cancel_requested},
-              {"created_at", iso8601(s.created_wall)},
-              {"timings_s", {{"queue_wait", s.queue_wait_s}, {"run", s.run_s}}},
-              {"input_bytes", s.input_bytes},
-              {"links", {{"self", self}, {"result", self + "/result"}}}};
-    if (s.output) j["result"] = output_summary(s);
-    if (s.attempts > 1) j["attempts"] = s.attempts;
-    if (s.error) j["error"] = s.error->to_json(self, request_id);
-    return j;
-  }
-
   static void set_json(httplib::Response& res, const json& j, int status = 200) {
     res.status = status;
     res.set_content(j.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
@@ -715,8 +352,7 @@ struct HttpService::Impl {
 
   static JobSnapshot found(const std::string& id, std::optional<JobSnapshot> job) {
     if (!job)
-      throw HttpError(make_problem(404, "job-not-found", "Job not found",
-                                   "no job '" + header_safe(id) + "' (unknown, deleted or expired)"));
+      throw HttpError(job_not_found(id));
     return std::move(*job);
   }
 
@@ -729,8 +365,7 @@ struct HttpService::Impl {
     double seconds = -1;
     const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), seconds);
     if (ec != std::errc() || end != text.data() + text.size() || !(seconds >= 0 && seconds <= kMaxWaitS)) {
-      Problem p = make_problem(400, "invalid-query", "Invalid query parameter",
-                               "wait must be a number of seconds from 0 to " + std::to_string(int(kMaxWaitS)) +
+      Problem p = make_problem(ProblemType::InvalidQuery, "wait must be a number of seconds from 0 to " + std::to_string(int(kMaxWaitS)) +
                                    " (got '" + header_safe(text) + "')");
       p.extensions["field"] = "wait";
       p.extensions["minimum"] = 0;
@@ -754,12 +389,12 @@ struct HttpService::Impl {
 
   void readyz(Context& ctx) {
     if (queue.draining()) {
-      Problem p = make_problem(503, "draining", "Server draining", "the server is shutting down");
+      Problem p = make_problem(ProblemType::Draining, "the server is shutting down");
       p.retry_after_s = 5;
       throw HttpError(p);
     }
     if (queue.saturated()) {
-      Problem p = make_problem(503, "queue-full", "Job queue full", "the job queue is full");
+      Problem p = make_problem(ProblemType::QueueFull, "the job queue is full");
       p.retry_after_s = queue.retry_after_s();
       throw HttpError(p);
     }
@@ -811,8 +446,14 @@ struct HttpService::Impl {
     ctx.res.set_content(doc.data(), doc.size(), "application/schema+json");
   }
 
+  void report_schema(Context& ctx) {
+    ctx.res.status = 200;
+    const auto doc = embedded::report_schema_json();
+    ctx.res.set_content(doc.data(), doc.size(), "application/schema+json");
+  }
+
   void denoise(Context& ctx) {
-    service::JobInput input = read_job_input(ctx);
+    service::JobInput input = bodies.read_job_input(ctx);
     std::shared_ptr<Job> job = queue.submit(std::move(input), false).job;
     const auto probe = ConnectionProbe::current(ctx.req.remote_port);
     while (!job->wait_for(std::chrono::milliseconds(50))) {
@@ -825,7 +466,7 @@ struct HttpService::Impl {
     }
     const JobSnapshot s = job->snapshot();
     if (s.state == JobState::Succeeded) return write_result(ctx, s);
-    throw HttpError(s.error.value_or(make_problem(500, "internal", "Internal server error", "the job failed")));
+    throw HttpError(s.error.value_or(make_problem(ProblemType::Internal, "the job failed")));
   }
 
   void create_job(Context& ctx) {
@@ -835,10 +476,9 @@ struct HttpService::Impl {
       if (key->empty() || key->size() > 255 || !std::all_of(key->begin(), key->end(), [](char c) {
             return c > 0x20 && c < 0x7f;
           }))
-        throw HttpError(make_problem(400, "bad-idempotency-key", "Bad Idempotency-Key",
-                                     "Idempotency-Key must be 1 to 255 visible ASCII characters"));
+        throw HttpError(make_problem(ProblemType::BadIdempotencyKey, "Idempotency-Key must be 1 to 255 visible ASCII characters"));
     }
-    service::JobInput input = read_job_input(ctx);
+    service::JobInput input = bodies.read_job_input(ctx);
     // What can be refused at once is refused before the job is accepted (not 202 and a failed
     // job later): parameters that do not validate (400), a body that is not the declared
     // container (415).
@@ -877,10 +517,10 @@ struct HttpService::Impl {
     }
     Problem p;
     if (!is_terminal(s.state)) {
-      p = make_problem(409, "job-not-finished", "Job not finished", "the job is " + std::string(to_string(s.state)));
+      p = make_problem(ProblemType::JobNotFinished, "the job is " + std::string(to_string(s.state)));
       p.retry_after_s = 1;
     } else {
-      p = make_problem(409, "job-" + std::string(to_string(s.state)), "Job has no result",
+      p = make_problem(s.state == JobState::Cancelled ? ProblemType::JobCancelled : ProblemType::JobFailed,
                        "the job " + std::string(to_string(s.state)) + (s.error ? ": " + s.error->detail : ""));
       if (s.error) p.extensions["job_error"] = s.error->to_json("/v1/jobs/" + s.id, ctx.request_id);
     }
@@ -893,8 +533,7 @@ struct HttpService::Impl {
     const JobStore::CancelResult r = store->cancel(id);
     switch (r.outcome) {
       case JobQueue::CancelOutcome::NotFound:
-        throw HttpError(make_problem(404, "job-not-found", "Job not found",
-                                     "no job '" + header_safe(id) + "' (unknown, deleted or expired)"));
+        throw HttpError(job_not_found(id));
       case JobQueue::CancelOutcome::CancelledQueued:
         return set_json(ctx.res, job_json(r.job, ctx.request_id), 200);
       case JobQueue::CancelOutcome::CancelRequested:
@@ -908,16 +547,18 @@ struct HttpService::Impl {
   // GET / and GET /web/{path}: the web page (web_routes.h), unless --web off.
   void web_page(Context& ctx) {
     if (!config.web)
-      throw HttpError(make_problem(404, "not-found", "Not found", "no route GET " + ctx.req.path + " (--web off)"));
+      throw HttpError(make_problem(ProblemType::NotFound, "no route GET " + ctx.req.path + " (--web off)"));
     serve_web_file(ctx.req, ctx.res, ctx.req.matches.size() > 1 ? ctx.req.matches[1].str() : "index.html");
   }
 
   // ---------------------------------------------------------------- state
   const ServerConfig config;
   const std::shared_ptr<const EventLog> log;
-  Metrics metrics;  // before queue: the queue's hook uses it until the queue is destroyed
-  JobQueue queue;
-  std::unique_ptr<JobStore> store;  // after queue: the Redis store runs its jobs on it
+  ServiceParts parts;  // owns what the three below refer to
+  Metrics& metrics;
+  JobQueue& queue;
+  JobStore* store;
+  BodyReader bodies;
   httplib::Server svr;
   std::vector<Route> routes;
   std::string id_prefix;
@@ -944,8 +585,8 @@ struct HttpService::Impl {
   } overload_log;
 };
 
-HttpService::HttpService(const ServerConfig& config, std::shared_ptr<const EventLog> log)
-    : impl_(std::make_unique<Impl>(config, std::move(log))) {}
+HttpService::HttpService(const ServerConfig& config, std::shared_ptr<const EventLog> log, ServiceParts parts)
+    : impl_(std::make_unique<Impl>(config, std::move(log), std::move(parts))) {}
 
 HttpService::~HttpService() {
   stop();

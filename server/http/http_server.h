@@ -1,7 +1,7 @@
 // The HTTP service: route table, handlers, CORS, auth, request ids, access logs and metrics,
-// over cpp-httplib, the JobQueue (this process's workers; synchronous jobs) and a JobStore
-// (asynchronous jobs: in memory, or shared through Redis with --queue; job_store.h). Built from
-// a ServerConfig; main() only parses the configuration, handles signals and calls these methods.
+// over cpp-httplib and the parts main() builds (service_parts.h): the metrics, the JobQueue
+// (this process's workers; synchronous jobs) and a JobStore (asynchronous jobs: in memory, or
+// shared through Redis with --queue; job_store.h). The service never picks its store itself.
 //
 // Lifecycle: bind() -> serve() (blocks, on its own thread) ... begin_drain() -> wait_drained()
 // -> stop(). Every method except serve() may be called from any thread.
@@ -14,6 +14,7 @@
 #include "server/http/config.h"
 #include "server/http/job_queue.h"
 #include "server/http/log.h"
+#include "server/http/service_parts.h"
 
 namespace mdn::http {
 
@@ -24,8 +25,9 @@ struct RouteInfo {
 
 class HttpService {
  public:
-  // Starts the worker pool. `log` receives access and job logs.
-  HttpService(const ServerConfig& config, std::shared_ptr<const EventLog> log);
+  // Takes the parts (every member set; make_service_parts builds them from the configuration).
+  // `log` receives access and job logs; it may be null.
+  HttpService(const ServerConfig& config, std::shared_ptr<const EventLog> log, ServiceParts parts);
   ~HttpService();
   HttpService(const HttpService&) = delete;
   HttpService& operator=(const HttpService&) = delete;

@@ -120,7 +120,7 @@ JobQueue::~JobQueue() {
   for (auto& job : queue_) {
     std::lock_guard job_lock(job->mutex_);
     finish_locked(*job, JobState::Cancelled,
-                  make_problem(503, "shutting-down", "Server shutting down", "the server stopped before this job ran"),
+                  make_problem(ProblemType::ShuttingDown, "the server stopped before this job ran"),
                   nullptr);
   }
   queue_.clear();
@@ -142,8 +142,7 @@ JobQueue::Submitted JobQueue::submit(service::JobInput input, bool asynchronous,
   if (idempotency_key) {
     if (auto it = idempotency_.find(*idempotency_key); it != idempotency_.end()) {
       if (it->second.fingerprint != fingerprint) {
-        Problem p = make_problem(422, "idempotency-key-reused", "Idempotency-Key reused",
-                                 "this Idempotency-Key was already used with a different body or parameters");
+        Problem p = make_problem(ProblemType::IdempotencyKeyReused, "this Idempotency-Key was already used with a different body or parameters");
         throw HttpError(std::move(p));
       }
       if (auto job = jobs_.find(it->second.job_id); job != jobs_.end()) return {job->second, true};
@@ -151,21 +150,19 @@ JobQueue::Submitted JobQueue::submit(service::JobInput input, bool asynchronous,
     }
   }
   if (draining_ || stop_) {
-    Problem p = make_problem(503, "draining", "Server draining", "the server is shutting down and accepts no new jobs");
+    Problem p = make_problem(ProblemType::Draining, "the server is shutting down and accepts no new jobs");
     p.retry_after_s = retry_after_s();
     throw HttpError(std::move(p));
   }
   if (int(queue_.size()) >= options_.capacity) {
-    Problem p = make_problem(503, "queue-full", "Job queue full",
-                             "all " + std::to_string(options_.capacity) + " queue slots are taken; retry later");
+    Problem p = make_problem(ProblemType::QueueFull, "all " + std::to_string(options_.capacity) + " queue slots are taken; retry later");
     p.retry_after_s = retry_after_s();
     throw HttpError(std::move(p));
   }
   // An accepted asynchronous job stays retrievable for its whole result lifetime: when every
   // stored-job slot is taken, new jobs are refused rather than old ones evicted early.
   if (asynchronous && int(jobs_.size()) >= options_.max_stored) {
-    Problem p = make_problem(503, "store-full", "Job store full",
-                             "all " + std::to_string(options_.max_stored) +
+    Problem p = make_problem(ProblemType::StoreFull, "all " + std::to_string(options_.max_stored) +
                                  " stored-job slots hold jobs within their result lifetime; retry later");
     p.retry_after_s = store_retry_after_s_locked();
     throw HttpError(std::move(p));
@@ -217,7 +214,7 @@ JobQueue::CancelOutcome JobQueue::cancel(const std::string& id) {
       queue_.erase(std::remove(queue_.begin(), queue_.end(), job), queue_.end());
       job->cancel_ = true;
       finish_locked(*job, JobState::Cancelled,
-                    make_problem(409, "cancelled", "Job cancelled", "cancelled by DELETE before it started"), nullptr);
+                    cancelled_before_start(), nullptr);
       job_lock.unlock();
       finished_order_.push_back(id);
       idle_cv_.notify_all();
@@ -258,7 +255,7 @@ void JobQueue::cancel(const std::shared_ptr<Job>& job) {
   if (job->state_ == JobState::Queued) {
     queue_.erase(std::remove(queue_.begin(), queue_.end(), job), queue_.end());
     finish_locked(*job, JobState::Cancelled,
-                  make_problem(409, "cancelled", "Job cancelled", "the client went away before the job started"), nullptr);
+                  make_problem(ProblemType::Cancelled, "the client went away before the job started"), nullptr);
     job_lock.unlock();
     if (!job->external_ && job->asynchronous_) finished_order_.push_back(job->id_);
     idle_cv_.notify_all();
@@ -400,12 +397,11 @@ void JobQueue::run(const std::shared_ptr<Job>& job) {
     if (observer.timed_out()) {
       state = JobState::Failed;
       const double limit_s = std::chrono::duration<double>(options_.time_limit).count();
-      error = make_problem(504, "time-limit-exceeded", "Job time limit exceeded",
-                           "the job ran longer than the server's limit of " + std::to_string(limit_s) + " s");
+      error = make_problem(ProblemType::TimeLimitExceeded, "the job ran longer than the server's limit of " + std::to_string(limit_s) + " s");
       error->extensions["time_limit_s"] = limit_s;
     } else {
       state = JobState::Cancelled;
-      error = make_problem(409, "cancelled", "Job cancelled", "cancelled while running");
+      error = make_problem(ProblemType::Cancelled, "cancelled while running");
     }
   } catch (...) {
     state = JobState::Failed;

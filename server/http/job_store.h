@@ -2,7 +2,7 @@
 // implementations chosen by --queue:
 //   memory   MemoryJobStore (this file): the process's own JobQueue; a single node needs
 //            nothing else. Jobs die with the process.
-//   redis:// RedisJobStore (redis_queue.h): input, parameters, state, progress and result in
+//   redis:// RedisJobStore (redis/store.h): input, parameters, state, progress and result in
 //            Redis, the queue a Redis Stream with a consumer group; any replica accepts, any
 //            replica's workers run, any replica answers.
 // Synchronous POST /v1/denoise never goes through a JobStore: it runs on the local JobQueue in

@@ -1,7 +1,8 @@
-// meshdenoise-server: parses the configuration (flags, then MDN_* variables), runs the HTTP
-// service, and drains on SIGTERM/SIGINT: /readyz turns 503, new jobs get 503, accepted jobs
-// finish within --drain-grace seconds, then the process exits 0; a drain that runs out of grace
-// logs every job it abandons and exits 1. A second signal stops at once.
+// meshdenoise-server: parses the configuration (flags, then MDN_* variables), builds the
+// metrics, the job queue and the job store (memory or Redis), runs the HTTP service over them,
+// and drains on SIGTERM/SIGINT: /readyz turns 503, new jobs get 503, accepted jobs finish
+// within --drain-grace seconds, then the process exits 0; a drain that runs out of grace logs
+// every job it abandons and exits 1. A second signal stops at once.
 #include <atomic>
 #include <cerrno>
 #include <csignal>
@@ -18,6 +19,7 @@
 #include "server/http/config.h"
 #include "server/http/http_server.h"
 #include "server/http/log.h"
+#include "server/http/service_parts.h"
 
 namespace {
 
@@ -83,7 +85,7 @@ int main(int argc, char** argv) {
 
   auto log = std::make_shared<const EventLog>(config);
   try {
-    HttpService service(config, log);
+    HttpService service(config, log, make_service_parts(config, log));
     const int port = service.bind();
     if (!config.port_file.empty()) write_port_file(config.port_file, port);
     log->info("listening", {{"host", config.host},
@@ -91,7 +93,7 @@ int main(int argc, char** argv) {
                             {"workers", config.effective_workers()},
                             {"threads_per_job", config.threads_per_job},
                             {"queue_capacity", config.queue_capacity},
-                            {"job_store", config.queue == "memory" ? "memory" : "redis"},
+                            {"job_store", config.queue ? "redis" : "memory"},
                             {"io_threads", config.io_threads},
                             {"max_body", config.max_body_bytes},
                             {"auth", !config.auth_token.empty()}});

@@ -4,8 +4,10 @@
 
 #include <exception>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 #include <nlohmann/json.hpp>
 
@@ -38,7 +40,40 @@ class HttpError : public std::runtime_error {
   Problem problem_;
 };
 
-// Builders for the common cases.
+// Every problem type the server answers with: one row per slug, its fixed title and status.
+// proto/openapi.yaml lists the same slugs (components.schemas.Problem.properties.type.enum).
+enum class ProblemType {
+  // Requests the HTTP layer refuses.
+  BadRequest, BadBody, BadForm, BadIdempotencyKey, EmptyBody, InvalidQuery, Unauthorized, NotFound,
+  MethodNotAllowed, LengthRequired, TooLarge, UriTooLong, UnsupportedMediaType, RangeNotSatisfiable,
+  MultipleRanges, TooManyHeaders, HttpError,
+  // The job's input and parameters.
+  InvalidParams, MalformedMesh, InvalidMesh, UnsupportedContent, SolverFailed, ResultTooLarge,
+  // Jobs and their store.
+  JobNotFound, JobNotFinished, JobFailed, JobCancelled, Cancelled, TimeLimitExceeded, IdempotencyKeyReused,
+  AttemptsExhausted, InputLost, QueueFull, StoreFull, QueueUnavailable, QueueError, Draining, ShuttingDown,
+  // The server itself.
+  OutOfMemory, Internal,
+};
+
+struct ProblemKind {
+  ProblemType type;
+  std::string_view slug;
+  std::string_view title;
+  int status;  // HttpError: the status httplib answered with replaces it
+};
+
+// The catalogue, in the enum's order.
+std::span<const ProblemKind> problem_catalogue();
+const ProblemKind& problem_kind(ProblemType type);
+
+// The problem of `type` with its slug, title and status from the catalogue.
+Problem make_problem(ProblemType type, std::string detail);
+// 409 cancelled by DELETE: before the job started (memory and Redis stores alike).
+Problem cancelled_before_start();
+// 404 job-not-found for a job id as the client sent it (sanitised for the detail).
+Problem job_not_found(std::string_view id);
+// A problem read back from storage (the Redis store keeps a finished job's error as JSON).
 Problem make_problem(int status, std::string type, std::string title, std::string detail);
 
 // Maps any exception to its problem (never throws):

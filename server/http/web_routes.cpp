@@ -129,7 +129,7 @@ void serve_web_file(const httplib::Request& req, httplib::Response& res, std::st
   const auto& files = web_files();
   const auto it = files.find(name);
   if (it == files.end())
-    throw HttpError(make_problem(404, "not-found", "Not found", "no page file /web/" + std::string(name)));
+    throw HttpError(make_problem(ProblemType::NotFound, "no page file /web/" + std::string(name)));
   const WebFile& file = it->second;
   // Strong ETags, one per representation (RFC 9110 8.8.3: the gzip bytes are another one).
   const std::string identity_tag = "\"" + file.etag + "\"", gzip_tag = "\"" + file.etag + "-gzip\"";

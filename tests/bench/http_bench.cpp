@@ -77,7 +77,8 @@ struct Server {
     config.workers = workers;
     config.queue_capacity = 1000;
     config.log_level = "off";
-    service = std::make_unique<mdn::http::HttpService>(config, std::make_shared<const mdn::http::EventLog>(config));
+    auto log = std::make_shared<const mdn::http::EventLog>(config);
+    service = std::make_unique<mdn::http::HttpService>(config, log, mdn::http::make_service_parts(config, log));
     port = service->bind();
     thread = std::thread([this] { service->serve(); });
   }

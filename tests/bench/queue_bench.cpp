@@ -129,9 +129,10 @@ struct Replica {
     config.workers = workers;
     config.queue_capacity = 1000;
     config.log_level = "off";
-    config.queue = queue;
+    config.queue = mdn::http::parse_queue_setting(queue);
     config.queue_prefix = prefix;
-    service = std::make_unique<mdn::http::HttpService>(config, std::make_shared<const mdn::http::EventLog>(config));
+    auto log = std::make_shared<const mdn::http::EventLog>(config);
+    service = std::make_unique<mdn::http::HttpService>(config, log, mdn::http::make_service_parts(config, log));
     port = service->bind();
     thread = std::thread([this] { service->serve(); });
     // Wait until ready (the Redis store connects in the background).

@@ -251,19 +251,19 @@ TEST_F(Cli, ParamsInlineAndFromFileAndReport) {
   EXPECT_EQ(report["params"]["n_vertex"], 4);
   EXPECT_EQ(report["params"]["region_mode"], "off");
   EXPECT_FALSE(report["params"].contains("alpha"));  // auto mode: not pinned, so chosen per surface
-  EXPECT_EQ(report["surfaces"][0]["params"]["n_normal"], 5);  // pinned fields ran as given
-  EXPECT_TRUE(report["surfaces"][0]["params"]["alpha"].is_number());  // and what auto chose is reported
+  EXPECT_EQ(report["reports"][0]["params"]["n_normal"], 5);  // pinned fields ran as given
+  EXPECT_TRUE(report["reports"][0]["params"]["alpha"].is_number());  // and what auto chose is reported
   EXPECT_EQ(report["params"]["output"]["format"], "off");
   EXPECT_EQ(report["vertices"], clean_.num_vertices());
   EXPECT_EQ(report["faces"], clean_.num_faces());
   EXPECT_EQ(report["bytes"], fs::file_size(path("a.off")));
   EXPECT_EQ(report["output"], path("a.off"));
   EXPECT_EQ(report["input"]["format"], "off");
-  EXPECT_TRUE(report["timings_ms"]["normal"].is_number());
-  EXPECT_TRUE(report["timings_ms"]["total"].is_number());
-  ASSERT_EQ(report["surfaces"].size(), 1u);
-  EXPECT_EQ(report["surfaces"][0]["region_prefilter_applied"], false);  // region_mode off
-  EXPECT_TRUE(report["surfaces"][0]["fold_ratio"].is_number());
+  EXPECT_TRUE(report["timings_ms"]["normal_filter"].is_number());
+  EXPECT_TRUE(report["timings_ms"]["denoise"].is_number());
+  ASSERT_EQ(report["reports"].size(), 1u);
+  EXPECT_EQ(report["reports"][0]["region_prefilter_applied"], false);  // region_mode off
+  EXPECT_TRUE(report["reports"][0]["fold_ratio"].is_number());
 
   write_text(path("params.json"), params);
   const Result file_run = run("--params " + quote(path("params.json")) + " " + quote(path("noisy.off")) + " " +
@@ -431,8 +431,8 @@ TEST_F(Cli, AutoIsTheDefaultAndTheReportShowsWhatRan) {
   ASSERT_EQ(automatic.code, 0) << automatic.err;
   const json a = parse_stdout(automatic);
   EXPECT_EQ(a["params"]["mode"], "auto");
-  ASSERT_EQ(a["surfaces"].size(), 1u);
-  const json& s = a["surfaces"][0];
+  ASSERT_EQ(a["reports"].size(), 1u);
+  const json& s = a["reports"][0];
   EXPECT_EQ(s["mode"], "auto");
   ASSERT_TRUE(s.contains("measures")) << s;
   EXPECT_GT(s["measures"]["noise"].get<double>(), 0);
@@ -450,9 +450,9 @@ TEST_F(Cli, AutoIsTheDefaultAndTheReportShowsWhatRan) {
                             quote(path("paper.off")));
   ASSERT_EQ(manual.code, 0) << manual.err;
   const json m = parse_stdout(manual);
-  EXPECT_EQ(m["surfaces"][0]["mode"], "manual");
-  EXPECT_FALSE(m["surfaces"][0].contains("measures"));
-  EXPECT_EQ(m["surfaces"][0]["params"]["n_normal"], DenoiseParams{}.n_normal);
+  EXPECT_EQ(m["reports"][0]["mode"], "manual");
+  EXPECT_FALSE(m["reports"][0].contains("measures"));
+  EXPECT_EQ(m["reports"][0]["params"]["n_normal"], DenoiseParams{}.n_normal);
 }
 
 TEST_F(Cli, TuneFindsParametersThatFeedBackIntoParams) {

@@ -5,6 +5,10 @@ Usage: proto_check.py <proto dir> <out.json>
 Writes {"openapi": <the OpenAPI document as JSON>, "examples": [...], "counter_examples": [...]}
 after checking that params.schema.json is a valid JSON Schema 2020-12 document, that each of
 its "examples" validates and each of its "x-counterExamples" does not. Exits non-zero on failure.
+
+Usage: proto_check.py --reports <proto dir> <document.json>...
+Checks report.schema.json the same way, then that every document (a CLI --report, a job's
+result) validates against it; exits non-zero naming the first error of each that does not.
 """
 import json
 import sys
@@ -13,17 +17,37 @@ import jsonschema
 import yaml
 
 
-def main():
-    proto, out_path = sys.argv[1], sys.argv[2]
-    with open(f"{proto}/openapi.yaml", encoding="utf-8") as f:
-        openapi = yaml.safe_load(f)
-    with open(f"{proto}/params.schema.json", encoding="utf-8") as f:
+def load_validator(path):
+    """The schema at `path` and its validator, once checked to be valid JSON Schema 2020-12."""
+    with open(path, encoding="utf-8") as f:
         schema = json.load(f)
     validator_class = jsonschema.validators.validator_for(schema)
     if validator_class is not jsonschema.Draft202012Validator:
-        sys.exit(f"params.schema.json must declare draft 2020-12, got {validator_class.__name__}")
+        sys.exit(f"{path} must declare draft 2020-12, got {validator_class.__name__}")
     validator_class.check_schema(schema)
-    validator = validator_class(schema)
+    return schema, validator_class(schema)
+
+
+def check_reports(proto, paths):
+    _, validator = load_validator(f"{proto}/report.schema.json")
+    failures = []
+    for path in paths:
+        with open(path, encoding="utf-8") as f:
+            document = json.load(f)
+        for error in validator.iter_errors(document):
+            failures.append(f"{path}: /{'/'.join(str(p) for p in error.absolute_path)}: {error.message}")
+            break
+    if failures:
+        sys.exit("\n".join(failures))
+
+
+def main():
+    if sys.argv[1] == "--reports":
+        return check_reports(sys.argv[2], sys.argv[3:])
+    proto, out_path = sys.argv[1], sys.argv[2]
+    with open(f"{proto}/openapi.yaml", encoding="utf-8") as f:
+        openapi = yaml.safe_load(f)
+    schema, validator = load_validator(f"{proto}/params.schema.json")
     failures = []
     for example in schema.get("examples", []):
         errors = list(validator.iter_errors(example))

@@ -3,6 +3,8 @@
 //    types, ranges, defaults, enumerations); its examples are accepted and its counter-examples
 //    refused by an independent validator (python3-jsonschema), by job_params_from_json and by
 //    the running server;
+//  - report.schema.json names the code's timings, and a real CLI --report and job result
+//    validate against it;
 //  - openapi.yaml lists exactly the server's routes, and every status the server answers on a
 //    route is documented there, and every documented status (but 500) is produced by a probe.
 #include <map>
@@ -11,6 +13,7 @@
 #include "http_fixture.h"
 #include "core/params.h"
 #include "server/http/http_server.h"
+#include "server/job_timings.h"
 #include "server/params_json.h"
 
 namespace mdn::test {
@@ -84,6 +87,51 @@ TEST(Proto, ParamsSchemaAgreesWithCoreParamSpecs) {
     EXPECT_THROW(service::job_params_from_json({{"output", {{k, lo - 1}}}}), InvalidParamsError) << k;
     EXPECT_THROW(service::job_params_from_json({{"output", {{k, hi + 1}}}}), InvalidParamsError) << k;
   }
+}
+
+// report.schema.json names exactly the timings the code writes (kTimingFields).
+TEST(Proto, ReportSchemaNamesEveryTiming) {
+  const json schema = load_json(proto_dir() + "/report.schema.json");
+  std::set<std::string> in_schema, in_code, required;
+  for (const auto& [k, v] : schema.at("properties").at("timings_ms").at("properties").items()) in_schema.insert(k);
+  for (const auto& k : schema.at("properties").at("timings_ms").at("required")) required.insert(k.get<std::string>());
+  for (const service::TimingField& f : service::kTimingFields) in_code.insert(std::string(f.name));
+  EXPECT_EQ(in_schema, in_code);
+  EXPECT_EQ(required, in_code);
+}
+
+// A real CLI --report (auto and manual modes, so every optional part shows) and a real job
+// resource's result validate against report.schema.json (python3-jsonschema).
+TEST(Proto, CliReportAndJobResultValidateAgainstTheReportSchema) {
+  const std::string dir = temp_dir("report");
+  write_file(dir + "/noisy.off", noisy_sphere_off(2));
+  std::vector<std::string> documents;
+  for (const auto& [name, params] : {std::pair{"auto", R"({})"}, {"manual", R"({"mode":"manual","n_normal":3})"}}) {
+    const std::string doc = dir + "/" + name + ".json";
+    const auto [code, text] = run_command(shell_quote(cli_binary()) + " --report --params " + shell_quote(params) + " " +
+                                          shell_quote(dir + "/noisy.off") + " " + shell_quote(dir + "/" + name + ".off") +
+                                          " > " + shell_quote(doc));
+    ASSERT_EQ(code, 0) << text;
+    ASSERT_TRUE(json::parse(read_file(doc)).contains("reports"));
+    documents.push_back(doc);
+  }
+  {
+    ServerProcess server({});
+    ASSERT_TRUE(server.started()) << server.log();
+    auto c = server.client();
+    auto r = c->Post("/v1/jobs", noisy_sphere_off(2), "model/x-off");
+    ASSERT_TRUE(r && r->status == 202);
+    const json done = wait_job(*c, parse_json(r->body)["id"]);
+    ASSERT_EQ(done["state"], "succeeded") << done;
+    documents.push_back(dir + "/job.json");
+    write_file(documents.back(), done["result"].dump());
+  }
+  std::string command = "python3 " + shell_quote(source_dir() + "/tests/integration/proto_check.py") +
+                        " --reports " + shell_quote(proto_dir());
+  for (const std::string& doc : documents) command += " " + shell_quote(doc);
+  const auto [code, text] = run_command(command + " 2>&1");
+  EXPECT_EQ(code, 0) << text;
+  fs::remove_all(dir);
 }
 
 TEST(Proto, SchemaExamplesAcceptedAndCounterExamplesRefusedEverywhere) {
@@ -188,7 +236,7 @@ TEST(Proto, OpenApiDocumentsExactlyTheServersRoutesAndStatuses) {
     observe(seen, "DELETE", "/v1/jobs/{id}", c->Delete("/v1/jobs/unknown"));
     observe(seen, "DELETE", "/v1/jobs/{id}", c->Delete(good_url, two_ranges));
     observe(seen, "DELETE", "/v1/jobs/{id}", c->Delete(good_url));
-    for (const std::string route : {"/v1/params", "/v1/params/schema", "/openapi.yaml", "/healthz", "/readyz", "/metrics"}) {
+    for (const std::string route : {"/v1/params", "/v1/params/schema", "/v1/report/schema", "/openapi.yaml", "/healthz", "/readyz", "/metrics"}) {
       observe(seen, "GET", route, c->Get(route));
       observe(seen, "GET", route, c->Get(route, two_ranges));
     }
@@ -203,6 +251,7 @@ TEST(Proto, OpenApiDocumentsExactlyTheServersRoutesAndStatuses) {
     // The served contract is the file, byte for byte.
     EXPECT_EQ(c->Get("/openapi.yaml")->body, read_file(proto_dir() + "/openapi.yaml"));
     EXPECT_EQ(c->Get("/v1/params/schema")->body, read_file(proto_dir() + "/params.schema.json"));
+    EXPECT_EQ(c->Get("/v1/report/schema")->body, read_file(proto_dir() + "/report.schema.json"));
   }
   {
     ServerProcess server({"--auth-token", "t0ken"});

@@ -1,8 +1,4 @@
-#include "server/http/redis_queue.h"
-
-#include <hiredis.h>
-#include <poll.h>
-#include <unistd.h>
+#include "server/http/redis/store.h"
 
 #include <algorithm>
 #include <atomic>
@@ -19,553 +15,23 @@
 #include <unordered_map>
 #include <vector>
 
+#include "server/http/redis/connection.h"
+#include "server/http/redis/finish_waiters.h"
+#include "server/http/redis/job_codec.h"
+#include "server/http/redis/recent_results.h"
+#include "server/http/redis/script_args.h"
+#include "server/http/redis/work_queue.h"
 #include "server/params_json.h"
 
 namespace mdn::http {
 namespace {
 
+using namespace redis;
+
 using nlohmann::json;
 using namespace std::chrono_literals;
 
-// ------------------------------------------------------------------ hiredis, thinly wrapped
 
-struct ReplyDeleter {
-  void operator()(redisReply* r) const {
-    if (r) freeReplyObject(r);
-  }
-};
-using Reply = std::unique_ptr<redisReply, ReplyDeleter>;
-
-// The connection failed (refused, reset, timed out): the store is unreachable.
-class RedisDown : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-// Redis answered with an error reply ("-ERR ...", "-LOADING ...").
-class RedisReplyError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
-// Element i of an array reply; anything else is a reply this code does not understand.
-const redisReply* element(const redisReply* r, std::size_t i) {
-  if (!r || r->type != REDIS_REPLY_ARRAY || i >= r->elements || !r->element[i])
-    throw std::runtime_error("unexpected reply from Redis (expected an array of at least " + std::to_string(i + 1) + ")");
-  return r->element[i];
-}
-
-std::string_view str(const redisReply* r) {
-  if (!r || (r->type != REDIS_REPLY_STRING && r->type != REDIS_REPLY_STATUS && r->type != REDIS_REPLY_ERROR))
-    return {};
-  return {r->str, r->len};
-}
-
-// One synchronous connection; used by one thread at a time.
-class Connection {
- public:
-  Connection(const RedisAddress& a, std::chrono::milliseconds timeout) {
-    const timeval connect_tv{1, 0};
-    ctx_ = redisConnectWithTimeout(a.host.c_str(), a.port, connect_tv);
-    if (!ctx_) throw RedisDown("cannot allocate a Redis context");
-    if (ctx_->err) {
-      const std::string why = ctx_->errstr;
-      redisFree(ctx_);
-      ctx_ = nullptr;
-      throw RedisDown("cannot connect to Redis at " + a.host + ":" + std::to_string(a.port) + ": " + why);
-    }
-    const timeval tv{long(timeout.count() / 1000), long((timeout.count() % 1000) * 1000)};
-    redisSetTimeout(ctx_, tv);
-    if (!a.password.empty()) expect_ok(command({"AUTH", a.password}), "AUTH");
-    if (a.db != 0) expect_ok(command({"SELECT", std::to_string(a.db)}), "SELECT");
-  }
-  ~Connection() {
-    if (ctx_) redisFree(ctx_);
-  }
-  Connection(const Connection&) = delete;
-  Connection& operator=(const Connection&) = delete;
-
-  // Sends one command; an error reply is returned (callers decide), a broken connection throws
-  // RedisDown and leaves this connection unusable.
-  Reply command(const std::vector<std::string_view>& args) {
-    if (broken_) throw RedisDown("connection already failed");
-    std::vector<const char*> argv;
-    std::vector<std::size_t> lens;
-    argv.reserve(args.size());
-    lens.reserve(args.size());
-    for (auto a : args) {
-      argv.push_back(a.data());
-      lens.push_back(a.size());
-    }
-    Reply r(static_cast<redisReply*>(redisCommandArgv(ctx_, int(args.size()), argv.data(), lens.data())));
-    if (!r) {
-      broken_ = true;
-      throw RedisDown(std::string("Redis connection failed: ") + (ctx_->err ? ctx_->errstr : "no reply"));
-    }
-    return r;
-  }
-  // Several commands in one round trip; replies in order (error replies included).
-  std::vector<Reply> pipeline(const std::vector<std::vector<std::string_view>>& commands) {
-    if (broken_) throw RedisDown("connection already failed");
-    for (const auto& args : commands) {
-      std::vector<const char*> argv;
-      std::vector<std::size_t> lens;
-      for (auto a : args) {
-        argv.push_back(a.data());
-        lens.push_back(a.size());
-      }
-      if (redisAppendCommandArgv(ctx_, int(args.size()), argv.data(), lens.data()) != REDIS_OK) {
-        broken_ = true;
-        throw RedisDown(std::string("Redis connection failed: ") + ctx_->errstr);
-      }
-    }
-    std::vector<Reply> out;
-    for (std::size_t i = 0; i < commands.size(); ++i) {
-      void* r = nullptr;
-      if (redisGetReply(ctx_, &r) != REDIS_OK || !r) {
-        broken_ = true;
-        throw RedisDown(std::string("Redis connection failed: ") + (ctx_->err ? ctx_->errstr : "no reply"));
-      }
-      out.emplace_back(static_cast<redisReply*>(r));
-    }
-    return out;
-  }
-  // Like command(), but an error reply throws RedisReplyError.
-  Reply checked(const std::vector<std::string_view>& args) {
-    Reply r = command(args);
-    if (r->type == REDIS_REPLY_ERROR) throw RedisReplyError(std::string(str(r.get())));
-    return r;
-  }
-  // Like pipeline(), but an error reply to any of the commands throws RedisReplyError.
-  std::vector<Reply> checked_pipeline(const std::vector<std::vector<std::string_view>>& commands) {
-    std::vector<Reply> replies = pipeline(commands);
-    for (const Reply& r : replies)
-      if (r->type == REDIS_REPLY_ERROR) throw RedisReplyError(std::string(str(r.get())));
-    return replies;
-  }
-  // On a subscribed connection: the next message pushed by Redis, or nullptr when none came
-  // within `wait`.
-  Reply next_message(std::chrono::milliseconds wait) {
-    if (broken_) throw RedisDown("connection already failed");
-    void* r = nullptr;
-    if (redisGetReplyFromReader(ctx_, &r) == REDIS_OK && !r) {
-      pollfd p{ctx_->fd, POLLIN, 0};
-      if (::poll(&p, 1, int(wait.count())) == 0) return Reply();
-      if (redisGetReply(ctx_, &r) != REDIS_OK) r = nullptr;
-    }
-    if (!r) {
-      broken_ = true;
-      throw RedisDown(std::string("Redis connection failed: ") + (ctx_->err ? ctx_->errstr : "no reply"));
-    }
-    return Reply(static_cast<redisReply*>(r));
-  }
-  bool broken() const { return broken_; }
-
- private:
-  static void expect_ok(const Reply& r, const char* what) {
-    if (r->type == REDIS_REPLY_ERROR) throw RedisDown(std::string(what) + " refused: " + std::string(str(r.get())));
-  }
-  redisContext* ctx_ = nullptr;
-  bool broken_ = false;
-};
-
-// Connections for request threads: taken, used, given back (a broken one is dropped).
-class Pool {
- public:
-  Pool(RedisAddress a, std::chrono::milliseconds timeout) : address_(std::move(a)), timeout_(timeout) {}
-  std::unique_ptr<Connection> take() {
-    {
-      std::lock_guard lock(mutex_);
-      if (!idle_.empty()) {
-        auto c = std::move(idle_.back());
-        idle_.pop_back();
-        return c;
-      }
-    }
-    return std::make_unique<Connection>(address_, timeout_);
-  }
-  void give(std::unique_ptr<Connection> c) {
-    if (!c || c->broken()) return;
-    std::lock_guard lock(mutex_);
-    if (idle_.size() < 16) idle_.push_back(std::move(c));
-  }
-  void clear() {
-    std::lock_guard lock(mutex_);
-    idle_.clear();
-  }
-  const RedisAddress& address() const { return address_; }
-  std::chrono::milliseconds timeout() const { return timeout_; }
-
- private:
-  const RedisAddress address_;
-  const std::chrono::milliseconds timeout_;
-  std::mutex mutex_;
-  std::vector<std::unique_ptr<Connection>> idle_;
-};
-
-// ------------------------------------------------------------------ Lua scripts
-// Each is one atomic step of a job's life. Keys are passed in KEYS (single Redis, not Cluster:
-// the idempotency replay reads the earlier job's hash by name).
-
-// Accepting a job: the hash, the idempotency key and the stream entry, or why not. The input
-// itself is SET (with an expiry, in case this script never runs) just before, in the same
-// pipeline: a payload passed through Lua costs about 2 ms per MB more than a plain SET. An
-// accepted job's input loses the expiry; a refused one's is deleted.
-// Returns {'ok', entries waiting before this one}, {'full', waiting}, {'reused'},
-// {'replay', earlier job id} or {'noinput'} (the SET did not happen).
-constexpr const char* kSubmitJob = R"lua(
-local function submit(hash, input_key, stream, idem, id, input_bytes, format, params, created_ms, capacity, fingerprint,
-                      group, has_key, job_prefix)
-  if redis.call('EXISTS', input_key) == 0 then return {'noinput'} end
-  if has_key == '1' then
-    local prev = redis.call('GET', idem)
-    if prev then
-      local bar = string.find(prev, '|', 1, true)
-      local jid = string.sub(prev, 1, bar - 1)
-      if string.sub(prev, bar + 1) ~= fingerprint then redis.call('DEL', input_key) return {'reused'} end
-      if redis.call('EXISTS', job_prefix .. jid) == 1 then redis.call('DEL', input_key) return {'replay', jid} end
-    end
-  end
-  if redis.call('EXISTS', stream) == 0 then
-    redis.call('XGROUP', 'CREATE', stream, group, '0', 'MKSTREAM')
-  end
-  local waiting = redis.call('XLEN', stream) - redis.call('XPENDING', stream, group)[1]
-  if waiting >= tonumber(capacity) then redis.call('DEL', input_key) return {'full', waiting} end
-  redis.call('HSET', hash, 'state', 'queued', 'stage', 'queued', 'fraction', '0', 'format', format,
-             'params', params, 'created_ms', created_ms, 'input_bytes', input_bytes, 'attempts', '0')
-  redis.call('PERSIST', input_key)
-  if has_key == '1' then
-    redis.call('SET', idem, id .. '|' .. fingerprint)
-    redis.call('HSET', hash, 'idem', idem)
-  end
-  redis.call('XADD', stream, '*', 'id', id)
-  return {'ok', waiting}
-end
-)lua";
-
-// KEYS: hash, input, stream, idem.  ARGV: id, input, format, params, created_ms, capacity,
-// fingerprint, group, has_key, job key prefix.
-constexpr const char* kSubmit = R"lua(
-return submit(KEYS[1], KEYS[2], KEYS[3], KEYS[4], ARGV[1], ARGV[2], ARGV[3], ARGV[4], ARGV[5], ARGV[6], ARGV[7],
-              ARGV[8], ARGV[9], ARGV[10])
-)lua";
-
-// Shared by the scripts that end a job: state, error, expiry (and the "done" message), and the
-// entry acknowledged.
-// KEYS: hash, input, stream.  ARGV (of the caller) give: now_ms, ttl_ms, entry id, group.
-constexpr const char* kFinishHelpers = R"lua(
-local function drop(stream, group, entry)
-  redis.call('XACK', stream, group, entry)
-  redis.call('XDEL', stream, entry)
-end
-local function expire_job(hash, ttl_ms)
-  redis.call('PEXPIRE', hash, ttl_ms)
-  local idem = redis.call('HGET', hash, 'idem')
-  if idem then redis.call('PEXPIRE', idem, ttl_ms) end
-  -- Every replica's long polls (GET /v1/jobs/{id}?wait=) learn that the job finished.
-  local prefix, id = string.match(hash, '^(.*)job:(%x+)$')
-  if prefix then redis.call('PUBLISH', prefix .. 'done', id) end
-end
-)lua";
-
-// Starting a job, shared by kTake and kStart. KEYS: stream.  ARGV: consumer, now_ms,
-// max_attempts, (unused), group, exhausted problem, cancelled problem, ttl_ms, lost-input
-// problem, job key prefix, (kStart: entry id, job id).
-// Returns {outcome, attempt, previous owner, input, format, params, entry id, job id}.
-constexpr const char* kStartJob = R"lua(
-local function start_job(entry, jid, want_input)
-  local hash = ARGV[10] .. jid
-  local input_key = hash .. ':input'
-  local function finish(state, problem)
-    redis.call('HSET', hash, 'state', state, 'error', problem, 'finished_ms', ARGV[2])
-    redis.call('DEL', input_key)
-    expire_job(hash, ARGV[8])
-    drop(KEYS[1], ARGV[5], entry)
-  end
-  local function result(outcome, n, previous)
-    return {outcome, n or 0, previous or '', '', '', '', entry, jid}
-  end
-  local st = redis.call('HGET', hash, 'state')
-  if not st then drop(KEYS[1], ARGV[5], entry) return result('gone') end
-  if st == 'succeeded' or st == 'failed' or st == 'cancelled' then drop(KEYS[1], ARGV[5], entry) return result('done') end
-  if redis.call('HGET', hash, 'cancel') == '1' then finish('cancelled', ARGV[7]) return result('cancelled') end
-  local previous = redis.call('HGET', hash, 'owner') or ''
-  local n = redis.call('HINCRBY', hash, 'attempts', 1)
-  if n > tonumber(ARGV[3]) then
-    redis.call('HINCRBY', hash, 'attempts', -1)
-    finish('failed', ARGV[6])
-    return result('exhausted', n - 1, previous)
-  end
-  local input = ''
-  if want_input then
-    input = redis.call('GET', input_key)
-    if not input then finish('failed', ARGV[9]) return result('lost') end
-  elseif redis.call('EXISTS', input_key) == 0 then
-    finish('failed', ARGV[9]) return result('lost')
-  end
-  redis.call('HSET', hash, 'state', 'running', 'owner', ARGV[1], 'started_ms', ARGV[2], 'stage', 'decode',
-             'fraction', '0')
-  return {'run', n, previous, input, redis.call('HGET', hash, 'format'), redis.call('HGET', hash, 'params'), entry, jid}
-end
-local function start_entry(e, want_input)
-  local jid = ''
-  for i = 1, #e[2], 2 do
-    if e[2][i] == 'id' then jid = e[2][i + 1] end
-  end
-  return start_job(e[1], jid, want_input)
-end
-)lua";
-
-// Takes the next new entry for this consumer and starts its job, in one step (one write, one
-// round trip). Nothing new: {'none', ..., last entry id}, for XREAD BLOCK to wait after it.
-constexpr const char* kTake = R"lua(
-local r = redis.call('XREADGROUP', 'GROUP', ARGV[5], ARGV[1], 'COUNT', '1', 'STREAMS', KEYS[1], '>')
-if not r then
-  local last = redis.call('XREVRANGE', KEYS[1], '+', '-', 'COUNT', '1')
-  return {'none', 0, '', '', '', '', #last == 0 and '0-0' or last[1][1], ''}
-end
-return start_entry(r[1][2][1], true)
-)lua";
-
-// Accepting a job and, when no other entry waits, starting it at once for this consumer (a local
-// worker slot is free): one write instead of two, and the input is not read back (element 4 of
-// the reply is empty). KEYS: stream, hash, input, idem.  ARGV: those of start_job, then id,
-// input, format, params, created_ms, capacity, fingerprint, has_key.
-constexpr const char* kSubmitStart = R"lua(
-local r = submit(KEYS[2], KEYS[3], KEYS[1], KEYS[4], ARGV[11], ARGV[12], ARGV[13], ARGV[14], ARGV[15], ARGV[16],
-                 ARGV[17], ARGV[5], ARGV[18], ARGV[10])
-if r[1] ~= 'ok' or r[2] > 0 then return r end
-local x = redis.call('XREADGROUP', 'GROUP', ARGV[5], ARGV[1], 'COUNT', '1', 'STREAMS', KEYS[1], '>')
-if not x then return r end
-return start_entry(x[1][2][1], false)
-)lua";
-
-// An entry taken over with XAUTOCLAIM (already in this consumer's pending list).
-constexpr const char* kStart = R"lua(
-return start_job(ARGV[11], ARGV[12], true)
-)lua";
-
-// Heartbeat. KEYS: hash, stream.  ARGV: consumer, stage ('' = unchanged), fraction, entry id, group.
-constexpr const char* kBeat = R"lua(
-if redis.call('HGET', KEYS[1], 'owner') ~= ARGV[1] or redis.call('HGET', KEYS[1], 'state') ~= 'running' then
-  return 'lost'
-end
-if ARGV[2] ~= '' then redis.call('HSET', KEYS[1], 'stage', ARGV[2], 'fraction', ARGV[3]) end
-redis.call('XCLAIM', KEYS[2], ARGV[5], ARGV[1], 0, ARGV[4], 'JUSTID')
-if redis.call('HGET', KEYS[1], 'cancel') == '1' then return 'cancel' end
-return 'ok'
-)lua";
-
-// Between heartbeats, a read-only look (no write, so no fsync): still ours? cancelled?
-// KEYS: hash.  ARGV: consumer.
-constexpr const char* kCheck = R"lua(
-if redis.call('HGET', KEYS[1], 'owner') ~= ARGV[1] or redis.call('HGET', KEYS[1], 'state') ~= 'running' then
-  return 'lost'
-end
-if redis.call('HGET', KEYS[1], 'cancel') == '1' then return 'cancel' end
-return 'ok'
-)lua";
-
-// A succeeded job's result is SET (with the results' expiry) under this consumer's own staging
-// key just before, in the same pipeline, and renamed here: a payload passed through Lua costs
-// about 2 ms per MB more, and a replica that lost the job never overwrites the owner's result.
-// KEYS: hash, input, stream, result, staged result.  ARGV: consumer, state, problem, output
-// summary, (unused), ttl_ms, now_ms, entry id, group, output_bytes.
-constexpr const char* kFinish = R"lua(
-if redis.call('HGET', KEYS[1], 'owner') ~= ARGV[1] or redis.call('HGET', KEYS[1], 'state') ~= 'running' then
-  redis.call('DEL', KEYS[5])
-  return 'stale'
-end
-if ARGV[2] == 'succeeded' then
-  if redis.call('EXISTS', KEYS[5]) == 0 then return redis.error_reply('the staged result is missing') end
-  redis.call('RENAME', KEYS[5], KEYS[4])
-  redis.call('HSET', KEYS[1], 'output', ARGV[4], 'output_bytes', ARGV[10], 'stage', 'done', 'fraction', '1')
-else
-  redis.call('HSET', KEYS[1], 'error', ARGV[3])
-end
-redis.call('HSET', KEYS[1], 'state', ARGV[2], 'finished_ms', ARGV[7])
-redis.call('DEL', KEYS[2])
-expire_job(KEYS[1], ARGV[6])
-drop(KEYS[3], ARGV[9], ARGV[8])
-return 'ok'
-)lua";
-
-// A replica stopping with a job still running hands it back at once (not counted as an
-// attempt). KEYS: hash, stream.  ARGV: consumer, entry id, group, job id.
-constexpr const char* kRelease = R"lua(
-if redis.call('HGET', KEYS[1], 'owner') ~= ARGV[1] or redis.call('HGET', KEYS[1], 'state') ~= 'running' then
-  return 'stale'
-end
-redis.call('HINCRBY', KEYS[1], 'attempts', -1)
-redis.call('HSET', KEYS[1], 'state', 'queued', 'stage', 'queued', 'fraction', '0')
-redis.call('HDEL', KEYS[1], 'owner')
-drop(KEYS[2], ARGV[3], ARGV[2])
-redis.call('XADD', KEYS[2], '*', 'id', ARGV[4])
-return 'ok'
-)lua";
-
-// DELETE. KEYS: hash, input, result.  ARGV: cancelled problem, now_ms, ttl_ms.
-constexpr const char* kCancel = R"lua(
-local st = redis.call('HGET', KEYS[1], 'state')
-if not st then return 'none' end
-if st == 'queued' then
-  redis.call('HSET', KEYS[1], 'cancel', '1', 'state', 'cancelled', 'error', ARGV[1], 'finished_ms', ARGV[2])
-  redis.call('DEL', KEYS[2])
-  expire_job(KEYS[1], ARGV[3])
-  return 'cancelled'
-elseif st == 'running' then
-  redis.call('HSET', KEYS[1], 'cancel', '1')
-  return 'requested'
-end
-local idem = redis.call('HGET', KEYS[1], 'idem')
-redis.call('DEL', KEYS[1], KEYS[2], KEYS[3])
-if idem then redis.call('DEL', idem) end
-return 'removed'
-)lua";
-
-
-// Every replica that ever ran is a consumer of the group; a restarted one comes back under a new
-// name. Consumers with nothing pending and idle for ARGV[2] ms are deleted, atomically (a
-// consumer deleted with an entry pending would strand it). A live one idle that long is simply
-// re-created by its next XREADGROUP. KEYS: stream.  ARGV: group, idle_ms.
-constexpr const char* kForgetConsumers = R"lua(
-local n = 0
-for _, c in ipairs(redis.call('XINFO', 'CONSUMERS', KEYS[1], ARGV[1])) do
-  local f = {}
-  for i = 1, #c, 2 do f[c[i]] = c[i + 1] end
-  if f['pending'] == 0 and f['idle'] > tonumber(ARGV[2]) then
-    redis.call('XGROUP', 'DELCONSUMER', KEYS[1], ARGV[1], f['name'])
-    n = n + 1
-  end
-end
-return n
-)lua";
-
-// ------------------------------------------------------------------ serialisation
-
-std::int64_t now_ms() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
-std::string problem_text(const Problem& p) {
-  return json{{"status", p.status}, {"type", p.type}, {"title", p.title}, {"detail", p.detail},
-              {"extensions", p.extensions}}
-      .dump();
-}
-
-std::optional<Problem> problem_from_text(const std::string& text) {
-  if (text.empty()) return std::nullopt;
-  const json j = json::parse(text, nullptr, false);
-  if (!j.is_object()) return make_problem(500, "internal", "Internal server error", "unreadable stored error");
-  Problem p = make_problem(j.value("status", 500), j.value("type", "internal"), j.value("title", ""),
-                           j.value("detail", ""));
-  if (j.contains("extensions") && j["extensions"].is_object()) p.extensions = j["extensions"];
-  return p;
-}
-
-// The summary of a result that every replica needs to answer for it (all but the bytes). The
-// reports are stored as rendered (service::report_to_json), exactly what the memory store shows.
-std::string output_text(const service::JobOutput& o) {
-  json reports = json::array();
-  for (const DenoiseReport& r : o.reports) reports.push_back(service::report_to_json(r));
-  return json{{"format", std::string(io::to_string(o.format))},
-              {"media_type", o.media_type},
-              {"effective", service::to_json(o.effective)},
-              {"reports", reports},
-              {"notes", o.notes},
-              {"vertices", o.vertices},
-              {"faces", o.faces},
-              {"decode_ms", o.decode_ms},
-              {"denoise_ms", o.denoise_ms},
-              {"encode_ms", o.encode_ms},
-              {"stages",
-               {{"setup", o.stages.setup_ms},
-                {"measure", o.stages.measure_ms},
-                {"initial", o.stages.initial_ms},
-                {"region", o.stages.region_ms},
-                {"anisotropic", o.stages.anisotropic_ms},
-                {"normal", o.stages.normal_ms},
-                {"vertex", o.stages.vertex_ms},
-                {"total", o.stages.total_ms}}}}
-      .dump();
-}
-
-// The output (without bytes) and the rendered reports of a stored summary.
-std::shared_ptr<service::JobOutput> output_from_text(const std::string& text, json& reports) {
-  const json j = json::parse(text);
-  auto o = std::make_shared<service::JobOutput>();
-  o->format = io::format_from_string(j.at("format").get<std::string>()).value_or(io::Format::Off);
-  o->media_type = j.at("media_type").get<std::string>();
-  o->effective = service::job_params_from_json(j.at("effective"));
-  reports = j.at("reports");
-  o->notes = j.at("notes").get<std::vector<std::string>>();
-  o->vertices = j.value("vertices", std::int64_t{0});
-  o->faces = j.value("faces", std::int64_t{0});
-  o->decode_ms = j.value("decode_ms", 0.0);
-  o->denoise_ms = j.value("denoise_ms", 0.0);
-  o->encode_ms = j.value("encode_ms", 0.0);
-  const json& s = j.at("stages");
-  o->stages.setup_ms = s.value("setup", 0.0);
-  o->stages.measure_ms = s.value("measure", 0.0);
-  o->stages.initial_ms = s.value("initial", 0.0);
-  o->stages.region_ms = s.value("region", 0.0);
-  o->stages.anisotropic_ms = s.value("anisotropic", 0.0);
-  o->stages.normal_ms = s.value("normal", 0.0);
-  o->stages.vertex_ms = s.value("vertex", 0.0);
-  o->stages.total_ms = s.value("total", 0.0);
-  return o;
-}
-
-std::optional<JobState> state_from_string(std::string_view s) {
-  for (JobState st : {JobState::Queued, JobState::Running, JobState::Succeeded, JobState::Failed, JobState::Cancelled})
-    if (to_string(st) == s) return st;
-  return std::nullopt;
-}
-
-std::int64_t to_int(const std::string& s, std::int64_t fallback = 0) {
-  try {
-    return s.empty() ? fallback : std::stoll(s);
-  } catch (...) {
-    return fallback;
-  }
-}
-
-double to_double(const std::string& s) {
-  try {
-    return s.empty() ? 0.0 : std::stod(s);
-  } catch (...) {
-    return 0.0;
-  }
-}
-
-JobSnapshot snapshot_from_hash(const std::string& id, std::map<std::string, std::string> h,
-                               const std::optional<std::string>& result) {
-  JobSnapshot s;
-  s.id = id;
-  s.asynchronous = true;
-  s.state = state_from_string(h["state"]).value_or(JobState::Failed);
-  s.stage = h["stage"].empty() ? "queued" : h["stage"];
-  s.fraction = std::clamp(to_double(h["fraction"]), 0.0, 1.0);
-  s.cancel_requested = h["cancel"] == "1";
-  s.input_bytes = to_int(h["input_bytes"]);
-  s.attempts = int(to_int(h["attempts"]));
-  const std::int64_t created = to_int(h["created_ms"]), now = now_ms();
-  const std::int64_t started = to_int(h["started_ms"], -1), finished = to_int(h["finished_ms"], -1);
-  s.created_wall = std::chrono::system_clock::time_point(std::chrono::milliseconds(created));
-  const std::int64_t end = finished >= 0 ? finished : now;
-  s.queue_wait_s = double(std::max<std::int64_t>(0, (started >= 0 ? started : end) - created)) / 1000;
-  s.run_s = started >= 0 ? double(std::max<std::int64_t>(0, end - started)) / 1000 : 0.0;
-  s.error = problem_from_text(h["error"]);
-  if (s.state == JobState::Succeeded && !h["output"].empty()) {
-    json reports;
-    auto out = output_from_text(h["output"], reports);
-    if (result) out->bytes = *result;
-    s.output = std::move(out);
-    s.reports = std::move(reports);
-    s.output_bytes = to_int(h["output_bytes"]);
-  }
-  return s;
-}
 
 std::string random_hex(std::mt19937_64& rng, int words) {
   std::string out;
@@ -577,16 +43,6 @@ std::string random_hex(std::mt19937_64& rng, int words) {
   return out;
 }
 
-// Redis error replies that mean "not now" rather than "never": loading, out of memory, a
-// replica, a failed snapshot, or a password missing or wrong (the operator's to fix; 503 with
-// Retry-After, as /readyz says).
-bool transient_reply(std::string_view e) {
-  for (std::string_view p : {"LOADING", "BUSY", "OOM", "READONLY", "MASTERDOWN", "TRYAGAIN", "CLUSTERDOWN",
-                             "NOREPLICAS", "MISCONF", "NOAUTH", "WRONGPASS", "NOPERM"})
-    if (e.rfind(p, 0) == 0) return true;
-  return false;
-}
-
 // ------------------------------------------------------------------ the store
 
 class RedisJobStore final : public JobStore {
@@ -595,7 +51,7 @@ class RedisJobStore final : public JobStore {
       : config_(c),
         queue_(queue),
         log_(std::move(log)),
-        pool_(parse_redis_url(c.queue), 10s),
+        pool_(c.queue.value(), 10s),
         prefix_(c.queue_prefix),
         stream_(prefix_ + "queue"),
         ttl_ms_(std::to_string(std::max<std::int64_t>(1, std::int64_t(std::llround(c.result_ttl_s * 1000))))),
@@ -608,17 +64,15 @@ class RedisJobStore final : public JobStore {
     gethostname(host, sizeof host - 1);
     consumer_ = std::string(host) + "-" + std::to_string(getpid()) + "-" + random_hex(rng_, 1).substr(0, 6);
     exhausted_problem_ = problem_text([&] {
-      Problem p = make_problem(500, "attempts-exhausted", "Job failed on every attempt",
-                               "the job was started " + std::to_string(c.queue_max_attempts) +
+      Problem p = make_problem(ProblemType::AttemptsExhausted, "the job was started " + std::to_string(c.queue_max_attempts) +
                                    " times and its worker stopped answering each time (crash, kill or lost "
                                    "node); it is not run again");
       p.extensions["attempts"] = c.queue_max_attempts;
       return p;
     }());
-    cancelled_problem_ =
-        problem_text(make_problem(409, "cancelled", "Job cancelled", "cancelled by DELETE before it started"));
+    cancelled_problem_ = problem_text(cancelled_before_start());
     lost_problem_ = problem_text(
-        make_problem(500, "input-lost", "Job input lost", "the job's input is no longer in the job store"));
+        make_problem(ProblemType::InputLost, "the job's input is no longer in the job store"));
     if (const char* v = std::getenv("MDN_TEST_HANDOFF_PICKUP_DELAY_MS"))
       handoff_pickup_delay_ = std::chrono::milliseconds(std::atoi(v));
     const int slots = c.effective_workers();
@@ -649,7 +103,7 @@ class RedisJobStore final : public JobStore {
   Submitted submit(service::JobInput input, const std::optional<std::string>& key,
                    const std::string& fingerprint) override {
     if (queue_.draining() || draining_) {
-      Problem p = make_problem(503, "draining", "Server draining", "the server is shutting down and accepts no new jobs");
+      Problem p = make_problem(ProblemType::Draining, "the server is shutting down and accepts no new jobs");
       p.retry_after_s = 5;
       throw HttpError(std::move(p));
     }
@@ -682,22 +136,12 @@ class RedisJobStore final : public JobStore {
     const std::int64_t input_bytes = std::int64_t(input.bytes.size());
     const std::string input_length = std::to_string(input_bytes), input_name = input_key(id);
     auto reply = run([&](Connection& c) {
-      // The input by a plain SET, then the script (see kSubmitJob), in one round trip.
+      // The input by a plain SET, then the script (see lua/submit_job.lua), in one round trip.
       const std::vector<std::string_view> set = {"SET", input_name, input.bytes, "PX", kUnacceptedInputMs};
-      if (!slot) {
-        return std::move(c.checked_pipeline({set, {"EVAL", kSubmitJob + std::string(kSubmit), "4", job_key(id),
-                                                   input_name, stream_, idem, id, input_length, format, params,
-                                                   created, capacity, fingerprint, kGroup, key ? "1" : "0",
-                                                   job_prefix}})
-                             .back());
-      }
-      auto args = start_args(kSubmitJob + std::string(kSubmitStart));
-      args[2] = "4";
-      args.insert(args.begin() + 4, {job_key(id), input_name, idem});
-      for (const std::string& v : {id, input_length, format, params, created, capacity, fingerprint,
-                                   std::string(key ? "1" : "0")})
-        args.push_back(v);
-      return std::move(c.checked_pipeline({set, std::vector<std::string_view>(args.begin(), args.end())}).back());
+      const SubmitFields job{id, input_length, format, params, created, capacity, fingerprint, key ? "1" : "0"};
+      const Argv args = slot ? SubmitStartArgs{stream_, job_key(id), input_name, idem, start_fields(), job}.to_argv()
+                             : SubmitArgs{job_key(id), input_name, stream_, idem, job, kGroup, job_prefix}.to_argv();
+      return std::move(c.checked_pipeline({set, views(args)}).back());
     });
     std::string_view outcome;
     try {
@@ -715,16 +159,14 @@ class RedisJobStore final : public JobStore {
         outcome = "ok";
       }
     } catch (const std::exception& e) {
-      throw HttpError(make_problem(500, "queue-error", "Job store error", e.what()));
+      throw HttpError(make_problem(ProblemType::QueueError, e.what()));
     }
     if (outcome == "noinput")
-      throw HttpError(make_problem(500, "queue-error", "Job store error", "the job's input could not be stored"));
+      throw HttpError(make_problem(ProblemType::QueueError, "the job's input could not be stored"));
     if (outcome == "reused")
-      throw HttpError(make_problem(422, "idempotency-key-reused", "Idempotency-Key reused",
-                                   "this Idempotency-Key was already used with a different body or parameters"));
+      throw HttpError(make_problem(ProblemType::IdempotencyKeyReused, "this Idempotency-Key was already used with a different body or parameters"));
     if (outcome == "full") {
-      Problem p = make_problem(503, "queue-full", "Job queue full",
-                               "all " + capacity + " slots of the shared queue are taken; retry later");
+      Problem p = make_problem(ProblemType::QueueFull, "all " + capacity + " slots of the shared queue are taken; retry later");
       p.retry_after_s = 5;
       throw HttpError(std::move(p));
     }
@@ -777,8 +219,7 @@ class RedisJobStore final : public JobStore {
     try {
       return snapshot_from_hash(id, std::move(h), result);
     } catch (const std::exception& e) {
-      throw HttpError(make_problem(500, "queue-error", "Job store error",
-                                   std::string("the stored job could not be read: ") + e.what()));
+      throw HttpError(make_problem(ProblemType::QueueError, std::string("the stored job could not be read: ") + e.what()));
     }
   }
 
@@ -787,28 +228,11 @@ class RedisJobStore final : public JobStore {
     // Registered before the first read, so that a "done" message between the read and the wait
     // is not missed. Without messages (the subscriber reconnecting), the job is read again every
     // kWaitRecheck.
-    std::unique_lock lock(wait_mutex_);
-    Waiters& w = waiters_[id];
-    ++w.count;
-    struct Unregister {
-      RedisJobStore& s;
-      const std::string& id;
-      ~Unregister() {
-        std::lock_guard l(s.wait_mutex_);
-        if (auto it = s.waiters_.find(id); it != s.waiters_.end() && --it->second.count == 0) s.waiters_.erase(it);
-      }
-    };
-    std::uint64_t seen = w.done;
-    lock.unlock();
-    Unregister unregister{*this, id};
+    FinishWaiters::Ticket ticket = waiters_.enter(id);
     for (;;) {
       std::optional<JobSnapshot> s = find(id, false);
       if (!s || is_terminal(s->state) || draining_ || Clock::now() >= deadline) return s;
-      lock.lock();
-      wait_cv_.wait_until(lock, std::min(deadline, Clock::now() + kWaitRecheck),
-                          [&] { return waiters_[id].done != seen || draining_ || stopping_; });
-      seen = waiters_[id].done;
-      lock.unlock();
+      waiters_.wait(ticket, std::min(deadline, Clock::now() + kWaitRecheck), [&] { return draining_ || stopping_; });
     }
   }
 
@@ -817,11 +241,9 @@ class RedisJobStore final : public JobStore {
   CancelResult cancel(const std::string& id) override {
     CancelResult r;
     if (!valid_id(id)) return r;
-    const std::string problem =
-        problem_text(make_problem(409, "cancelled", "Job cancelled", "cancelled by DELETE before it started"));
     auto reply = run([&](Connection& c) {
-      return c.checked({"EVAL", kFinishHelpers + std::string(kCancel), "3", job_key(id), input_key(id), result_key(id),
-                        problem, std::to_string(now_ms()), ttl_ms_});
+      return c.checked(views(CancelArgs{job_key(id), input_key(id), result_key(id), cancelled_problem_,
+                                        std::to_string(now_ms()), ttl_ms_}.to_argv()));
     });
     const std::string_view outcome = str(reply.get());
     if (outcome == "none") return r;
@@ -838,8 +260,7 @@ class RedisJobStore final : public JobStore {
 
   std::optional<Problem> unavailable() const override {
     if (up_) return std::nullopt;
-    Problem p = make_problem(503, "queue-unavailable", "Job store unavailable",
-                             "the shared job store (Redis) cannot be reached; the server reconnects by itself");
+    Problem p = make_problem(ProblemType::QueueUnavailable, "the shared job store (Redis) cannot be reached; the server reconnects by itself");
     p.retry_after_s = kRetryAfterS;
     return p;
   }
@@ -873,11 +294,7 @@ class RedisJobStore final : public JobStore {
         if (log_) log_->warn("job_unreleased", {{"job_id", handoffs_.front().job_id}, {"detail", ex.what()}});
       }
     }
-    {
-      std::lock_guard finish_lock(finish_mutex_);
-      finisher_stop_ = true;
-    }
-    finish_cv_.notify_all();
+    finishes_.close();  // the finisher stores what is queued, then ends
     if (finisher_.joinable()) finisher_.join();
     monitor_wake_.notify_all();
     if (monitor_.joinable()) monitor_.join();
@@ -920,7 +337,7 @@ class RedisJobStore final : public JobStore {
 
  private:
   static constexpr const char* kGroup = "workers";
-  // Expiry of an input SET before its job is accepted (kSubmitJob removes it, or deletes the
+  // Expiry of an input SET before its job is accepted (lua/submit_job.lua removes it, or deletes the
   // input of a refused job): only an input whose script never ran expires.
   static constexpr const char* kUnacceptedInputMs = "600000";
   static constexpr int kRetryAfterS = 2;
@@ -935,7 +352,7 @@ class RedisJobStore final : public JobStore {
   }
 
   [[noreturn]] void throw_unavailable(const std::string& detail) const {
-    Problem p = make_problem(503, "queue-unavailable", "Job store unavailable", detail);
+    Problem p = make_problem(ProblemType::QueueUnavailable, detail);
     p.retry_after_s = kRetryAfterS;
     throw HttpError(std::move(p));
   }
@@ -957,8 +374,7 @@ class RedisJobStore final : public JobStore {
     } catch (const RedisReplyError& e) {
       pool_.give(std::move(c));
       if (transient_reply(e.what())) throw_unavailable(std::string("the shared job store (Redis) is busy: ") + e.what());
-      throw HttpError(make_problem(500, "queue-error", "Job store error",
-                                   std::string("the shared job store (Redis) refused: ") + e.what()));
+      throw HttpError(make_problem(ProblemType::QueueError, std::string("the shared job store (Redis) refused: ") + e.what()));
     }
   }
 
@@ -1010,7 +426,7 @@ class RedisJobStore final : public JobStore {
         mark_up();
         if (Clock::now() >= next_forget) {
           next_forget = Clock::now() + 60s;
-          Reply f = c->command({"EVAL", kForgetConsumers, "1", stream_, kGroup, "3600000"});
+          Reply f = c->command(views(ForgetConsumersArgs{stream_, kGroup, "3600000"}.to_argv()));
           if (f->type == REDIS_REPLY_INTEGER && f->integer > 0 && log_)
             log_->info("redis_consumers_forgotten", {{"count", f->integer}});
         }
@@ -1044,11 +460,7 @@ class RedisJobStore final : public JobStore {
         // ["message", channel, job id]
         if (!m || m->type != REDIS_REPLY_ARRAY || m->elements != 3 || str(m->element[0]) != "message") continue;
         const std::string id(str(m->element[2]));
-        std::lock_guard lock(wait_mutex_);
-        if (auto it = waiters_.find(id); it != waiters_.end()) {
-          ++it->second.done;
-          wait_cv_.notify_all();
-        }
+        waiters_.done(id);
       } catch (const std::exception&) {
         c.reset();
         sleep_unless_stopping(500ms);
@@ -1056,18 +468,14 @@ class RedisJobStore final : public JobStore {
     }
   }
 
-  void wake_waiters() {
-    std::lock_guard lock(wait_mutex_);
-    for (auto& [id, w] : waiters_) ++w.done;
-    wait_cv_.notify_all();
-  }
+  void wake_waiters() { waiters_.wake_all(); }
 
   // ---------------------------------------------------------------- worker slots
   struct Finish {
     std::string job_id, entry_id, state, error, summary, result, finished_ms, result_bytes;
   };
 
-  // What kTake or kStart answered.
+  // What lua/take.lua or lua/start.lua answered.
   struct Taken {
     std::string outcome;  // run, none, gone, done, cancelled, exhausted, lost
     int attempt = 0;
@@ -1077,8 +485,8 @@ class RedisJobStore final : public JobStore {
   };
 
   // A worker slot of this replica reserved by submit() for a job it accepts and starts in one
-  // step (kSubmitStart); released unused when the job could not start at once (others waited).
-  // Rarely, the reserved slot takes another job meanwhile (kTake in flight): the handed job then
+  // step (lua/submit_start.lua); released unused when the job could not start at once (others waited).
+  // Rarely, the reserved slot takes another job meanwhile (lua/take.lua in flight): the handed job then
   // waits for the first free slot of this replica.
   class SlotReservation {
    public:
@@ -1164,19 +572,15 @@ class RedisJobStore final : public JobStore {
     return t;
   }
 
-  std::vector<std::string> start_args(const std::string& script) const {
-    return {"EVAL", kFinishHelpers + std::string(kStartJob) + script, "1", stream_, consumer_, std::to_string(now_ms()),
-            std::to_string(config_.queue_max_attempts), "", kGroup, exhausted_problem_, cancelled_problem_, ttl_ms_,
-            lost_problem_, prefix_ + "job:"};
+  StartFields start_fields() const {
+    return {consumer_, std::to_string(now_ms()), std::to_string(config_.queue_max_attempts), kGroup, exhausted_problem_,
+            cancelled_problem_, ttl_ms_, lost_problem_, prefix_ + "job:"};
   }
 
-  static Reply eval(Connection& c, const std::vector<std::string>& args) {
-    std::vector<std::string_view> views(args.begin(), args.end());
-    return c.checked(views);
-  }
+  static Reply eval(Connection& c, const Argv& args) { return c.checked(views(args)); }
 
   // The next job for this slot: one taken over from a silent worker (XAUTOCLAIM, at most every
-  // half idle threshold), else the next new one (kTake). `last_id`: where XREAD should wait.
+  // half idle threshold), else the next new one (lua/take.lua). `last_id`: where XREAD should wait.
   Taken next_job(Connection& c, std::string& last_id) {
     const auto now = Clock::now();
     bool reclaim = false;
@@ -1199,15 +603,12 @@ class RedisJobStore final : public JobStore {
         if (fields && fields->type == REDIS_REPLY_ARRAY)
           for (std::size_t k = 0; k + 1 < fields->elements; k += 2)
             if (str(fields->element[k]) == "id") job_id = std::string(str(fields->element[k + 1]));
-        auto args = start_args(kStart);
-        args.push_back(entry_id);
-        args.push_back(job_id);
-        Taken t = parse_taken(eval(c, args));
+        Taken t = parse_taken(eval(c, StartArgs{stream_, start_fields(), entry_id, job_id}.to_argv()));
         t.reclaimed = true;
         return t;
       }
     }
-    Taken t = parse_taken(eval(c, start_args(kTake)));
+    Taken t = parse_taken(eval(c, TakeArgs{stream_, start_fields()}.to_argv()));
     if (t.outcome == "none") last_id = t.entry_id;
     return t;
   }
@@ -1241,7 +642,7 @@ class RedisJobStore final : public JobStore {
         Taken t = next_job(*c, last_id);
         backoff = 100ms;
         if (t.outcome == "none") {
-          // A job submit() started for this slot after kTake looked (its entry is the last one,
+          // A job submit() started for this slot after lua/take.lua looked (its entry is the last one,
           // so XREAD would not wake for it): run it now.
           if (std::optional<Taken> handed = take_handoff(idle, true)) {
             run_taken(c, std::move(*handed));
@@ -1281,8 +682,7 @@ class RedisJobStore final : public JobStore {
   // Hands a started job back to the queue (this replica stops), not counted as an attempt.
   void release(std::unique_ptr<Connection>& c, const Taken& e) {
     retry(c, [&](Connection& conn) {
-      conn.checked({"EVAL", kFinishHelpers + std::string(kRelease), "2", job_key(e.job_id), stream_, consumer_,
-                    e.entry_id, kGroup, e.job_id});
+      conn.checked(views(ReleaseArgs{job_key(e.job_id), stream_, consumer_, e.entry_id, kGroup, e.job_id}.to_argv()));
     });
     if (log_) log_->info("job_released", {{"job_id", e.job_id}, {"detail", "this replica stopped; back in the queue"}});
   }
@@ -1387,9 +787,10 @@ class RedisJobStore final : public JobStore {
             beat.reset();
             beat = std::make_unique<Connection>(pool_.address(), pool_.timeout());
           }
-          Reply b = due ? beat->checked({"EVAL", kBeat, "2", job_key(e.job_id), stream_, consumer_,
-                                         changed ? s.stage : std::string(), fraction, e.entry_id, kGroup})
-                        : beat->checked({"EVAL", kCheck, "1", job_key(e.job_id), consumer_});
+          Reply b = beat->checked(views(due ? BeatArgs{job_key(e.job_id), stream_, consumer_, changed ? s.stage : "",
+                                                       fraction, e.entry_id, kGroup}
+                                                  .to_argv()
+                                            : CheckArgs{job_key(e.job_id), consumer_}.to_argv()));
           if (due) {
             last_beat = Clock::now();
             last_stage = s.stage;
@@ -1414,15 +815,14 @@ class RedisJobStore final : public JobStore {
       state = s.state;
       error = s.error;
       if (state == JobState::Cancelled && cancel_by_user)
-        error = make_problem(409, "cancelled", "Job cancelled", "cancelled by DELETE while running");
+        error = make_problem(ProblemType::Cancelled, "cancelled by DELETE while running");
       else if (state == JobState::Cancelled && end == End::Finished)  // cancelled by this replica's stop
         end = End::Released;
       if (state == JobState::Succeeded) {
         result_bytes = std::int64_t(s.output->bytes.size());
         if (result_bytes > config_.queue_max_result_bytes) {
           state = JobState::Failed;
-          error = make_problem(422, "result-too-large", "Result too large",
-                               "the result has " + std::to_string(result_bytes) + " bytes; the job store keeps at most " +
+          error = make_problem(ProblemType::ResultTooLarge, "the result has " + std::to_string(result_bytes) + " bytes; the job store keeps at most " +
                                    std::to_string(config_.queue_max_result_bytes) + " (--queue-max-result)");
           error->extensions["maximum"] = config_.queue_max_result_bytes;
         } else {
@@ -1445,11 +845,7 @@ class RedisJobStore final : public JobStore {
     Finish f{e.job_id, e.entry_id, std::string(to_string(state)), error ? problem_text(*error) : std::string(),
              std::move(summary), std::move(result), std::to_string(now_ms()), std::to_string(result_bytes)};
     ++busy_;
-    {
-      std::lock_guard lock(finish_mutex_);
-      finishes_.push_back(std::move(f));
-    }
-    finish_cv_.notify_one();
+    finishes_.push(std::move(f));
   }
 
   // Stores finished jobs' results and states in order; on stop, stores what is left while
@@ -1457,25 +853,20 @@ class RedisJobStore final : public JobStore {
   void finisher_loop() {
     std::unique_ptr<Connection> c;
     for (;;) {
-      Finish f;
-      {
-        std::unique_lock lock(finish_mutex_);
-        finish_cv_.wait(lock, [&] { return !finishes_.empty() || finisher_stop_; });
-        if (finishes_.empty()) return;
-        f = std::move(finishes_.front());
-        finishes_.pop_front();
-      }
+      std::optional<Finish> next = finishes_.pop();
+      if (!next) return;
+      Finish& f = *next;
       std::string stored;
       bool done = false;
       try {
         done = retry(c, [&](Connection& conn) {
-          static const std::string script = kFinishHelpers + std::string(kFinish);
-          const std::string hash = job_key(f.job_id), input = input_key(f.job_id), result = result_key(f.job_id),
-                            staged = result + ":" + consumer_;
-          const std::vector<std::string_view> finish = {
-              "EVAL", script, "5", hash, input, stream_, result, staged, consumer_, f.state, f.error, f.summary, "", ttl_ms_, f.finished_ms, f.entry_id, kGroup,
-              f.result_bytes};
-          // The result by a plain SET, then the script (see kFinish), in one round trip.
+          const std::string result = result_key(f.job_id), staged = result + ":" + consumer_;
+          const Argv args = FinishArgs{job_key(f.job_id), input_key(f.job_id), stream_, result, staged, consumer_,
+                                       f.state, f.error, f.summary, ttl_ms_, f.finished_ms, f.entry_id, kGroup,
+                                       f.result_bytes}
+                                .to_argv();
+          const std::vector<std::string_view> finish = views(args);
+          // The result by a plain SET, then the script (see lua/finish.lua), in one round trip.
           std::vector<Reply> r = f.state == "succeeded"
                                      ? conn.checked_pipeline({{"SET", staged, f.result, "PX", ttl_ms_}, finish})
                                      : conn.checked_pipeline({finish});
@@ -1493,55 +884,6 @@ class RedisJobStore final : public JobStore {
         log_->warn("job_lost", {{"job_id", f.job_id}, {"detail", "another replica took the job over"}});
     }
   }
-
-  // Results this replica stored lately, so that GET /result through it need not read them
-  // back (a megabyte through Redis costs a few milliseconds each way). find() serves one only
-  // while Redis holds its job as succeeded with the same finish time: deleted and expired jobs
-  // are never served from here. Oldest first out, within kBytes and kPlaces.
-  class RecentResults {
-   public:
-    struct Entry {
-      std::string finished_ms;
-      std::shared_ptr<const std::string> bytes;
-    };
-    static constexpr std::size_t kBytes = 64u << 20, kLargest = kBytes / 4, kPlaces = 4096;
-    void add(const std::string& id, const std::string& finished_ms, std::string bytes) {
-      if (bytes.size() > kLargest) return;
-      std::lock_guard lock(mutex_);
-      erase_locked(id);
-      total_ += bytes.size();
-      entries_[id] = {finished_ms, std::make_shared<const std::string>(std::move(bytes))};
-      order_.push_back(id);
-      // Places of erased entries count too, so that order_ stays bounded however many results
-      // DELETE removed meanwhile.
-      while (!order_.empty() && (total_ > kBytes || order_.size() > kPlaces)) {
-        erase_locked(order_.front());
-        order_.pop_front();
-      }
-    }
-    std::optional<Entry> find(const std::string& id) const {
-      std::lock_guard lock(mutex_);
-      auto it = entries_.find(id);
-      if (it == entries_.end()) return std::nullopt;
-      return it->second;
-    }
-    void erase(const std::string& id) {
-      std::lock_guard lock(mutex_);
-      erase_locked(id);  // its place in order_ goes when it comes first
-    }
-
-   private:
-    void erase_locked(const std::string& id) {
-      auto it = entries_.find(id);
-      if (it == entries_.end()) return;
-      total_ -= it->second.bytes->size();
-      entries_.erase(it);
-    }
-    mutable std::mutex mutex_;
-    std::unordered_map<std::string, Entry> entries_;
-    std::deque<std::string> order_;
-    std::size_t total_ = 0;
-  };
 
   // ---------------------------------------------------------------- state
   const ServerConfig config_;
@@ -1563,25 +905,15 @@ class RedisJobStore final : public JobStore {
 
   RecentResults recent_;
 
-  std::mutex finish_mutex_;
-  std::condition_variable finish_cv_;
-  std::deque<Finish> finishes_;
-  bool finisher_stop_ = false;
+  WorkQueue<Finish> finishes_;  // slots -> the finisher
   std::thread finisher_;
 
-  // Long polls waiting on this replica, per job: how many, and a counter bumped by each "done"
-  // message (or reconnection) for the job.
-  struct Waiters {
-    int count = 0;
-    std::uint64_t done = 0;
-  };
+  // Long polls waiting on this replica; each reads its job again at least every kWaitRecheck.
   static constexpr std::chrono::seconds kWaitRecheck{5};
-  std::mutex wait_mutex_;
-  std::condition_variable wait_cv_;
-  std::unordered_map<std::string, Waiters> waiters_;
+  FinishWaiters waiters_;
   std::thread subscriber_;
 
-  // Jobs submit() started for this replica's idle slots (kSubmitStart).
+  // Jobs submit() started for this replica's idle slots (lua/submit_start.lua).
   std::mutex handoff_mutex_;
   std::condition_variable handoff_cv_;
   std::deque<Taken> handoffs_;

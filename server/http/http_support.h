@@ -1,0 +1,40 @@
+// Small pieces the HTTP service's files share (http_server.cpp, request_body.cpp,
+// job_resource.cpp): a handler's Context, header and text helpers, and the per-request flag
+// that closes a connection whose request body stays unread. Internal to the service.
+#pragma once
+
+#include <httplib.h>
+
+#include <chrono>
+#include <string>
+#include <string_view>
+
+namespace mdn::http {
+
+// What a route handler gets (http_server.cpp's dispatch builds it).
+struct Context {
+  const httplib::Request& req;
+  httplib::Response& res;
+  const httplib::ContentReader* reader;  // POST routes only
+  std::string request_id;
+  bool body_consumed = false;  // POST routes: the whole body was read
+};
+
+std::string lower(std::string s);
+std::string trim(std::string_view s);
+// "model/gltf-binary; charset=x" -> "model/gltf-binary"
+std::string base_media_type(std::string_view content_type);
+void replace_header(httplib::Response& res, const std::string& key, const std::string& value);
+// Answers this request, then closes the connection (access_log does it once the response is
+// written, with a lingering close): used when the request body stays unread, or when what
+// follows on the connection cannot be told apart from the rest of an unparseable request.
+void close_after_response(const httplib::Request& req, httplib::Response& res);
+// Whether close_after_response was called for this thread's current request; clears the flag.
+bool take_bytes_left_unread();
+// A header value must not carry CR/LF (response splitting) nor other control characters.
+std::string header_safe(std::string_view text);
+std::string format_ms(double ms);  // "%.3f"
+std::string iso8601(std::chrono::system_clock::time_point t);
+bool has_request_body(const httplib::Request& req);
+
+}  // namespace mdn::http

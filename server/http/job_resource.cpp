@@ -1,0 +1,85 @@
+#include "server/http/job_resource.h"
+
+#include <algorithm>
+#include <utility>
+#include <vector>
+
+#include "server/job_json.h"
+#include "server/params_json.h"
+
+namespace mdn::http {
+
+using nlohmann::json;
+
+json reports_json(const JobSnapshot& s) {
+  if (s.reports) return *s.reports;
+  return service::reports_to_json(s.output->reports);
+}
+
+json output_summary(const JobSnapshot& s) { return service::output_to_json(*s.output, s.output_bytes, reports_json(s)); }
+
+std::string server_timing(const JobSnapshot& s) {
+  std::vector<std::pair<std::string_view, double>> groups;
+  for (const service::TimingField& f : service::kTimingFields) {
+    if (f.server_timing.empty()) continue;
+    auto it = std::find_if(groups.begin(), groups.end(), [&](const auto& g) { return g.first == f.server_timing; });
+    if (it == groups.end()) it = groups.insert(groups.end(), {f.server_timing, 0.0});
+    it->second += s.output->timings.*f.member;
+  }
+  std::string out = "queue;dur=" + format_ms(s.queue_wait_s * 1000);
+  for (const auto& [name, ms] : groups) out += ", " + std::string(name) + ";dur=" + format_ms(ms);
+  return out + ", total;dur=" + format_ms((s.queue_wait_s + s.run_s) * 1000);
+}
+
+void write_result(Context& ctx, const JobSnapshot& s) {
+  const service::JobOutput& out = *s.output;
+  httplib::Response& res = ctx.res;
+  // A single byte range of a result is honoured (resumable downloads); httplib slices it.
+  if (ctx.req.ranges.size() == 1) {
+    const auto [first, last] = ctx.req.ranges.front();
+    const auto size = std::int64_t(out.bytes.size());
+    const bool ok = (first >= 0 && first < size && (last < 0 || last >= first)) || (first < 0 && last > 0);
+    if (!ok) {
+      replace_header(res, "Content-Range", "bytes */" + std::to_string(size));
+      throw HttpError(make_problem(ProblemType::RangeNotSatisfiable, "the result has " + std::to_string(size) + " bytes"));
+    }
+    res.status = 206;
+  } else {
+    res.status = 200;
+  }
+  res.set_content(out.bytes, out.media_type);
+  res.set_header("Content-Disposition", "attachment; filename=\"denoised." + std::string(io::to_string(out.format)) + "\"");
+  res.set_header("X-Denoise-Params", service::to_json(out.effective).dump());
+  res.set_header("X-Denoise-Input-Bytes", std::to_string(s.input_bytes));
+  res.set_header("X-Denoise-Output-Bytes", std::to_string(out.bytes.size()));
+  res.set_header("X-Denoise-Vertices", std::to_string(out.vertices));
+  res.set_header("X-Denoise-Faces", std::to_string(out.faces));
+  // The job's JSON always has the reports; the header only when it stays small.
+  if (std::string report = reports_json(s).dump(); report.size() <= 8192)
+    res.set_header("X-Denoise-Report", report);
+  if (!out.notes.empty()) {
+    std::string notes;
+    for (const auto& n : out.notes) notes += (notes.empty() ? "" : "; ") + n;
+    res.set_header("X-Denoise-Notes", header_safe(notes));
+  }
+  // Server-Timing (W3C): per-stage milliseconds, shown by browsers' developer tools.
+  res.set_header("Server-Timing", server_timing(s));
+}
+
+json job_json(const JobSnapshot& s, const std::string& request_id) {
+  const std::string self = "/v1/jobs/" + s.id;
+  json j = {{"id", s.id},
+            {"state", to_string(s.state)},
+            {"progress", {{"stage", s.stage}, {"fraction", s.fraction}}},
+            {"cancel_requested", s.cancel_requested},
+            {"created_at", iso8601(s.created_wall)},
+            {"timings_s", {{"queue_wait", s.queue_wait_s}, {"run", s.run_s}}},
+            {"input_bytes", s.input_bytes},
+            {"links", {{"self", self}, {"result", self + "/result"}}}};
+  if (s.output) j["result"] = output_summary(s);
+  if (s.attempts > 1) j["attempts"] = s.attempts;
+  if (s.error) j["error"] = s.error->to_json(self, request_id);
+  return j;
+}
+
+}  // namespace mdn::http

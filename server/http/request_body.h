@@ -1,0 +1,46 @@
+// Request bodies of the job routes (POST /v1/denoise, POST /v1/jobs): the mesh's media type,
+// the body read with our own byte count (cpp-httplib 0.11.4 bounds Content-Length bodies only,
+// not chunked uploads), multipart forms, and the parameters from ?params=, X-Denoise-Params or
+// the form's params field.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+// The core headers (Eigen) before httplib.h: its <resolv.h> defines a macro `_res` that breaks
+// Eigen's parameter names.
+#include "core/io/document.h"
+#include "server/job_runner.h"
+#include "server/http/metrics.h"
+#include "server/http/problem.h"
+#include "server/http/http_support.h"
+
+namespace mdn::http {
+
+// Media types accepted for mesh bodies: their list (for 415 answers) and the 415 problem.
+std::string accepted_media_types();
+Problem unsupported_media_type(const std::string& detail);
+// The container of a mesh body: from its declared media type, else its file name's extension,
+// else its bytes. Throws HttpError 415.
+io::Format resolve_format(const std::string& content_type, std::string_view bytes, const std::string& filename = {});
+
+// Reads a job's body within --max-body bytes, counting them into the metrics. Thread-safe:
+// it keeps no state but its two settings.
+class BodyReader {
+ public:
+  BodyReader(std::int64_t max_body_bytes, Metrics& metrics) : max_body_bytes_(max_body_bytes), metrics_(metrics) {}
+  // Body, container and parameters of a job, from a raw body or a multipart form. Throws
+  // HttpError (400, 411, 413, 415) and what job_params_from_text throws.
+  service::JobInput read_job_input(Context& ctx);
+
+ private:
+  std::string read_body(Context& ctx, const httplib::ContentReader& reader);
+  [[noreturn]] void throw_too_large(Context& ctx);
+  void check_declared_length(Context& ctx);
+
+  const std::int64_t max_body_bytes_;
+  Metrics& metrics_;
+};
+
+}  // namespace mdn::http

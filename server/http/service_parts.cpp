@@ -1,0 +1,42 @@
+#include "server/http/service_parts.h"
+
+#include <string>
+#include <utility>
+
+#include "server/http/redis/store.h"
+
+namespace mdn::http {
+
+JobQueueOptions make_queue_options(const ServerConfig& c) {
+  JobQueueOptions o;
+  o.workers = c.effective_workers();
+  o.threads_per_job = c.threads_per_job;
+  o.capacity = c.queue_capacity;
+  o.time_limit = std::chrono::milliseconds(std::int64_t(c.job_time_limit_s * 1000));
+  o.result_ttl = std::chrono::milliseconds(std::int64_t(c.result_ttl_s * 1000));
+  o.max_stored = c.max_stored_jobs;
+  o.limits.max_faces = c.max_faces;
+  o.limits.max_vertices = c.max_vertices;
+  return o;
+}
+
+ServiceParts make_service_parts(const ServerConfig& config, std::shared_ptr<const EventLog> log) {
+  ServiceParts parts;
+  parts.metrics = std::make_unique<Metrics>();
+  Metrics* metrics = parts.metrics.get();
+  parts.queue = std::make_unique<JobQueue>(make_queue_options(config), [metrics, log](const JobSnapshot& s) {
+    metrics->job_finished(std::string(to_string(s.state)), s.queue_wait_s, s.run_s);
+    if (!log) return;
+    nlohmann::json fields = {{"job_id", s.id}, {"state", to_string(s.state)}, {"queue_wait_s", s.queue_wait_s},
+                             {"run_s", s.run_s}, {"async", s.asynchronous}};
+    if (s.error) fields["error"] = s.error->type, fields["detail"] = s.error->detail;
+    log->info("job_finished", fields);
+  });
+  if (config.queue)
+    parts.store = make_redis_job_store(config, *parts.queue, std::move(log));
+  else
+    parts.store = std::make_unique<MemoryJobStore>(*parts.queue);
+  return parts;
+}
+
+}  // namespace mdn::http

@@ -1,0 +1,99 @@
+#include "server/job_json.h"
+
+#include <string>
+#include <utility>
+
+#include "server/params_json.h"
+
+namespace mdn::service {
+
+using nlohmann::json;
+
+json report_to_json(const DenoiseReport& report) {
+  json j = {
+      {"fold_ratio", report.fold_ratio},
+      {"cluster_area_ratio", report.cluster_area_ratio},
+      {"region_prefilter_applied", report.region_prefilter_applied},
+      {"region_vertices", report.region_vertices},
+      {"mode", std::string(to_string(report.mode))},
+      {"params", method_params_json(report.params)},
+  };
+  if (report.measures) {
+    const InputMeasures& m = *report.measures;
+    j["measures"] = {{"noise", m.noise},
+                     {"tail", m.tail},
+                     {"feature_share", m.feature_share},
+                     {"smooth_residual", m.smooth_residual},
+                     {"smooth_tail", m.smooth_tail},
+                     {"cluster_area_ratio", m.cluster_area_ratio}};
+  }
+  if (report.selection) {
+    const Selection& sel = *report.selection;
+    json candidates = json::array();
+    for (const ScoredCandidate& c : sel.candidates)
+      candidates.push_back({{"name", c.name}, {"score", c.score}, {"params", method_params_json(c.params)}});
+    j["selection"] = {{"noise",
+                       {{"sigma_edges", sel.noise.sigma_edges},
+                        {"sigma", sel.noise.sigma},
+                        {"gaussian_sigma", sel.noise.gaussian_sigma},
+                        {"edge_length", sel.noise.edge_length}}},
+                      {"sample_faces", sel.sample_faces},
+                      {"scored_faces", sel.scored_faces},
+                      {"candidates", std::move(candidates)},
+                      {"chosen", sel.candidates[static_cast<std::size_t>(sel.chosen)].name},
+                      {"evaluations", sel.evaluations}};
+  }
+  return j;
+}
+
+json reports_to_json(const std::vector<DenoiseReport>& reports) {
+  json out = json::array();
+  for (const DenoiseReport& r : reports) out.push_back(report_to_json(r));
+  return out;
+}
+
+json timings_to_json(const JobTimings& timings) {
+  json j = json::object();
+  for (const TimingField& f : kTimingFields) j[std::string(f.name)] = timings.*f.member;
+  return j;
+}
+
+JobTimings timings_from_json(const json& j) {
+  JobTimings t;
+  for (const TimingField& f : kTimingFields)
+    if (auto it = j.find(f.name); it != j.end()) t.*f.member = it->get<double>();
+  return t;
+}
+
+json output_to_json(const JobOutput& output, std::int64_t bytes, json reports) {
+  return {{"format", std::string(io::to_string(output.format))},
+          {"media_type", output.media_type},
+          {"bytes", bytes},
+          {"vertices", output.vertices},
+          {"faces", output.faces},
+          {"params", to_json(output.effective)},
+          {"notes", output.notes},
+          {"reports", std::move(reports)},
+          {"timings_ms", timings_to_json(output.timings)}};
+}
+
+json output_to_json(const JobOutput& output) {
+  return output_to_json(output, std::int64_t(output.bytes.size()), reports_to_json(output.reports));
+}
+
+JobOutput output_from_json(const json& j, json& reports, std::int64_t& bytes) {
+  JobOutput o;
+  const std::string format = j.at("format").get<std::string>();
+  o.format = io::format_from_string(format).value_or(io::Format::Off);
+  o.media_type = j.at("media_type").get<std::string>();
+  bytes = j.at("bytes").get<std::int64_t>();
+  o.vertices = j.at("vertices").get<std::int64_t>();
+  o.faces = j.at("faces").get<std::int64_t>();
+  o.effective = job_params_from_json(j.at("params"));
+  o.notes = j.at("notes").get<std::vector<std::string>>();
+  reports = j.at("reports");
+  o.timings = timings_from_json(j.at("timings_ms"));
+  return o;
+}
+
+}  // namespace mdn::service

@@ -1,0 +1,94 @@
+// meshdenoise-server's configuration: defaults, then MDN_* variables, then flags; bad values
+// refused with the setting named; --queue parsed once into a typed address.
+#include "server/http/config.h"
+
+#include <gtest/gtest.h>
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace mdn::http {
+namespace {
+
+ServerConfig parse(const std::vector<std::string>& args, const std::map<std::string, std::string>& env = {}) {
+  return parse_command_line(args, [&](const char* name) -> const char* {
+           auto it = env.find(name);
+           return it == env.end() ? nullptr : it->second.c_str();
+         })
+      .config;
+}
+
+std::string error_of(const std::vector<std::string>& args, const std::map<std::string, std::string>& env = {}) {
+  try {
+    parse(args, env);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+
+TEST(Config, FlagsWinOverTheEnvironmentWhichWinsOverDefaults) {
+  EXPECT_EQ(parse({}).port, 8080);
+  EXPECT_EQ(parse({}, {{"MDN_PORT", "9000"}}).port, 9000);
+  EXPECT_EQ(parse({"--port", "9100"}, {{"MDN_PORT", "9000"}}).port, 9100);
+  EXPECT_EQ(parse({"--port=9200"}, {{"MDN_PORT", "9000"}}).port, 9200);
+  // Each setting on its own: the environment sets one, a flag another.
+  const ServerConfig c = parse({"--workers", "3"}, {{"MDN_QUEUE_CAPACITY", "7"}, {"MDN_WORKERS", "9"}});
+  EXPECT_EQ(c.workers, 3);
+  EXPECT_EQ(c.queue_capacity, 7);
+}
+
+TEST(Config, ByteCountsTakeSuffixes) {
+  EXPECT_EQ(parse({"--max-body", "2M"}).max_body_bytes, std::int64_t{2} << 20);
+  EXPECT_EQ(parse({"--max-body", "64k"}).max_body_bytes, std::int64_t{64} << 10);
+}
+
+TEST(Config, BadValuesAreRefusedNamingTheSetting) {
+  EXPECT_NE(error_of({"--port", "70000"}).find("--port"), std::string::npos);
+  EXPECT_NE(error_of({"--port", "80x"}).find("expected an integer"), std::string::npos);
+  EXPECT_NE(error_of({}, {{"MDN_PORT", "-1"}}).find("MDN_PORT"), std::string::npos);
+  EXPECT_NE(error_of({"--job-time-limit", "0"}).find("--job-time-limit"), std::string::npos);  // (0, 1e6]
+  EXPECT_NE(error_of({"--no-such-flag", "1"}).find("unknown flag"), std::string::npos);
+  EXPECT_NE(error_of({"--port"}).find("needs a value"), std::string::npos);
+  EXPECT_NE(error_of({"--queue", "postgres://db"}).find("--queue"), std::string::npos);
+  EXPECT_NE(error_of({"--queue", "redis://host/16"}).find("Redis database"), std::string::npos);
+  EXPECT_NE(error_of({"--queue", "redis://host:0"}).find("Redis port"), std::string::npos);
+}
+
+TEST(Config, QueueIsParsedOnceIntoAnAddress) {
+  EXPECT_FALSE(parse({}).queue.has_value());
+  EXPECT_FALSE(parse({"--queue", "memory"}).queue.has_value());
+  const ServerConfig c = parse({}, {{"MDN_QUEUE", "redis://:s3cret@cache.internal:6380/2"}});
+  ASSERT_TRUE(c.queue.has_value());
+  EXPECT_EQ(c.queue->host, "cache.internal");
+  EXPECT_EQ(c.queue->port, 6380);
+  EXPECT_EQ(c.queue->db, 2);
+  EXPECT_EQ(c.queue->password, "s3cret");
+  const RedisAddress v6 = parse_redis_url("redis://[::1]");
+  EXPECT_EQ(v6.host, "::1");
+  EXPECT_EQ(v6.port, 6379);
+  EXPECT_EQ(v6.db, 0);
+  EXPECT_EQ(parse_redis_url("redis://user:pw@h").password, "pw");
+}
+
+TEST(Config, TheQueueIsShownWithoutItsPassword) {
+  EXPECT_EQ(show_queue_setting(std::nullopt), "memory");
+  const std::string shown = show_queue_setting(parse_redis_url("redis://:s3cret@cache:6380/2"));
+  EXPECT_EQ(shown, "redis://(credentials)@cache:6380/2");
+  EXPECT_EQ(show_queue_setting(parse_redis_url("redis://[::1]:7000")), "redis://[::1]:7000/0");
+}
+
+TEST(Config, RedisBoundsTheBodyAtWhatItCanStore) {
+  EXPECT_EQ(parse({"--max-body", "1G"}).max_body_bytes, std::int64_t{1} << 30);  // memory: allowed
+  EXPECT_NE(error_of({"--max-body", "1G", "--queue", "redis://h"}).find("512M"), std::string::npos);
+}
+
+TEST(Config, HelpNamesEveryFlagWithItsVariable) {
+  const std::string help = help_text();
+  for (const char* s : {"--port (MDN_PORT)", "--queue (MDN_QUEUE)", "--auth-token (MDN_AUTH_TOKEN)"})
+    EXPECT_NE(help.find(s), std::string::npos) << s;
+}
+
+}  // namespace
+}  // namespace mdn::http
