@@ -29,7 +29,7 @@ struct SelectionOptions {
   double a = 1.0;                  // recorruption strength (decision 20)
   int draws = 2;                   // recorrupted pairs averaged per score (decision 21)
   int refine = 3;                  // > 0: only this many candidates, the best after one draw, get the other draws
-  double scale = 0.84;             // the recorruption's sigma over the estimated noise (decision 20)
+  double scale = 0.92;             // the recorruption's sigma over the estimated noise (decision 20)
   std::uint64_t seed = 1;          // of the recorruption draws
   double sigma = 0;                // > 0: the noise level to use (positions' units) instead of the estimate
   bool isotropic = true;           // recorrupt every coordinate (true) or along the normal only (false); decision 20
