@@ -51,7 +51,7 @@ Vertices vertex_normals(const Vertices& V, const Triangles& F);
 // Mean length of the mesh's unique undirected edges (0 for an empty mesh).
 double mean_edge_length(const Vertices& V, const Triangles& F);
 
-// Unit-box normalisation (NOTES reading 1): centre the bounding box at the origin and
+// Unit-box normalisation (core/README.md, decision 1): centre the bounding box at the origin and
 // scale its longest side to 1. apply() maps into the box, undo() maps back.
 struct UnitBox {
   Vec3 center = Vec3::Zero();

@@ -43,7 +43,7 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
   Vertices current = face_normals(V, F);
   if (s.iterations <= 0 || nf == 0) return current;
 
-  // Areas and centroids are those of the pre-filtered mesh and stay fixed (NOTES reading 9).
+  // Areas and centroids are those of the pre-filtered mesh and stay fixed (core/README.md, decision 9).
   const Eigen::VectorXd area = face_areas(V, F);
   const Vertices centroid = face_centroids(V, F);
 
@@ -104,7 +104,7 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
   const auto num_pairs = static_cast<std::int64_t>(pair_start.back());
   std::vector<double> range(static_cast<std::size_t>(num_pairs));
 
-  // Eq. 7 typo: both denominators mean 1 - cos(sigma_gamma) (NOTES reading 8).
+  // Eq. 7 typo: both denominators mean 1 - cos(sigma_gamma) (core/README.md, decision 8).
   const double inv_range = 1.0 / (1.0 - std::cos(s.sigma_gamma_deg * std::numbers::pi / 180.0));
   Vertices next(nf, 3);
   if (s.on_iteration) s.on_iteration(0, current);

@@ -92,7 +92,7 @@ DenoiseResult denoise(const TriMesh& input, const DenoiseParams& requested, cons
   StageTimings& times = report.timings;
   Executor executor(options.threads);
 
-  // Sec. 3: work in the unit box (NOTES reading 1); undone at the end.
+  // Sec. 3: work in the unit box (core/README.md, decision 1); undone at the end.
   auto t0 = Clock::now();
   const UnitBox box = UnitBox::of(input.V);
   const LocalityOrder order = LocalityOrder::of(input, options.order);  // decision 16, undone at the end

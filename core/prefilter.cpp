@@ -328,7 +328,7 @@ FaceClusters cluster_faces(const Vertices& P, const Triangles& F, int k, std::ui
 
   const Vertices C = face_centroids(P, F);
   const Eigen::VectorXd A = face_areas(P, F);
-  // Feature scaling (NOTES reading 6, our choice): the three centroid coordinates share one
+  // Feature scaling (core/README.md, decision 6): the three centroid coordinates share one
   // scale so that together they carry unit variance (distances stay isotropic), and the
   // area enters as log(area), standardised to unit variance on its own. Sampling density is
   // a ratio, so log-area separates a 16x denser region as clearly wherever it lies, and the

@@ -72,7 +72,7 @@ Topology Topology::build(const Triangles& F, std::int32_t num_vertices) {
       boundary.push_back({h0.lo, h0.hi});
     } else {
       // Three or more faces, two copies of one triangle, or a degenerate face on the edge:
-      // no shaping term (NOTES reading 2).
+      // no shaping term (core/README.md, decision 2).
       nonmanifold.push_back({h0.lo, h0.hi});
     }
     i = j;
@@ -129,7 +129,7 @@ Topology Topology::build(const Triangles& F, std::int32_t num_vertices) {
     }
   }
 
-  // --- Face -> vertex-adjacent faces N(i), itself excluded (NOTES reading 9). ---
+  // --- Face -> vertex-adjacent faces N(i), itself excluded (core/README.md, decision 9). ---
   t.ff_offsets.assign(static_cast<std::size_t>(t.num_faces) + 1, 0);
   t.ff_faces.reserve(static_cast<std::size_t>(t.num_faces) * 13);
   std::vector<std::int32_t> scratch, seen(static_cast<std::size_t>(t.num_faces), -1);
