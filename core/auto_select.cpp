@@ -164,7 +164,7 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
   // found. Far less than the estimate means the estimate read shape as noise (a clean or nearly
   // clean surface with many features): score again at the noise the winner found.
   const double found = sel.candidates[static_cast<std::size_t>(sel.chosen)].residual;
-  if (options.sigma <= 0 && found < 0.5 * sel.noise.sigma) {
+  if (options.sigma <= 0 && found < options.rescore_below * sel.noise.sigma) {
     sel.noise.sigma = found;
     sel.noise.sigma_edges = sel.noise.edge_length > 0 ? found / sel.noise.edge_length : 0;
     scoring = std::make_unique<RecorruptedScorer>(sample, normals, std::max(options.scale * found, 1e-12 * sel.noise.edge_length),

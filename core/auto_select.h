@@ -30,6 +30,7 @@ struct SelectionOptions {
   int draws = 2;                   // recorrupted pairs averaged per score (decision 21)
   int refine = 3;                  // > 0: only this many candidates, the best after one draw, get the other draws
   double scale = 0.92;             // the recorruption's sigma over the estimated noise (decision 20)
+  double rescore_below = 0.5;      // rescore at the noise the winner found when under this share of the estimate (0: never)
   std::uint64_t seed = 1;          // of the recorruption draws
   double sigma = 0;                // > 0: the noise level to use (positions' units) instead of the estimate
   bool isotropic = true;           // recorrupt every coordinate (true) or along the normal only (false); decision 20

@@ -460,9 +460,9 @@ int select_command(const fs::path& data, int jobs, const std::string& which, con
   std::erase_if(cases, [](const Case& c) { return c.config == "clean"; });
   // Variants of the selection: draws, how many candidates get every draw, the recorruption's
   // sigma over the estimate (or over the truth, for an oracle variant).
-  struct Variant { const char* name; int draws, refine; double scale; bool oracle; };
-  const Variant variants[] = {{"default", 2, 3, 0.92, false}, {"2dr x1", 2, 3, 1.0, false},
-                              {"2dr x0.84", 2, 3, 0.84, false}, {"1dr x1", 1, 0, 1.0, false}};
+  struct Variant { const char* name; int draws, refine; double scale; bool oracle; double rescore_below = 0.5; };
+  const Variant variants[] = {{"default", 2, 3, 0.92, false}, {"no rescore", 2, 3, 0.92, false, 0.0},
+                              {"3 draws", 3, 3, 0.92, false}, {"true sigma", 2, 3, 0.92, true}};
   constexpr int kVariants = 4;
   const char* names[kVariants] = {variants[0].name, variants[1].name, variants[2].name, variants[3].name};
   struct Out { double truth, est, refined; std::vector<double> msae; int pick[kVariants]; double ms, one_ms; std::vector<std::string> names; };
@@ -486,6 +486,7 @@ int select_command(const fs::path& data, int jobs, const std::string& which, con
       so.refine = v.refine;
       so.scale = v.scale;
       so.sigma = v.oracle ? v.scale * sigma_true : 0;
+      so.rescore_below = v.rescore_below;
       return so;
     };
     const auto t0 = std::chrono::steady_clock::now();
