@@ -24,7 +24,10 @@ struct JobOutput {
   std::string bytes;
   io::Format format;
   std::string media_type;
-  JobParams effective;                  // parameters actually used
+  // The compression written: glTF as io::resolve_compression decided it (the input's by
+  // default), DRC Draco, every other container None.
+  io::Compression compression = io::Compression::None;
+  JobParams effective;                  // parameters actually used, output.format and compression resolved
   std::vector<DenoiseReport> reports;   // one per surface
   std::vector<std::string> notes;       // from the adapter (e.g. TANGENT dropped)
   std::int64_t vertices = 0, faces = 0; // summed over surfaces

@@ -255,7 +255,47 @@ io::Format input_format(const std::string& path, const std::string& bytes) {
   if (auto format = io::format_from_extension(path)) return *format;
   if (auto format = io::sniff_format(bytes)) return *format;
   throw FileError("cannot tell the format of " + (path == kStdio ? std::string("standard input") : path) +
-                  " from its extension or its contents (supported: off, obj, ply, drc, glb, gltf)");
+                  " from its extension or its contents (supported: off, obj, ply, stl, drc, glb, gltf)");
+}
+
+// The extensions an OUT may have ("out.off", ..., "out.gltf").
+std::string accepted_extensions() {
+  std::string out;
+  for (io::Format f : {io::Format::Off, io::Format::Obj, io::Format::Ply, io::Format::Stl, io::Format::Drc,
+                       io::Format::Glb, io::Format::Gltf})
+    out += (out.empty() ? "." : ", .") + std::string(io::to_string(f));
+  return out;
+}
+
+// OUT's format by its extension; none if it has no extension (then output.format or IN's).
+// An extension that names no format is refused rather than written as IN's format.
+std::optional<io::Format> output_format_by_name(const std::string& path) {
+  if (path == kStdio) return std::nullopt;
+  const std::filesystem::path name = std::filesystem::path(path).filename();
+  if (!name.has_extension() || name.stem().empty()) return std::nullopt;
+  if (auto format = io::format_from_extension(name.string())) return format;
+  throw UsageError("cannot write " + path + ": the extension " + name.extension().string() +
+                   " names no format this tool writes (accepted: " + accepted_extensions() + ")");
+}
+
+// The job's parameters: --params (inline JSON or a file, read once), then --mode. `fields`
+// receives the --params object as given (empty without --params).
+service::JobParams job_params(const CliOptions& options, json& fields) {
+  service::JobParams params;
+  fields = json::object();
+  if (options.params) {
+    const std::string text = json_argument("--params", *options.params);
+    params = service::job_params_from_text(text);
+    fields = json::parse(text);  // valid: job_params_from_text accepted it
+  }
+  if (options.mode) {
+    const auto mode = mdn::param_mode_from_string(*options.mode);
+    if (!mode) throw UsageError("--mode must be auto, search, manual or none, got \"" + *options.mode + "\"");
+    if (fields.contains("mode") && fields["mode"] != *options.mode)
+      throw UsageError("--mode " + *options.mode + " disagrees with --params' \"mode\": " + fields["mode"].dump());
+    params.denoise.mode = *mode;
+  }
+  return params;
 }
 
 // Runs fn; a mesh or format problem is reported against the file it came from (exit 3).
@@ -398,8 +438,8 @@ int run_batch(const CliOptions& options) {
   if (options.add_noise || options.metrics || options.tune) {
     throw UsageError("--out-dir cannot be combined with --add-noise, --metrics or --tune");
   }
-  service::JobParams params;
-  if (options.params) params = service::job_params_from_text(json_argument("--params", *options.params));
+  json fields;
+  const service::JobParams params = job_params(options, fields);
   const fs::path dir = *options.out_dir;
   const std::vector<std::string> outputs = batch_outputs(inputs, dir, params.output.format);
   std::error_code ec;
@@ -548,17 +588,14 @@ int run(int argc, char** argv) {
   const int threads = default_threads(options);
 
   // Parse everything the user typed before touching any mesh.
-  service::JobParams params;
-  if (options.params) {
-    const std::string text = json_argument("--params", *options.params);
-    params = service::job_params_from_text(text);
-    if (options.add_noise) {
-      // Only the output settings apply when no denoising happens; anything else would be
-      // silently ignored, so it is refused.
-      const json fields = json::parse(text);  // valid: job_params_from_text accepted it
-      for (const auto& [key, value] : fields.items()) {
-        if (key != "output") throw UsageError("with --add-noise, --params may only hold \"output\", not \"" + key + "\"");
-      }
+  if (options.add_noise && options.mode) throw UsageError("--mode cannot be combined with --add-noise");
+  json fields;
+  service::JobParams params = job_params(options, fields);
+  if (options.add_noise) {
+    // Only the output settings apply when no denoising happens; anything else would be
+    // silently ignored, so it is refused.
+    for (const auto& [key, value] : fields.items()) {
+      if (key != "output") throw UsageError("with --add-noise, --params may only hold \"output\", not \"" + key + "\"");
     }
   }
   std::optional<mdn::NoiseSpec> noise;
@@ -581,7 +618,7 @@ int run(int argc, char** argv) {
   if (out_path == kStdio && (options.report || options.metrics)) {
     throw UsageError("OUT is standard output (-): --report and --metrics would print into the mesh");
   }
-  if (auto by_extension = io::format_from_extension(out_path)) {
+  if (auto by_extension = output_format_by_name(out_path)) {
     if (params.output.format && *params.output.format != *by_extension) {
       throw UsageError("output.format is \"" + std::string(io::to_string(*params.output.format)) + "\" but " +
                        out_path + " has the extension of \"" + std::string(io::to_string(*by_extension)) + "\"");

@@ -20,9 +20,7 @@ namespace mdn::io {
 
 enum class Format { Off, Obj, Ply, Drc, Glb, Gltf, Stl };
 std::string_view to_string(Format format);  // "off", "obj", "ply", "drc", "glb", "gltf", "stl"
-// Inverse of to_string for the formats the service's contract names (not yet "stl": the
-// server/CLI wiring phase turns it on with the contract, see FormatInfo::by_name).
-std::optional<Format> format_from_string(std::string_view name);
+std::optional<Format> format_from_string(std::string_view name);  // inverse of to_string, any case
 std::optional<Format> format_from_extension(std::string_view path);  // by file name ending
 std::optional<Format> sniff_format(std::string_view bytes);       // by content (magic numbers / keywords)
 std::string_view media_type(Format format);  // model/gltf-binary, model/gltf+json, application/octet-stream ...

@@ -20,6 +20,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/io/document.h"
 #include "core/metrics.h"
 #include "core/noise.h"
 #include "core/params.h"
@@ -676,6 +677,73 @@ TEST_F(Cli, DashReadsStandardInputAndWritesStandardOutput) {
   const Result garbage = run("- " + quote(path("out.off")), path("garbage.txt"));
   EXPECT_EQ(garbage.code, 3) << garbage.err;
   EXPECT_NE(garbage.err.find("standard input"), std::string::npos) << garbage.err;
+}
+
+}  // namespace
+}  // namespace mdn
+
+
+namespace mdn {
+namespace {
+
+// Issue 18: an OUT whose extension names no format is refused (it used to receive IN's
+// format: out.stl got OFF text); .stl is one of the accepted ones now.
+TEST_F(Cli, UnknownOutputExtensionIsRefused) {
+  write_sphere_pair(2);
+  const Result xyz = run(quote(path("noisy.off")) + " " + quote(path("out.xyz")));
+  EXPECT_EQ(xyz.code, 2) << xyz.err;
+  EXPECT_NE(xyz.err.find(".xyz"), std::string::npos) << xyz.err;
+  for (const char* ext : {".off", ".obj", ".ply", ".stl", ".drc", ".glb", ".gltf"})
+    EXPECT_NE(xyz.err.find(ext), std::string::npos) << ext << " not named in: " << xyz.err;
+  EXPECT_FALSE(fs::exists(path("out.xyz")));
+
+  const Result stl = run("--report " + quote(path("noisy.off")) + " " + quote(path("out.stl")));
+  ASSERT_EQ(stl.code, 0) << stl.err;
+  EXPECT_EQ(parse_stdout(stl)["format"], "stl");
+  const mdn::TriMesh back = mdn::io::decode(read_text(path("out.stl")), mdn::io::Format::Stl)->surfaces()[0];
+  EXPECT_EQ(back.num_faces(), noisy_.num_faces());
+  // No extension at all still means IN's format.
+  ASSERT_EQ(run(quote(path("noisy.off")) + " " + quote(path("out"))).code, 0);
+  EXPECT_EQ(read_text(path("out")).rfind("OFF", 0), 0u);
+}
+
+// --mode none (or "mode": "none") converts without denoising, and says so in the report.
+TEST_F(Cli, ModeNoneConvertsOnly) {
+  write_sphere_pair(2);
+  const Result r = run("--mode none --report " + quote(path("noisy.off")) + " " + quote(path("out.ply")));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json report = parse_stdout(r);
+  EXPECT_EQ(report["params"]["mode"], "none");
+  ASSERT_EQ(report["reports"].size(), 1u);
+  EXPECT_EQ(report["reports"][0]["mode"], "none");
+  EXPECT_FALSE(report["reports"][0].contains("selection"));
+  EXPECT_EQ(report["timings_ms"]["normal_filter"], 0.0);
+  const mdn::TriMesh back = mdn::io::decode(read_text(path("out.ply")), mdn::io::Format::Ply)->surfaces()[0];
+  ASSERT_EQ(back.F, noisy_.F);
+  EXPECT_LT((back.V - noisy_.V).cwiseAbs().maxCoeff(), 1e-5);  // PLY stores floats
+  // The same through --params; a contradiction or an unknown mode is a usage error.
+  EXPECT_EQ(run("--params '{\"mode\": \"none\"}' " + quote(path("noisy.off")) + " " + quote(path("out2.off"))).code, 0);
+  EXPECT_EQ(run("--mode none --params '{\"mode\": \"auto\"}' " + quote(path("noisy.off")) + " " + quote(path("o.off"))).code, 2);
+  const Result bad = run("--mode convert " + quote(path("noisy.off")) + " " + quote(path("o.off")));
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("none"), std::string::npos) << bad.err;
+}
+
+// glTF output keeps the input's compression by default (issue 18): plain in, plain out.
+TEST_F(Cli, GltfOutputCompressionFollowsTheInput) {
+  write_sphere_pair(2);
+  const Result plain = run("--report " + quote(path("noisy.off")) + " " + quote(path("out.glb")));
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  EXPECT_EQ(parse_stdout(plain)["compression"], "none");
+  EXPECT_EQ(read_text(path("out.glb")).find("KHR_draco_mesh_compression"), std::string::npos);
+  const Result draco = run("--report --params '{\"output\": {\"compression\": \"draco\"}}' " + quote(path("noisy.off")) +
+                           " " + quote(path("draco.glb")));
+  ASSERT_EQ(draco.code, 0) << draco.err;
+  EXPECT_EQ(parse_stdout(draco)["compression"], "draco");
+  const Result again = run("--report " + quote(path("draco.glb")) + " " + quote(path("again.glb")));
+  ASSERT_EQ(again.code, 0) << again.err;
+  EXPECT_EQ(parse_stdout(again)["compression"], "draco");
+  EXPECT_NE(read_text(path("again.glb")).find("KHR_draco_mesh_compression"), std::string::npos);
 }
 
 }  // namespace

@@ -100,7 +100,7 @@ TEST_F(HttpBadRequests, EachIsAnsweredWithTheRightProblemAndTheServerStaysHealth
       {"non-integer iterations", [&](auto& c) { return post(c, p + url_encode("{\"n_normal\":2.5}"), good, "model/x-off"); }, "", 400, "invalid-params", "n_normal"},
       {"unknown parameter", [&](auto& c) { return post(c, p + url_encode("{\"sigma\":1}"), good, "model/x-off"); }, "", 400, "invalid-params", "sigma"},
       {"unknown enumeration value", [&](auto& c) { return post(c, p + url_encode("{\"region_mode\":\"maybe\"}"), good, "model/x-off"); }, "", 400, "invalid-params", "region_mode"},
-      {"unknown output format", [&](auto& c) { return post(c, p + url_encode("{\"output\":{\"format\":\"stl\"}}"), good, "model/x-off"); }, "", 400, "invalid-params", "output.format"},
+      {"unknown output format", [&](auto& c) { return post(c, p + url_encode("{\"output\":{\"format\":\"xyz\"}}"), good, "model/x-off"); }, "", 400, "invalid-params", "output.format"},
       {"draco bits out of range", [&](auto& c) { return post(c, p + url_encode("{\"output\":{\"position_bits\":4}}"), good, "model/x-off"); }, "", 400, "invalid-params", "output.position_bits"},
       {"parameters given twice", [&](auto& c) { return post(c, p + url_encode("{}"), good, "model/x-off", {{"X-Denoise-Params", "{}"}}); }, "", 400, "invalid-params", ""},
       {"form without mesh", [&](auto& c) { return c.Post("/v1/denoise", httplib::MultipartFormDataItems{{"params", "{}", "", ""}}); }, "", 400, "bad-form", ""},

@@ -215,12 +215,12 @@ TEST(WebPage, DenoisesAnUploadedMeshAndShowsBeforeAndAfter) {
   json heavy = json::object();
   for (const auto& [k, v] : heavy_params.items()) heavy[k] = std::to_string(v.get<int>());
 
-  // Pinned in the form: one method parameter and the output container (Draco glTF: the page
+  // Pinned in the form: one method parameter, the output container and Draco (the page
   // must read it back through DRACOLoader's worker).
   const json plan = {{"url", "http://127.0.0.1:" + std::to_string(server.port()) + "/"},
                      {"out", artifacts_dir()},
                      {"mesh", dir + "/noisy-cube.off"},
-                     {"set", {{"n_normal", "12"}, {"output.format", "\"glb\""}}},
+                     {"set", {{"n_normal", "12"}, {"output.format", "\"glb\""}, {"output.compression", "\"draco\""}}},
                      {"refused", {dir + "/photo.png", dir + "/broken.off"}},
                      {"formats", formats},
                      {"drop", formats[0]},
