@@ -36,7 +36,8 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
     (void)io::resolve_compression(input.params.output, io::Compression::None);
 
   auto start = Clock::now();
-  std::unique_ptr<io::MeshDocument> document = io::decode(input.bytes, input.format, limits);
+  std::unique_ptr<io::MeshDocument> document =
+      io::decode(input.bytes, input.format, io::DecodeOptions{.limits = limits, .resource_dir = input.resource_dir});
   out.timings.decode_ms = ms_since(start);
 
   const RunOptions options{.threads = input.threads < 1 ? 1 : input.threads, .progress = progress};

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,9 @@ struct JobInput {
   io::Format format;
   JobParams params;
   int threads = 1;  // threads for the core pipeline
+  // glTF: the folder external buffers and images are read from (io::DecodeOptions); only the
+  // command-line tool sets it, so the service refuses every external URI.
+  std::optional<std::string> resource_dir;
 };
 
 struct JobOutput {

@@ -135,6 +135,12 @@ Compression resolve_compression(const EncodeOptions& options, Compression input)
   return input;
 }
 
+std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, const DecodeOptions& options) {
+  if (format == Format::Glb || format == Format::Gltf)
+    return detail::decode_gltf(bytes, format, options.limits, options.resource_dir ? &*options.resource_dir : nullptr);
+  return decode(bytes, format, options.limits);
+}
+
 std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, const Limits& limits) {
   switch (format) {
     case Format::Off: return detail::decode_off(bytes, limits);

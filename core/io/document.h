@@ -100,7 +100,20 @@ class MeshDocument {
 // UnsupportedError (HTTP 422).
 Compression resolve_compression(const EncodeOptions& options, Compression input);
 
+// How to decode, beyond the format. The service uses the defaults: nothing outside the bytes
+// is ever read.
+struct DecodeOptions {
+  Limits limits;
+  // glTF: the folder that buffers and images referenced by relative URI are read from (the
+  // command-line tool sets it to the .gltf's folder). Unset, every external URI is an
+  // UnsupportedError. Set, a URI with a scheme, an absolute path or one that leads out of the
+  // folder ("..") is still an UnsupportedError, and the files read count against
+  // limits.max_decoded_bytes. What was read is embedded: encode() writes data URIs.
+  std::optional<std::string> resource_dir;
+};
+
 // Decodes bytes of the given format. Throws FormatError, UnsupportedError or LimitError.
 std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, const Limits& limits = {});
+std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, const DecodeOptions& options);
 
 }  // namespace mdn::io

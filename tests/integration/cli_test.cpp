@@ -746,5 +746,52 @@ TEST_F(Cli, GltfOutputCompressionFollowsTheInput) {
   EXPECT_NE(read_text(path("again.glb")).find("KHR_draco_mesh_compression"), std::string::npos);
 }
 
+// A .gltf with its .bin beside it (issue 18): the tool reads buffers and images by relative URI
+// from the .gltf's folder, writes the output's beside the output, and refuses URIs that leave
+// the folder, are absolute or have a scheme (exit 3).
+TEST_F(Cli, GltfWithExternalBufferReadsAndWritesBesideIt) {
+  write_sphere_pair(2);
+  ASSERT_EQ(run("--mode none " + quote(path("noisy.off")) + " " + quote(path("embedded.gltf"))).code, 0);
+  json gltf = json::parse(read_text(path("embedded.gltf")));
+  const std::string uri = gltf["buffers"][0]["uri"];
+  ASSERT_EQ(uri.rfind("data:", 0), 0u);
+  // The buffer to a file, by way of the tool's own base64 (decoded by python3 here).
+  fs::create_directories(path("in"));
+  write_text(path("in/data.b64"), uri.substr(uri.find(',') + 1));
+  ASSERT_EQ(std::system(("python3 -c 'import base64,sys; sys.stdout.buffer.write(base64.b64decode(open(sys.argv[1]).read()))' " +
+                         quote(path("in/data.b64")) + " > " + quote(path("in/mesh data.bin"))).c_str()), 0);
+  const auto write_gltf = [&](const std::string& name, const std::string& buffer_uri) {
+    json copy = gltf;
+    copy["buffers"][0]["uri"] = buffer_uri;
+    write_text(path("in/" + name), copy.dump());
+  };
+  write_gltf("scan.gltf", "mesh%20data.bin");
+  fs::create_directories(path("out"));
+  const Result ok = run("--report " + quote(path("in/scan.gltf")) + " " + quote(path("out/clean.gltf")));
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  const json out = json::parse(read_text(path("out/clean.gltf")));
+  EXPECT_EQ(out["buffers"][0]["uri"], "clean_0.bin");
+  ASSERT_TRUE(fs::exists(path("out/clean_0.bin")));
+  EXPECT_EQ(static_cast<std::int64_t>(fs::file_size(path("out/clean_0.bin"))), out["buffers"][0]["byteLength"].get<std::int64_t>());
+  // The output reads back, from its own folder, as the same mesh.
+  const Result back = run("--mode none --report " + quote(path("out/clean.gltf")) + " " + quote(path("back.off")));
+  ASSERT_EQ(back.code, 0) << back.err;
+  EXPECT_EQ(parse_stdout(back)["faces"], noisy_.num_faces());
+
+  fs::create_directories(path("in/sub"));
+  write_text(path("secret.bin"), "secret");
+  fs::create_symlink(path("secret.bin"), path("in/link.bin"));
+  for (const auto& [bad, why] : std::vector<std::pair<std::string, std::string>>{
+           {"../secret.bin", "leads out"}, {"sub/../../secret.bin", "leads out"}, {"%2e%2e/secret.bin", "leads out"},
+           {"link.bin", "leads out"}, {path("secret.bin"), "absolute"}, {"file:///etc/hostname", "scheme"},
+           {"http://example.org/x.bin", "scheme"}, {"missing.bin", "cannot be read"}}) {
+    write_gltf("bad.gltf", bad);
+    const Result r = run(quote(path("in/bad.gltf")) + " " + quote(path("out/bad.gltf")));
+    EXPECT_EQ(r.code, 3) << bad << ": " << r.err;
+    EXPECT_NE(r.err.find(why), std::string::npos) << bad << ": " << r.err;
+    EXPECT_FALSE(fs::exists(path("out/bad.gltf"))) << bad;
+  }
+}
+
 }  // namespace
 }  // namespace mdn

@@ -254,7 +254,7 @@ TEST(WebPage, DenoisesAnUploadedMeshAndShowsBeforeAndAfter) {
 
   // The CLI command carries the run's parameters; the file downloaded in the browser is what
   // POST /v1/denoise returns for the same input and parameters, byte for byte.
-  const std::string params_text = R"({"n_normal":12,"output":{"format":"glb"}})";
+  const std::string params_text = R"({"n_normal":12,"output":{"format":"glb","compression":"draco"}})";
   EXPECT_NE(report.value("cli", "").find("--params '" + params_text + "'"), std::string::npos) << report.value("cli", "");
   EXPECT_NE(report.value("curl", "").find("/v1/denoise"), std::string::npos) << report.value("curl", "");
   EXPECT_EQ(report.at("download_state"), "completed");
