@@ -793,5 +793,21 @@ TEST_F(Cli, GltfWithExternalBufferReadsAndWritesBesideIt) {
   }
 }
 
+// Bad STL files are exit 3 with the problem named, as every other malformed input.
+TEST_F(Cli, TruncatedStlExitsThree) {
+  std::string binary(80, ' ');
+  binary += std::string("\x02\x00\x00\x00", 4) + std::string(50, '\0');  // two facets declared, one given
+  write_text(path("cut.stl"), binary);
+  write_text(path("cut-ascii.stl"), "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n");
+  write_text(path("nan.stl"), "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex nan 0 0\nvertex 0 1 0\n"
+                              "endloop\nendfacet\nendsolid x\n");
+  for (const char* name : {"cut.stl", "cut-ascii.stl", "nan.stl"}) {
+    const Result r = run(quote(path(name)) + " " + quote(path("out.off")));
+    EXPECT_EQ(r.code, 3) << name << ": " << r.err;
+    EXPECT_NE(r.err.find(name), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(path("out.off"))) << name;
+  }
+}
+
 }  // namespace
 }  // namespace mdn

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "http_fixture.h"
+#include "io/meshopt_fixture.h"
 #include "support/mutate.h"
 
 namespace mdn::test {
@@ -74,6 +75,15 @@ TEST_F(HttpBadRequests, EachIsAnsweredWithTheRightProblemAndTheServerStaysHealth
   std::string truncated_stl(80, ' ');
   truncated_stl += std::string("\x02\x00\x00\x00", 4) + std::string(50, '\0');  // two facets declared, one given
   const std::string cut_ascii_stl = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n";
+  // EXT_meshopt_compression that lies: the first ATTRIBUTES stream claims one element more
+  // than its buffer view holds (same number of digits, so the GLB's lengths still agree).
+  std::string lying_meshopt = test_io::meshopt_sphere_glb(test_io::make_sphere(), true);
+  {
+    const std::size_t mode = lying_meshopt.find(R"("mode":"ATTRIBUTES")");
+    const std::size_t last_digit = lying_meshopt.rfind(',', mode) - 1;
+    char& digit = lying_meshopt[last_digit];
+    digit = digit == '9' ? '8' : static_cast<char>(digit + 1);
+  }
   const std::string p = "/v1/denoise?params=";
 
   std::vector<BadRequest> table = {
@@ -83,6 +93,7 @@ TEST_F(HttpBadRequests, EachIsAnsweredWithTheRightProblemAndTheServerStaysHealth
       {"gltf with an external buffer", [&](auto& c) { return post(c, "/v1/denoise", gltf_external, "model/gltf+json"); }, "", 422, "unsupported-content", ""},
       {"gltf with a relative buffer uri", [&](auto& c) { return post(c, "/v1/denoise", gltf_relative_buffer, "model/gltf+json"); }, "", 422, "unsupported-content", ""},
       {"gltf with an external image", [&](auto& c) { return post(c, "/v1/denoise", gltf_external_image, "model/gltf+json"); }, "", 422, "unsupported-content", ""},
+      {"meshopt stream that lies about its count", [&](auto& c) { return post(c, "/v1/denoise", lying_meshopt, "model/gltf-binary"); }, "", 400, "malformed-mesh", ""},
       {"truncated binary stl", [&](auto& c) { return post(c, "/v1/denoise", truncated_stl, "model/stl"); }, "", 400, "malformed-mesh", ""},
       {"ascii stl cut inside a facet", [&](auto& c) { return post(c, "/v1/denoise", cut_ascii_stl, "model/stl"); }, "", 400, "malformed-mesh", ""},
       {"meshopt output asked for", [&](auto& c) { return post(c, p + url_encode("{\"output\":{\"format\":\"glb\",\"compression\":\"meshopt\"}}"), good, "model/x-off"); }, "", 422, "unsupported-content", ""},
