@@ -28,6 +28,7 @@ std::string_view to_string(ParamMode mode) {
   switch (mode) {
     case ParamMode::Auto: return "auto";
     case ParamMode::Search: return "search";
+    case ParamMode::None: return "none";
     case ParamMode::Manual: break;
   }
   return "manual";
@@ -37,6 +38,7 @@ std::optional<ParamMode> param_mode_from_string(std::string_view text) {
   if (text == "auto") return ParamMode::Auto;
   if (text == "search") return ParamMode::Search;
   if (text == "manual") return ParamMode::Manual;
+  if (text == "none") return ParamMode::None;
   return std::nullopt;
 }
 

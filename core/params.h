@@ -32,6 +32,7 @@ enum class ParamMode {
   Manual,  // the values below, as given
   Auto,    // chosen per input among candidates by an estimated error (core/auto_select.h), except pinned fields
   Search,  // Auto, then a coordinate descent driven by the same estimated error (slower; core/tune.h)
+  None,    // no denoising: denoise() returns the input's positions unchanged (format conversion only)
 };
 std::string_view to_string(ParamMode mode);
 std::optional<ParamMode> param_mode_from_string(std::string_view text);

@@ -90,6 +90,13 @@ DenoiseResult denoise(const TriMesh& input, const DenoiseParams& requested, cons
   DenoiseResult result;
   DenoiseReport& report = result.report;
   StageTimings& times = report.timings;
+  report.mode = requested.mode;
+  report.params = requested;
+  if (requested.mode == ParamMode::None) {  // convert only: no stage runs
+    result.mesh = input;
+    times.total_ms = ms_since(t_start);
+    return result;
+  }
   Executor executor(options.threads);
 
   // Sec. 3: work in the unit box (core/README.md, decision 1); undone at the end.
@@ -104,8 +111,6 @@ DenoiseResult denoise(const TriMesh& input, const DenoiseParams& requested, cons
 
   // ParamMode::Auto / Search: measure the input, score the candidates on recorrupted copies
   // of a sample (Search: then descend from the best) and run the winner (core/auto_select.h).
-  report.mode = requested.mode;
-  report.params = requested;
   if (requested.mode != ParamMode::Manual) {
     t0 = Clock::now();
     report.measures = measure_input(P, F, topo, requested, &executor);

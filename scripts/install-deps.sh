@@ -40,3 +40,10 @@ if [[ " $* " == *" test "* ]] && [ -f "$root/tests/tools/package.json" ]; then
     (cd "$root/tests/tools" && npm install --no-audit --no-fund --loglevel=error && touch node_modules)
   fi
 fi
+
+# The Node glTF-Transform client example's own packages (its lock file): the tests run it as documented.
+if [[ " $* " == *" test "* ]] && [ -f "$root/client-examples/node/package-lock.json" ]; then
+  if [ ! -d "$root/client-examples/node/node_modules" ] || [ "$root/client-examples/node/package-lock.json" -nt "$root/client-examples/node/node_modules" ]; then
+    (cd "$root/client-examples/node" && npm ci --no-audit --no-fund --loglevel=error && touch node_modules)
+  fi
+fi

@@ -22,13 +22,18 @@ std::string usage() {
                                                to the ground truth GT; print them as JSON
 
 Robust mesh denoising via vertex pre-filtering and L1-median normal filtering (Lu, Chen,
-Schaefer). Formats: off, obj, ply, drc, glb, gltf, chosen by file extension, else by content.
-OUT's format is its extension's, else params.output.format, else IN's. "-" as IN (or GT, or a
+Schaefer). Formats: off, obj, ply, stl, drc, glb, gltf, chosen by file extension, else by
+content. OUT's format is its extension's (another extension is refused), else
+params.output.format, else IN's. glTF output keeps IN's compression (Draco in, Draco out;
+otherwise none) unless params.output.compression says otherwise. "-" as IN (or GT, or a
 --params file) reads standard input, and as OUT writes standard output; "./-" is a file.
 
 Options:
   --params JSON|FILE   parameters as a JSON object (inline, or the name of a file holding it),
                        the same shape as the HTTP API; missing fields keep their defaults.
+  --mode MODE          the parameters' "mode": auto (default), search, manual, or none to
+                       convert only (decode IN, encode OUT, no denoising); the same as
+                       --params '{"mode": MODE}'
   --add-noise SPEC     add Gaussian noise instead of denoising (--params may then only hold
                        "output"); SPEC is JSON (inline or a file):
                        {"kind": "along_normal"|"per_coordinate"|"random_direction",
@@ -69,8 +74,9 @@ candidates (no filtering, Table 1's row, fitted prototypes) are scored on recorr
 of a sample of it, and the best runs; a field given explicitly keeps its value. "mode":
 "search" refines the pick by a coordinate descent on the same score (several times slower).
 "mode": "manual" uses the values as given and the defaults below (Table 1's Fandisk row) for
-the others. --report shows what ran, the noise estimate and every candidate's score.
-  mode "auto"|"search"|"manual", default "auto"
+the others. "mode": "none" denoises nothing (a format or compression conversion). --report
+shows what ran, the noise estimate and every candidate's score.
+  mode "auto"|"search"|"manual"|"none", default "auto"
 [accepted range], default:
 )";
   const mdn::DenoiseParams defaults;
@@ -92,10 +98,13 @@ the others. --report shows what ran, the noise estimate and every candidate's sc
       << defaults.kmeans_seed << R"(
   solver "ldlt"|"cg", default ")"
       << mdn::to_string(defaults.solver) << R"("
-  output {...}  output container and Draco settings, defaults:
+  output {...}  output container, glTF compression and Draco settings, defaults:
          )" << service::to_json(service::JobParams{})["output"].dump()
       << R"(
-         format: "off"|"obj"|"ply"|"drc"|"glb"|"gltf", null = IN's; position_bits [8, 30];
+         format: "off"|"obj"|"ply"|"stl"|"drc"|"glb"|"gltf", null = IN's;
+         compression: "as_input" (IN's: Draco if IN used it, else none; meshopt input
+         gives none)|"none"|"draco" ("meshopt" is not written yet); "draco": true|false
+         is still accepted (= "draco"|"none"); position_bits [8, 30];
          normal_bits [1, 30]; texcoord_bits, color_bits, generic_bits [0, 30], 0 = lossless;
          compression_level [0, 10] (10 = smallest)
 
@@ -156,6 +165,8 @@ CliOptions parse_command_line(int argc, char** argv) {
       options.metrics = value();
     } else if (arg == "--tune") {
       options.tune = value();
+    } else if (arg == "--mode") {
+      options.mode = value();
     } else if (arg == "--out-dir") {
       options.out_dir = value();
     } else if (arg == "--threads") {

@@ -22,6 +22,7 @@ struct CliOptions {
   std::optional<std::string> metrics;    // --metrics: ground-truth mesh file
   std::optional<std::string> tune;       // --tune: ground-truth mesh file
   std::optional<std::string> out_dir;    // --out-dir: batch mode, every positional is an input
+  std::optional<std::string> mode;       // --mode: "mode" of the parameters (auto, search, manual, none)
   int threads = 0;                       // 0: hardware concurrency
   bool report = false;
   bool progress = true;

@@ -67,6 +67,7 @@ JobTimings timings_from_json(const json& j) {
 
 json output_to_json(const JobOutput& output, std::int64_t bytes, json reports) {
   return {{"format", std::string(io::to_string(output.format))},
+          {"compression", std::string(io::to_string(output.compression))},
           {"media_type", output.media_type},
           {"bytes", bytes},
           {"vertices", output.vertices},
@@ -85,6 +86,9 @@ JobOutput output_from_json(const json& j, json& reports, std::int64_t& bytes) {
   JobOutput o;
   const std::string format = j.at("format").get<std::string>();
   o.format = io::format_from_string(format).value_or(io::Format::Off);
+  // Documents stored before "compression" existed read as None.
+  if (const auto it = j.find("compression"); it != j.end())
+    o.compression = io::compression_from_string(it->get<std::string>()).value_or(io::Compression::None);
   o.media_type = j.at("media_type").get<std::string>();
   bytes = j.at("bytes").get<std::int64_t>();
   o.vertices = j.at("vertices").get<std::int64_t>();

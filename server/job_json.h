@@ -1,6 +1,6 @@
 // The one JSON view of a job's output, shared by the CLI's --report, the HTTP job and result
 // resources and the Redis store's summary. Its shape is proto/report.schema.json:
-//   { "format", "media_type", "bytes", "vertices", "faces", "params": to_json(effective),
+//   { "format", "compression", "media_type", "bytes", "vertices", "faces", "params": to_json(effective),
 //     "notes": [...], "reports": [ report_to_json(r) per surface ],
 //     "timings_ms": { kTimingFields' names } }
 // Timings are wall-clock and vary between runs; everything else is deterministic.

@@ -15,6 +15,14 @@ double ms_since(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
+bool is_gltf(io::Format format) { return format == io::Format::Glb || format == io::Format::Gltf; }
+
+// What an encode to `format` writes (see JobOutput::compression).
+io::Compression written_compression(const io::EncodeOptions& options, io::Format format, io::Compression input) {
+  if (is_gltf(format)) return io::resolve_compression(options, input);
+  return format == io::Format::Drc ? io::Compression::Draco : io::Compression::None;
+}
+
 }  // namespace
 
 JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObserver* progress) {
@@ -23,9 +31,13 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
 
   JobOutput out;
   out.effective = input.params;
+  // A compression that cannot be written (meshopt, for now) is refused before any work.
+  if (is_gltf(input.params.output.format.value_or(input.format)))
+    (void)io::resolve_compression(input.params.output, io::Compression::None);
 
   auto start = Clock::now();
-  std::unique_ptr<io::MeshDocument> document = io::decode(input.bytes, input.format, limits);
+  std::unique_ptr<io::MeshDocument> document =
+      io::decode(input.bytes, input.format, io::DecodeOptions{.limits = limits, .resource_dir = input.resource_dir});
   out.timings.decode_ms = ms_since(start);
 
   const RunOptions options{.threads = input.threads < 1 ? 1 : input.threads, .progress = progress};
@@ -46,6 +58,8 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
   out.format = *encode.format;
   out.media_type = std::string(io::media_type(out.format));
   out.effective.output.format = out.format;  // echo what was actually produced
+  out.compression = written_compression(encode, out.format, document->compression());
+  if (is_gltf(out.format)) out.effective.output.compression = out.compression;
 
   start = Clock::now();
   out.bytes = document->encode(encode);

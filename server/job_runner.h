@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,13 +19,19 @@ struct JobInput {
   io::Format format;
   JobParams params;
   int threads = 1;  // threads for the core pipeline
+  // glTF: the folder external buffers and images are read from (io::DecodeOptions); only the
+  // command-line tool sets it, so the service refuses every external URI.
+  std::optional<std::string> resource_dir;
 };
 
 struct JobOutput {
   std::string bytes;
   io::Format format;
   std::string media_type;
-  JobParams effective;                  // parameters actually used
+  // The compression written: glTF as io::resolve_compression decided it (the input's by
+  // default), DRC Draco, every other container None.
+  io::Compression compression = io::Compression::None;
+  JobParams effective;                  // parameters actually used, output.format and compression resolved
   std::vector<DenoiseReport> reports;   // one per surface
   std::vector<std::string> notes;       // from the adapter (e.g. TANGENT dropped)
   std::int64_t vertices = 0, faces = 0; // summed over surfaces

@@ -255,7 +255,113 @@ io::Format input_format(const std::string& path, const std::string& bytes) {
   if (auto format = io::format_from_extension(path)) return *format;
   if (auto format = io::sniff_format(bytes)) return *format;
   throw FileError("cannot tell the format of " + (path == kStdio ? std::string("standard input") : path) +
-                  " from its extension or its contents (supported: off, obj, ply, drc, glb, gltf)");
+                  " from its extension or its contents (supported: off, obj, ply, stl, drc, glb, gltf)");
+}
+
+// The extensions an OUT may have ("out.off", ..., "out.gltf").
+std::string accepted_extensions() {
+  std::string out;
+  for (io::Format f : {io::Format::Off, io::Format::Obj, io::Format::Ply, io::Format::Stl, io::Format::Drc,
+                       io::Format::Glb, io::Format::Gltf})
+    out += (out.empty() ? "." : ", .") + std::string(io::to_string(f));
+  return out;
+}
+
+// OUT's format by its extension; none if it has no extension (then output.format or IN's).
+// An extension that names no format is refused rather than written as IN's format.
+std::optional<io::Format> output_format_by_name(const std::string& path) {
+  if (path == kStdio) return std::nullopt;
+  const std::filesystem::path name = std::filesystem::path(path).filename();
+  if (!name.has_extension() || name.stem().empty()) return std::nullopt;
+  if (auto format = io::format_from_extension(name.string())) return format;
+  throw UsageError("cannot write " + path + ": the extension " + name.extension().string() +
+                   " names no format this tool writes (accepted: " + accepted_extensions() + ")");
+}
+
+// The job's parameters: --params (inline JSON or a file, read once), then --mode. `fields`
+// receives the --params object as given (empty without --params).
+service::JobParams job_params(const CliOptions& options, json& fields) {
+  service::JobParams params;
+  fields = json::object();
+  if (options.params) {
+    const std::string text = json_argument("--params", *options.params);
+    params = service::job_params_from_text(text);
+    fields = json::parse(text);  // valid: job_params_from_text accepted it
+  }
+  if (options.mode) {
+    const auto mode = mdn::param_mode_from_string(*options.mode);
+    if (!mode) throw UsageError("--mode must be auto, search, manual or none, got \"" + *options.mode + "\"");
+    if (fields.contains("mode") && fields["mode"] != *options.mode)
+      throw UsageError("--mode " + *options.mode + " disagrees with --params' \"mode\": " + fields["mode"].dump());
+    params.denoise.mode = *mode;
+  }
+  return params;
+}
+
+// A .gltf read from a file may reference buffers and images beside it (relative URIs inside
+// its folder); from standard input, or in any other format, nothing outside the bytes is read.
+std::optional<std::string> resource_dir(const std::string& path, io::Format format) {
+  if (format != io::Format::Gltf || path == kStdio) return std::nullopt;
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  return parent.empty() ? std::string(".") : parent.string();
+}
+
+// Whether a .gltf references files (a buffer or image uri that is not a data: URI).
+bool has_external_uris(const std::string& gltf_text) {
+  const json j = json::parse(gltf_text, nullptr, /*allow_exceptions=*/false);
+  if (!j.is_object()) return false;
+  for (const char* key : {"buffers", "images"})
+    for (const auto& item : j.value(key, json::array()))
+      if (item.is_object() && item.contains("uri") && item["uri"].is_string() &&
+          !item["uri"].get<std::string>().starts_with("data:"))
+        return true;
+  return false;
+}
+
+std::string base64_decode(std::string_view text) {
+  static constexpr std::string_view kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  std::uint32_t bits = 0;
+  int count = 0;
+  for (const char c : text) {
+    const std::size_t v = kAlphabet.find(c);
+    if (v == std::string_view::npos) continue;  // '=' padding
+    bits = (bits << 6) | static_cast<std::uint32_t>(v);
+    count += 6;
+    if (count >= 8) {
+      count -= 8;
+      out += static_cast<char>((bits >> count) & 0xFF);
+    }
+  }
+  return out;
+}
+
+// The files a .gltf output writes beside itself when its input had its data beside it: each
+// embedded buffer and image becomes OUT's stem + "_<i>.bin" / "_image<i>.<ext>" in OUT's
+// folder, referenced by that relative name. Returns the rewritten .gltf and the files.
+std::string externalize(const std::string& gltf_text, const std::string& out_path,
+                        std::vector<std::pair<std::string, std::string>>& files) {
+  namespace fs = std::filesystem;
+  json j = json::parse(gltf_text);
+  const fs::path out(out_path);
+  const std::string stem = out.stem().string();
+  for (const char* key : {"buffers", "images"}) {
+    if (!j.contains(key)) continue;
+    for (std::size_t i = 0; i < j[key].size(); ++i) {
+      json& item = j[key][i];
+      if (!item.contains("uri") || !item["uri"].is_string()) continue;
+      const std::string uri = item["uri"].get<std::string>();
+      const std::size_t comma = uri.find(',');
+      if (!uri.starts_with("data:") || comma == std::string::npos) continue;
+      const std::string mime = uri.substr(5, uri.find(';') - 5);
+      std::string name = stem + (std::string(key) == "buffers" ? "_" + std::to_string(i) + ".bin"
+                                                                : "_image" + std::to_string(i) +
+                                                                      (mime == "image/jpeg" ? ".jpg" : mime == "image/webp" ? ".webp" : ".png"));
+      files.emplace_back((out.parent_path() / name).string(), base64_decode(std::string_view(uri).substr(comma + 1)));
+      item["uri"] = name;
+    }
+  }
+  return j.dump(2);
 }
 
 // Runs fn; a mesh or format problem is reported against the file it came from (exit 3).
@@ -303,7 +409,7 @@ mdn::TriMesh merge_surfaces(const std::vector<mdn::TriMesh>& surfaces) {
 LoadedMesh decode_mesh(const std::string& path, const std::string& bytes, io::Format format) {
   return blame_file(path, [&] {
     LoadedMesh loaded;
-    loaded.document = io::decode(bytes, format, cli_limits());
+    loaded.document = io::decode(bytes, format, io::DecodeOptions{cli_limits(), resource_dir(path, format)});
     loaded.merged = merge_surfaces(loaded.document->surfaces());
     mdn::validate_mesh(loaded.merged);
     return loaded;
@@ -335,7 +441,11 @@ json measure(const mdn::TriMesh& truth, const std::string& truth_path, const mdn
 // The progress bar (if any) is cleared whatever happens.
 service::JobOutput denoise_input(const std::string& in_path, const std::string& in_bytes, io::Format in_format,
                                  const service::JobParams& params, int threads, CliProgress& progress) {
-  const service::JobInput job{.bytes = in_bytes, .format = in_format, .params = params, .threads = threads};
+  const service::JobInput job{.bytes = in_bytes,
+                              .format = in_format,
+                              .params = params,
+                              .threads = threads,
+                              .resource_dir = resource_dir(in_path, in_format)};
   try {
     service::JobOutput output = blame_file(in_path, [&] { return service::run_job(job, cli_limits(), &progress); });
     progress.clear();
@@ -398,8 +508,8 @@ int run_batch(const CliOptions& options) {
   if (options.add_noise || options.metrics || options.tune) {
     throw UsageError("--out-dir cannot be combined with --add-noise, --metrics or --tune");
   }
-  service::JobParams params;
-  if (options.params) params = service::job_params_from_text(json_argument("--params", *options.params));
+  json fields;
+  const service::JobParams params = job_params(options, fields);
   const fs::path dir = *options.out_dir;
   const std::vector<std::string> outputs = batch_outputs(inputs, dir, params.output.format);
   std::error_code ec;
@@ -548,17 +658,14 @@ int run(int argc, char** argv) {
   const int threads = default_threads(options);
 
   // Parse everything the user typed before touching any mesh.
-  service::JobParams params;
-  if (options.params) {
-    const std::string text = json_argument("--params", *options.params);
-    params = service::job_params_from_text(text);
-    if (options.add_noise) {
-      // Only the output settings apply when no denoising happens; anything else would be
-      // silently ignored, so it is refused.
-      const json fields = json::parse(text);  // valid: job_params_from_text accepted it
-      for (const auto& [key, value] : fields.items()) {
-        if (key != "output") throw UsageError("with --add-noise, --params may only hold \"output\", not \"" + key + "\"");
-      }
+  if (options.add_noise && options.mode) throw UsageError("--mode cannot be combined with --add-noise");
+  json fields;
+  service::JobParams params = job_params(options, fields);
+  if (options.add_noise) {
+    // Only the output settings apply when no denoising happens; anything else would be
+    // silently ignored, so it is refused.
+    for (const auto& [key, value] : fields.items()) {
+      if (key != "output") throw UsageError("with --add-noise, --params may only hold \"output\", not \"" + key + "\"");
     }
   }
   std::optional<mdn::NoiseSpec> noise;
@@ -581,7 +688,7 @@ int run(int argc, char** argv) {
   if (out_path == kStdio && (options.report || options.metrics)) {
     throw UsageError("OUT is standard output (-): --report and --metrics would print into the mesh");
   }
-  if (auto by_extension = io::format_from_extension(out_path)) {
+  if (auto by_extension = output_format_by_name(out_path)) {
     if (params.output.format && *params.output.format != *by_extension) {
       throw UsageError("output.format is \"" + std::string(io::to_string(*params.output.format)) + "\" but " +
                        out_path + " has the extension of \"" + std::string(io::to_string(*by_extension)) + "\"");
@@ -627,6 +734,13 @@ int run(int argc, char** argv) {
   // file's own quantisation (Draco) can be measured afterwards with --metrics GT OUT.
   std::optional<json> metrics;
   if (truth) metrics = measure(*truth, *options.metrics, result, in_path, threads);
+  // A .gltf whose data sat beside it gets its output's data beside the output (the same layout).
+  const io::Format out_format = io::format_from_string(summary.value("format", std::string())).value_or(in_format);
+  if (out_format == io::Format::Gltf && in_format == io::Format::Gltf && out_path != kStdio && has_external_uris(in_bytes)) {
+    std::vector<std::pair<std::string, std::string>> files;
+    out_bytes = externalize(out_bytes, out_path, files);
+    for (const auto& [file, bytes] : files) write_file(file, bytes);
+  }
   write_file(out_path, out_bytes);
 
   if (options.report) {

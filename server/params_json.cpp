@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -129,7 +130,9 @@ constexpr OutputIntSpec kOutputInts[] = {
     {"compression_level", &io::EncodeOptions::compression_level, 0, 10},
 };
 
-constexpr const char* kFormatChoices = "\"off\", \"obj\", \"ply\", \"drc\", \"glb\", \"gltf\" or null (same as the input)";
+constexpr const char* kFormatChoices =
+    "\"off\", \"obj\", \"ply\", \"stl\", \"drc\", \"glb\", \"gltf\" or null (same as the input)";
+constexpr const char* kCompressionChoices = "\"as_input\", \"none\", \"draco\" or \"meshopt\"";
 
 std::vector<std::string> top_level_names() {
   std::vector<std::string> names;
@@ -139,7 +142,7 @@ std::vector<std::string> top_level_names() {
 }
 
 std::vector<std::string> output_names() {
-  std::vector<std::string> names{"format", "draco"};
+  std::vector<std::string> names{"format", "compression", "draco"};
   for (const auto& spec : kOutputInts) names.emplace_back(spec.name);
   return names;
 }
@@ -151,8 +154,12 @@ std::vector<std::string> output_names() {
   throw InvalidParamsError(path, out.str());
 }
 
+// "compression" names the glTF output compression; "draco" (the older switch) still overrides
+// it: true is "draco", false is "none". Both given, they must agree.
 void parse_output(const json& j, io::EncodeOptions& out) {
   if (!j.is_object()) fail("output", "an object", j);
+  std::optional<io::Compression> compression;
+  std::optional<bool> draco;
   for (const auto& [key, value] : j.items()) {
     const std::string path = "output." + key;
     if (key == "format") {
@@ -164,8 +171,11 @@ void parse_output(const json& j, io::EncodeOptions& out) {
       const auto format = io::format_from_string(text);
       if (!format) fail(path, std::string("one of ") + kFormatChoices, value);
       out.format = *format;
+    } else if (key == "compression") {
+      compression = io::compression_from_string(string_value(value, path, kCompressionChoices));
+      if (!compression) fail(path, std::string("one of ") + kCompressionChoices, value);
     } else if (key == "draco") {
-      out.draco = boolean_value(value, path);
+      draco = boolean_value(value, path);
     } else {
       bool found = false;
       for (const auto& spec : kOutputInts) {
@@ -177,6 +187,17 @@ void parse_output(const json& j, io::EncodeOptions& out) {
       }
       if (!found) unknown_field(path, output_names());
     }
+  }
+  if (draco) {
+    const io::Compression by_draco = *draco ? io::Compression::Draco : io::Compression::None;
+    if (compression && *compression != by_draco)
+      fail("output.draco", std::string("consistent with output.compression \"") + std::string(io::to_string(*compression)) +
+                               "\" (or left out)", json(*draco));
+    compression = by_draco;
+  }
+  if (compression) {
+    out.compression = *compression;
+    out.draco = *compression == io::Compression::Draco;
   }
 }
 
@@ -217,9 +238,9 @@ JobParams job_params_from_json(const nlohmann::json& j) {
   for (const auto& [key, value] : j.items()) {
     if (const auto field = auto_field_from_string(key)) p.denoise.pin(*field);  // explicit: kept in auto mode
     if (key == "mode") {
-      const auto& text = string_value(value, key, "\"auto\", \"search\" or \"manual\"");
-      const auto mode = param_mode_from_string(text);
-      if (!mode) fail(key, "one of \"auto\", \"search\" or \"manual\"", value);
+      constexpr const char* kModes = "\"auto\", \"search\", \"manual\" or \"none\"";
+      const auto mode = param_mode_from_string(string_value(value, key, kModes));
+      if (!mode) fail(key, std::string("one of ") + kModes, value);
       p.denoise.mode = *mode;
     } else if (key == "region_mode") {
       const auto& text = string_value(value, key, "\"auto\", \"on\" or \"off\"");
@@ -278,7 +299,8 @@ nlohmann::json to_json(const JobParams& p) {
   j["solver"] = std::string(to_string(p.denoise.solver));
   json out = json::object();
   out["format"] = p.output.format ? json(std::string(io::to_string(*p.output.format))) : json(nullptr);
-  out["draco"] = p.output.draco;
+  out["compression"] = std::string(io::to_string(p.output.compression.value_or(
+      p.output.draco ? io::Compression::Draco : io::Compression::None)));
   for (const auto& spec : kOutputInts) out[spec.name] = p.output.*spec.field;
   j["output"] = std::move(out);
   return j;

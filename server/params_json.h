@@ -3,7 +3,7 @@
 //
 //   { "alpha": 0.1, "sigma_theta": 30, "n_aniso": 2, "sigma_gamma": 30, "n_normal": 20,
 //     "n_vertex": 10, "region_mode": "auto", "beta": 6, ... ,
-//     "output": { "format": "glb", "draco": true, "position_bits": 16, ... } }
+//     "output": { "format": "glb", "compression": "as_input", "position_bits": 16, ... } }
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -23,7 +23,13 @@ struct JobParams {
     d.mode = ParamMode::Auto;
     return d;
   }();                        // method parameters (defaults from core, mode auto)
-  io::EncodeOptions output;   // output container and Draco settings
+  // Output container and compression (glTF: as the input's by default, issue 18) and the
+  // Draco settings.
+  io::EncodeOptions output = [] {
+    io::EncodeOptions o;
+    o.compression = io::Compression::AsInput;
+    return o;
+  }();
 };
 
 // Parses a JSON object; missing fields keep their defaults. Throws InvalidParamsError naming

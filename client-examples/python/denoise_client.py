@@ -12,7 +12,7 @@ import urllib.error
 import urllib.request
 
 MEDIA_TYPES = {".glb": "model/gltf-binary", ".gltf": "model/gltf+json", ".drc": "model/x-draco",
-               ".off": "model/x-off", ".obj": "model/obj", ".ply": "model/x-ply"}
+               ".off": "model/x-off", ".obj": "model/obj", ".ply": "model/x-ply", ".stl": "model/stl"}
 
 
 def request(method, url, body=None, headers=None):
@@ -29,8 +29,14 @@ def request(method, url, body=None, headers=None):
 
 
 def main():
+    if any(a in ("-h", "--help") for a in sys.argv[1:]):
+        print(__doc__.strip())
+        return
     args = [a for a in sys.argv[1:] if a != "--async"]
     use_async = "--async" in sys.argv
+    if len(args) not in (2, 3):
+        print(__doc__.strip().splitlines()[2] + "\n(run with --help for more)", file=sys.stderr)
+        sys.exit(2)
     src, dst = args[0], args[1]
     params = args[2] if len(args) > 2 else "{}"
     base = os.environ.get("MDN_URL", "http://127.0.0.1:8080")

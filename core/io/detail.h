@@ -15,7 +15,9 @@ std::unique_ptr<MeshDocument> decode_off(std::string_view bytes, const Limits& l
 std::unique_ptr<MeshDocument> decode_obj(std::string_view bytes, const Limits& limits);
 std::unique_ptr<MeshDocument> decode_ply(std::string_view bytes, const Limits& limits);
 std::unique_ptr<MeshDocument> decode_drc(std::string_view bytes, const Limits& limits);
-std::unique_ptr<MeshDocument> decode_gltf(std::string_view bytes, Format format, const Limits& limits);
+// resource_dir: null refuses external URIs; else the folder they are read from (DecodeOptions).
+std::unique_ptr<MeshDocument> decode_gltf(std::string_view bytes, Format format, const Limits& limits,
+                                          const std::string* resource_dir = nullptr);
 std::unique_ptr<MeshDocument> decode_stl(std::string_view bytes, const Limits& limits);
 
 // STL detection (sniff_format and decode_stl): the binary size identity 84 + 50 n, and ASCII

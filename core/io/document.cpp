@@ -17,9 +17,6 @@ struct FormatInfo {
   Format format;
   std::string_view name;
   std::string_view media_type;
-  // Found by format_from_string: the formats the service's contract (proto/) names. STL is
-  // not there until the server/CLI wiring adds it (its tests use "stl" as the unknown name).
-  bool by_name = true;
 };
 
 // One table for names, extensions and media types. OFF and PLY have no registered media
@@ -31,7 +28,7 @@ constexpr std::array<FormatInfo, 7> kFormats{{
     {Format::Drc, "drc", "application/octet-stream"},
     {Format::Glb, "glb", "model/gltf-binary"},
     {Format::Gltf, "gltf", "model/gltf+json"},
-    {Format::Stl, "stl", "model/stl", false},
+    {Format::Stl, "stl", "model/stl"},
 }};
 
 std::string lower(std::string_view text) {
@@ -58,7 +55,7 @@ std::string_view to_string(Format format) {
 std::optional<Format> format_from_string(std::string_view name) {
   const std::string key = lower(name);
   for (const auto& info : kFormats)
-    if (info.name == key && info.by_name) return info.format;
+    if (info.name == key) return info.format;
   return std::nullopt;
 }
 
@@ -136,6 +133,12 @@ Compression resolve_compression(const EncodeOptions& options, Compression input)
   }
   if (input == Compression::Meshopt || input == Compression::AsInput) return Compression::None;
   return input;
+}
+
+std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, const DecodeOptions& options) {
+  if (format == Format::Glb || format == Format::Gltf)
+    return detail::decode_gltf(bytes, format, options.limits, options.resource_dir ? &*options.resource_dir : nullptr);
+  return decode(bytes, format, options.limits);
 }
 
 std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, const Limits& limits) {

@@ -20,9 +20,7 @@ namespace mdn::io {
 
 enum class Format { Off, Obj, Ply, Drc, Glb, Gltf, Stl };
 std::string_view to_string(Format format);  // "off", "obj", "ply", "drc", "glb", "gltf", "stl"
-// Inverse of to_string for the formats the service's contract names (not yet "stl": the
-// server/CLI wiring phase turns it on with the contract, see FormatInfo::by_name).
-std::optional<Format> format_from_string(std::string_view name);
+std::optional<Format> format_from_string(std::string_view name);  // inverse of to_string, any case
 std::optional<Format> format_from_extension(std::string_view path);  // by file name ending
 std::optional<Format> sniff_format(std::string_view bytes);       // by content (magic numbers / keywords)
 std::string_view media_type(Format format);  // model/gltf-binary, model/gltf+json, application/octet-stream ...
@@ -102,7 +100,20 @@ class MeshDocument {
 // UnsupportedError (HTTP 422).
 Compression resolve_compression(const EncodeOptions& options, Compression input);
 
+// How to decode, beyond the format. The service uses the defaults: nothing outside the bytes
+// is ever read.
+struct DecodeOptions {
+  Limits limits;
+  // glTF: the folder that buffers and images referenced by relative URI are read from (the
+  // command-line tool sets it to the .gltf's folder). Unset, every external URI is an
+  // UnsupportedError. Set, a URI with a scheme, an absolute path or one that leads out of the
+  // folder ("..") is still an UnsupportedError, and the files read count against
+  // limits.max_decoded_bytes. What was read is embedded: encode() writes data URIs.
+  std::optional<std::string> resource_dir;
+};
+
 // Decodes bytes of the given format. Throws FormatError, UnsupportedError or LimitError.
 std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, const Limits& limits = {});
+std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, const DecodeOptions& options);
 
 }  // namespace mdn::io

@@ -23,8 +23,12 @@
 #include <draco/mesh/mesh.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -780,14 +784,82 @@ std::string_view glb_json(std::string_view bytes) {
   return bytes.substr(20, length);
 }
 
-void refuse_external(const Json& json, const char* key) {
-  for (const auto& item : json.value(key, Json::array())) {
+// A relative URI reference (RFC 3986) as a path inside the resource folder: percent-decoded,
+// refused with UnsupportedError if it has a scheme, is absolute, climbs out with "..", or
+// holds a backslash or a NUL.
+std::filesystem::path resource_path(const std::string& uri, const std::string& where) {
+  const auto refuse = [&](const char* why) -> std::filesystem::path {
+    throw UnsupportedError("external URI '" + uri.substr(0, 200) + "' in " + where + " refused: " + why);
+  };
+  const std::size_t colon = uri.find(':');
+  if (colon != std::string::npos && uri.find_first_of("/?#") > colon) refuse("a URI with a scheme is never fetched");
+  std::string decoded;
+  for (std::size_t i = 0; i < uri.size(); ++i) {
+    if (uri[i] == '?' || uri[i] == '#') break;  // query and fragment name no file
+    if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
+        std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
+      decoded += static_cast<char>(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
+      i += 2;
+    } else {
+      decoded += uri[i];
+    }
+  }
+  if (decoded.empty()) refuse("empty");
+  if (decoded.find('\\') != std::string::npos || decoded.find('\0') != std::string::npos) refuse("a backslash or NUL in a path");
+  if (decoded.front() == '/') refuse("an absolute path; only files inside the .gltf's folder are read");
+  const std::filesystem::path relative = std::filesystem::path(decoded).lexically_normal();
+  for (const auto& part : relative)
+    if (part == "..") refuse("it leads out of the .gltf's folder");
+  return relative;
+}
+
+// Buffers and images referenced by URI: refused (the service), or, with a resource folder
+// (the command-line tool), read from it and embedded as data URIs before anything else reads
+// the asset, so the rest of the decoder and the encoder only ever see embedded data. Returns
+// how many were read.
+int resolve_external(Json& json, const char* key, const std::string* resource_dir, const Limits& limits,
+                     std::int64_t& read_bytes) {
+  if (!json.contains(key) || !json[key].is_array()) return 0;
+  int read = 0;
+  for (std::size_t i = 0; i < json[key].size(); ++i) {
+    Json& item = json[key][i];
     if (!item.is_object() || !item.contains("uri")) continue;
     if (!item["uri"].is_string()) throw FormatError(std::string("glTF: a uri in ") + key + " is not a string");
     const std::string uri = item["uri"].get<std::string>();
-    if (uri.rfind("data:", 0) != 0)
+    if (uri.rfind("data:", 0) == 0) continue;
+    if (!resource_dir)
       throw UnsupportedError("external URI '" + uri.substr(0, 200) + "' in " + key + " refused: only embedded data is read");
+    const std::string where = std::string(key) + "[" + std::to_string(i) + "]";
+    const std::filesystem::path file = std::filesystem::path(*resource_dir) / resource_path(uri, where);
+    std::error_code ec;
+    // A symbolic link inside the folder must not lead out of it either.
+    const std::filesystem::path root = std::filesystem::weakly_canonical(*resource_dir, ec);
+    const std::filesystem::path real = std::filesystem::weakly_canonical(file, ec);
+    const auto [r, f] = std::mismatch(root.begin(), root.end(), real.begin(), real.end());
+    if (r != root.end())
+      throw UnsupportedError("external URI '" + uri.substr(0, 200) + "' in " + where + " refused: it leads out of the .gltf's folder");
+    const auto size = std::filesystem::file_size(file, ec);
+    if (ec || !std::filesystem::is_regular_file(file, ec))
+      throw FormatError("glTF: " + where + " names '" + uri.substr(0, 200) + "', which cannot be read (" +
+                        (ec ? ec.message() : std::string("not a regular file")) + ")");
+    read_bytes += static_cast<std::int64_t>(size);
+    if (read_bytes > limits.max_decoded_bytes)
+      throw LimitError("glTF: the external files come to more than " + std::to_string(limits.max_decoded_bytes) + " bytes");
+    std::ifstream in(file, std::ios::binary);
+    std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (!in.good() && !in.eof()) throw FormatError("glTF: cannot read '" + uri.substr(0, 200) + "'");
+    std::string mime = "application/octet-stream";
+    if (std::string(key) == "images") {
+      mime = item.value("mimeType", std::string());
+      if (mime.empty()) {
+        const std::string ext = file.extension().string();
+        mime = ext == ".png" ? "image/png" : ext == ".jpg" || ext == ".jpeg" ? "image/jpeg" : ext == ".webp" ? "image/webp" : "application/octet-stream";
+      }
+    }
+    item["uri"] = "data:" + mime + ";base64," + base64_encode(data);
+    ++read;
   }
+  return read;
 }
 
 }  // namespace
@@ -935,7 +1007,8 @@ Json parse_bounded(std::string_view text, const Limits& limits, std::int64_t& by
 
 }  // namespace
 
-static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes, Format format, const Limits& limits);
+static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes, Format format, const Limits& limits,
+                                                          const std::string* resource_dir);
 
 namespace {
 
@@ -1025,23 +1098,27 @@ int decode_meshopt_views(const Json& json, tinygltf::Model& model, Reader& reade
 
 }  // namespace
 
-std::unique_ptr<MeshDocument> decode_gltf(std::string_view bytes, Format format, const Limits& limits) {
+std::unique_ptr<MeshDocument> decode_gltf(std::string_view bytes, Format format, const Limits& limits,
+                                          const std::string* resource_dir) {
   try {
-    return decode_gltf_checked(bytes, format, limits);
+    return decode_gltf_checked(bytes, format, limits, resource_dir);
   } catch (const Json::exception& e) {  // a shape check_shape does not cover: still the input's fault
     throw FormatError(std::string("glTF: unexpected JSON content (") + e.what() + ")");
   }
 }
 
-static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes, Format format, const Limits& limits) {
+static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes, Format format, const Limits& limits,
+                                                          const std::string* resource_dir) {
   auto doc = std::make_unique<GltfDocument>();
   doc->format_ = format;
   const std::string_view text = format == Format::Glb ? glb_json(bytes) : bytes;
   std::int64_t scene_bytes = 0;
   doc->json_ = parse_bounded(text, limits, scene_bytes);
-  // Refused before tinygltf sees the asset: nothing external is ever opened.
-  refuse_external(doc->json_, "buffers");
-  refuse_external(doc->json_, "images");
+  // Before tinygltf sees the asset: without a resource folder nothing external is ever opened.
+  std::int64_t external_bytes = 0;
+  int external = 0;
+  for (const char* key : {"buffers", "images"})
+    external += resolve_external(doc->json_, key, resource_dir, limits, external_bytes);
   for (const char* list : {"extensionsUsed", "extensionsRequired"})
     for (const auto& name : doc->json_.value(list, Json::array()))
       if (name == "KHR_meshopt_compression")
@@ -1054,7 +1131,7 @@ static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes,
   // primitive has (valid glTF). Draco primitives are read from the JSON and the payload
   // here, so tinygltf gets a copy of the JSON without their "indices".
   Json for_loader = doc->json_;
-  bool changed = false;
+  bool changed = external > 0;
   if (for_loader.contains("meshes") && for_loader["meshes"].is_array())
     for (auto& mesh : for_loader["meshes"])
       if (mesh.is_object() && mesh.contains("primitives") && mesh["primitives"].is_array())
@@ -1259,7 +1336,7 @@ std::string write_plain_gltf(const std::vector<TriMesh>& all, Format format, con
   }
   json["buffers"] = Json::array({{{"byteLength", bin.size()}, {"uri", "data:application/octet-stream;base64," + base64_encode(bin)}}});
   const std::string text = json.dump();
-  auto doc = decode_gltf(text, Format::Gltf, Limits{});
+  auto doc = decode_gltf(text, Format::Gltf, Limits{}, nullptr);
   // Exact positions rather than their float copies (when welding merged nothing).
   bool same_sizes = doc->surfaces().size() == surfaces.size();
   for (std::size_t s = 0; same_sizes && s < surfaces.size(); ++s) same_sizes = doc->surfaces()[s].V.rows() == surfaces[s].V.rows();

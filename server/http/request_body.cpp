@@ -22,6 +22,7 @@ constexpr InputMediaType kInputMediaTypes[] = {
     {"model/obj", io::Format::Obj},
     {"model/x-ply", io::Format::Ply},
     {"model/x-draco", io::Format::Drc},
+    {"model/stl", io::Format::Stl},
     {"application/octet-stream", std::nullopt},  // .drc, or any format recognised by content
     {"text/plain", std::nullopt},                // OFF/OBJ/PLY ASCII recognised by content
 };
@@ -52,8 +53,8 @@ io::Format resolve_format(const std::string& content_type, std::string_view byte
   }
   if (!sniff) {
     // Whatever media type the io adapters emit is accepted too (a result can be sent back).
-    for (io::Format f : {io::Format::Off, io::Format::Obj, io::Format::Ply, io::Format::Drc, io::Format::Glb,
-                         io::Format::Gltf}) {
+    for (io::Format f : {io::Format::Off, io::Format::Obj, io::Format::Ply, io::Format::Stl, io::Format::Drc,
+                         io::Format::Glb, io::Format::Gltf}) {
       if (type == io::media_type(f)) {
         if (type == "application/octet-stream" || type == "text/plain") break;
         return f;
@@ -65,7 +66,7 @@ io::Format resolve_format(const std::string& content_type, std::string_view byte
     if (auto f = io::format_from_extension(filename)) return *f;
   if (auto f = io::sniff_format(bytes)) return *f;
   throw HttpError(unsupported_media_type(
-      "the body is not recognisable as glTF, GLB, Draco, OFF, OBJ or PLY; declare its media type"));
+      "the body is not recognisable as glTF, GLB, Draco, OFF, OBJ, PLY or STL; declare its media type"));
 }
 
 // Reads the body through the ContentReader, counting bytes ourselves: cpp-httplib 0.11.4

@@ -180,7 +180,7 @@ async function showResult(job, bytes) {
   $('summary').replaceChildren(...[
     ['Time', `${seconds(wall)} in all · queue ${seconds(job.timings_s.queue_wait)} · run ${seconds(job.timings_s.run)}`],
     ['Input', `${state.file.name} · ${bytesText(job.input_bytes)}`],
-    ['Output', `${result.format}${result.params.output?.draco === false ? '' : result.format === 'glb' || result.format === 'gltf' ? ' (Draco)' : ''} · ${bytesText(result.bytes)}`],
+    ['Output', `${result.format}${result.compression === 'draco' ? ' (Draco)' : result.compression === 'meshopt' ? ' (meshopt)' : ''} · ${bytesText(result.bytes)}`],
     ['Mesh', `${result.vertices.toLocaleString('en')} vertices · ${result.faces.toLocaleString('en')} faces`],
     ...(legend ? [['Moved', `mean ${num(legend.mean / legend.edge)} · max ${num(legend.max / legend.edge)} edge lengths`]] : []),
     ...result.notes.map((n) => ['Note', n]),

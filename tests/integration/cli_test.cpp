@@ -20,6 +20,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/io/document.h"
 #include "core/metrics.h"
 #include "core/noise.h"
 #include "core/params.h"
@@ -676,6 +677,136 @@ TEST_F(Cli, DashReadsStandardInputAndWritesStandardOutput) {
   const Result garbage = run("- " + quote(path("out.off")), path("garbage.txt"));
   EXPECT_EQ(garbage.code, 3) << garbage.err;
   EXPECT_NE(garbage.err.find("standard input"), std::string::npos) << garbage.err;
+}
+
+}  // namespace
+}  // namespace mdn
+
+
+namespace mdn {
+namespace {
+
+// Issue 18: an OUT whose extension names no format is refused (it used to receive IN's
+// format: out.stl got OFF text); .stl is one of the accepted ones now.
+TEST_F(Cli, UnknownOutputExtensionIsRefused) {
+  write_sphere_pair(2);
+  const Result xyz = run(quote(path("noisy.off")) + " " + quote(path("out.xyz")));
+  EXPECT_EQ(xyz.code, 2) << xyz.err;
+  EXPECT_NE(xyz.err.find(".xyz"), std::string::npos) << xyz.err;
+  for (const char* ext : {".off", ".obj", ".ply", ".stl", ".drc", ".glb", ".gltf"})
+    EXPECT_NE(xyz.err.find(ext), std::string::npos) << ext << " not named in: " << xyz.err;
+  EXPECT_FALSE(fs::exists(path("out.xyz")));
+
+  const Result stl = run("--report " + quote(path("noisy.off")) + " " + quote(path("out.stl")));
+  ASSERT_EQ(stl.code, 0) << stl.err;
+  EXPECT_EQ(parse_stdout(stl)["format"], "stl");
+  const mdn::TriMesh back = mdn::io::decode(read_text(path("out.stl")), mdn::io::Format::Stl)->surfaces()[0];
+  EXPECT_EQ(back.num_faces(), noisy_.num_faces());
+  // No extension at all still means IN's format.
+  ASSERT_EQ(run(quote(path("noisy.off")) + " " + quote(path("out"))).code, 0);
+  EXPECT_EQ(read_text(path("out")).rfind("OFF", 0), 0u);
+}
+
+// --mode none (or "mode": "none") converts without denoising, and says so in the report.
+TEST_F(Cli, ModeNoneConvertsOnly) {
+  write_sphere_pair(2);
+  const Result r = run("--mode none --report " + quote(path("noisy.off")) + " " + quote(path("out.ply")));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json report = parse_stdout(r);
+  EXPECT_EQ(report["params"]["mode"], "none");
+  ASSERT_EQ(report["reports"].size(), 1u);
+  EXPECT_EQ(report["reports"][0]["mode"], "none");
+  EXPECT_FALSE(report["reports"][0].contains("selection"));
+  EXPECT_EQ(report["timings_ms"]["normal_filter"], 0.0);
+  const mdn::TriMesh back = mdn::io::decode(read_text(path("out.ply")), mdn::io::Format::Ply)->surfaces()[0];
+  ASSERT_EQ(back.F, noisy_.F);
+  EXPECT_LT((back.V - noisy_.V).cwiseAbs().maxCoeff(), 1e-5);  // PLY stores floats
+  // The same through --params; a contradiction or an unknown mode is a usage error.
+  EXPECT_EQ(run("--params '{\"mode\": \"none\"}' " + quote(path("noisy.off")) + " " + quote(path("out2.off"))).code, 0);
+  EXPECT_EQ(run("--mode none --params '{\"mode\": \"auto\"}' " + quote(path("noisy.off")) + " " + quote(path("o.off"))).code, 2);
+  const Result bad = run("--mode convert " + quote(path("noisy.off")) + " " + quote(path("o.off")));
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("none"), std::string::npos) << bad.err;
+}
+
+// glTF output keeps the input's compression by default (issue 18): plain in, plain out.
+TEST_F(Cli, GltfOutputCompressionFollowsTheInput) {
+  write_sphere_pair(2);
+  const Result plain = run("--report " + quote(path("noisy.off")) + " " + quote(path("out.glb")));
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  EXPECT_EQ(parse_stdout(plain)["compression"], "none");
+  EXPECT_EQ(read_text(path("out.glb")).find("KHR_draco_mesh_compression"), std::string::npos);
+  const Result draco = run("--report --params '{\"output\": {\"compression\": \"draco\"}}' " + quote(path("noisy.off")) +
+                           " " + quote(path("draco.glb")));
+  ASSERT_EQ(draco.code, 0) << draco.err;
+  EXPECT_EQ(parse_stdout(draco)["compression"], "draco");
+  const Result again = run("--report " + quote(path("draco.glb")) + " " + quote(path("again.glb")));
+  ASSERT_EQ(again.code, 0) << again.err;
+  EXPECT_EQ(parse_stdout(again)["compression"], "draco");
+  EXPECT_NE(read_text(path("again.glb")).find("KHR_draco_mesh_compression"), std::string::npos);
+}
+
+// A .gltf with its .bin beside it (issue 18): the tool reads buffers and images by relative URI
+// from the .gltf's folder, writes the output's beside the output, and refuses URIs that leave
+// the folder, are absolute or have a scheme (exit 3).
+TEST_F(Cli, GltfWithExternalBufferReadsAndWritesBesideIt) {
+  write_sphere_pair(2);
+  ASSERT_EQ(run("--mode none " + quote(path("noisy.off")) + " " + quote(path("embedded.gltf"))).code, 0);
+  json gltf = json::parse(read_text(path("embedded.gltf")));
+  const std::string uri = gltf["buffers"][0]["uri"];
+  ASSERT_EQ(uri.rfind("data:", 0), 0u);
+  // The buffer to a file, by way of the tool's own base64 (decoded by python3 here).
+  fs::create_directories(path("in"));
+  write_text(path("in/data.b64"), uri.substr(uri.find(',') + 1));
+  ASSERT_EQ(std::system(("python3 -c 'import base64,sys; sys.stdout.buffer.write(base64.b64decode(open(sys.argv[1]).read()))' " +
+                         quote(path("in/data.b64")) + " > " + quote(path("in/mesh data.bin"))).c_str()), 0);
+  const auto write_gltf = [&](const std::string& name, const std::string& buffer_uri) {
+    json copy = gltf;
+    copy["buffers"][0]["uri"] = buffer_uri;
+    write_text(path("in/" + name), copy.dump());
+  };
+  write_gltf("scan.gltf", "mesh%20data.bin");
+  fs::create_directories(path("out"));
+  const Result ok = run("--report " + quote(path("in/scan.gltf")) + " " + quote(path("out/clean.gltf")));
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  const json out = json::parse(read_text(path("out/clean.gltf")));
+  EXPECT_EQ(out["buffers"][0]["uri"], "clean_0.bin");
+  ASSERT_TRUE(fs::exists(path("out/clean_0.bin")));
+  EXPECT_EQ(static_cast<std::int64_t>(fs::file_size(path("out/clean_0.bin"))), out["buffers"][0]["byteLength"].get<std::int64_t>());
+  // The output reads back, from its own folder, as the same mesh.
+  const Result back = run("--mode none --report " + quote(path("out/clean.gltf")) + " " + quote(path("back.off")));
+  ASSERT_EQ(back.code, 0) << back.err;
+  EXPECT_EQ(parse_stdout(back)["faces"], noisy_.num_faces());
+
+  fs::create_directories(path("in/sub"));
+  write_text(path("secret.bin"), "secret");
+  fs::create_symlink(path("secret.bin"), path("in/link.bin"));
+  for (const auto& [bad, why] : std::vector<std::pair<std::string, std::string>>{
+           {"../secret.bin", "leads out"}, {"sub/../../secret.bin", "leads out"}, {"%2e%2e/secret.bin", "leads out"},
+           {"link.bin", "leads out"}, {path("secret.bin"), "absolute"}, {"file:///etc/hostname", "scheme"},
+           {"http://example.org/x.bin", "scheme"}, {"missing.bin", "cannot be read"}}) {
+    write_gltf("bad.gltf", bad);
+    const Result r = run(quote(path("in/bad.gltf")) + " " + quote(path("out/bad.gltf")));
+    EXPECT_EQ(r.code, 3) << bad << ": " << r.err;
+    EXPECT_NE(r.err.find(why), std::string::npos) << bad << ": " << r.err;
+    EXPECT_FALSE(fs::exists(path("out/bad.gltf"))) << bad;
+  }
+}
+
+// Bad STL files are exit 3 with the problem named, as every other malformed input.
+TEST_F(Cli, TruncatedStlExitsThree) {
+  std::string binary(80, ' ');
+  binary += std::string("\x02\x00\x00\x00", 4) + std::string(50, '\0');  // two facets declared, one given
+  write_text(path("cut.stl"), binary);
+  write_text(path("cut-ascii.stl"), "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n");
+  write_text(path("nan.stl"), "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex nan 0 0\nvertex 0 1 0\n"
+                              "endloop\nendfacet\nendsolid x\n");
+  for (const char* name : {"cut.stl", "cut-ascii.stl", "nan.stl"}) {
+    const Result r = run(quote(path(name)) + " " + quote(path("out.off")));
+    EXPECT_EQ(r.code, 3) << name << ": " << r.err;
+    EXPECT_NE(r.err.find(name), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(path("out.off"))) << name;
+  }
 }
 
 }  // namespace

@@ -57,6 +57,19 @@ TEST_F(ClientExamples, PythonSyncAndAsync) {
   EXPECT_NE(out.find("alpha"), std::string::npos) << out;
 }
 
+// The Python client's --help, from the repository root and from its own folder (it used to die
+// with an IndexError); a wrong argument count is a usage error (2).
+TEST_F(ClientExamples, PythonHelpFromAnyFolder) {
+  for (const std::string folder : {std::string(source_dir()), std::string(source_dir()) + "/client-examples"}) {
+    const std::string script = folder == source_dir() ? "client-examples/python/denoise_client.py" : "python/denoise_client.py";
+    const auto [code, out] = run_command("cd " + shell_quote(folder) + " && python3 " + script + " --help 2>&1");
+    EXPECT_EQ(code, 0) << folder << ": " << out;
+    EXPECT_NE(out.find("Usage:"), std::string::npos) << out;
+    const auto [bad, text] = run_command("cd " + shell_quote(folder) + " && python3 " + script + " only-one 2>&1");
+    EXPECT_EQ(bad, 2) << text;
+  }
+}
+
 TEST_F(ClientExamples, NodeFetch) {
   const auto [code, out] = run_command(env() + "node " + shell_quote(example("node/denoise_client.mjs")) + " " +
                                        shell_quote(dir_ + "/in.off") + " " + shell_quote(dir_ + "/out.off") + " " +
@@ -66,12 +79,10 @@ TEST_F(ClientExamples, NodeFetch) {
 }
 
 TEST_F(ClientExamples, NodeGltfTransformPipelineStep) {
-  const fs::path modules = fs::path(source_dir()) / "tests/tools/node_modules";
+  // As client-examples/README.md says: its own pinned packages (npm ci --prefix
+  // client-examples/node), run in place from the repository root.
+  const fs::path modules = fs::path(source_dir()) / "client-examples/node/node_modules";
   ASSERT_TRUE(fs::exists(modules / "@gltf-transform/core")) << "run scripts/install-deps.sh build test";
-  // ES modules resolve packages from the script's folder upwards: run copies beside a link.
-  fs::copy_file(example("node/denoise_client.mjs"), dir_ + "/denoise_client.mjs");
-  fs::copy_file(example("node/gltf_transform_denoise.mjs"), dir_ + "/gltf_transform_denoise.mjs");
-  fs::create_directory_symlink(modules, dir_ + "/node_modules");
   // A GLB to start from: the server converts the noisy OFF (no denoising iterations).
   auto c = server_->client();
   auto glb = c->Post("/v1/denoise", {{"X-Denoise-Params", R"({"n_aniso":0,"n_normal":0,"n_vertex":0,"output":{"format":"glb"}})"}},
@@ -79,7 +90,7 @@ TEST_F(ClientExamples, NodeGltfTransformPipelineStep) {
   ASSERT_TRUE(glb);
   ASSERT_EQ(glb->status, 200) << glb->body;
   write_file(dir_ + "/in.glb", glb->body);
-  const auto [code, out] = run_command(env() + "node " + shell_quote(dir_ + "/gltf_transform_denoise.mjs") + " " +
+  const auto [code, out] = run_command("cd " + shell_quote(source_dir()) + " && " + env() + "node client-examples/node/gltf_transform_denoise.mjs " +
                                        shell_quote(dir_ + "/in.glb") + " " + shell_quote(dir_ + "/out.glb") + " " +
                                        shell_quote(params_) + " 2>&1");
   ASSERT_EQ(code, 0) << out;

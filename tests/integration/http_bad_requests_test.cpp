@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "http_fixture.h"
+#include "io/meshopt_fixture.h"
 #include "support/mutate.h"
 
 namespace mdn::test {
@@ -63,6 +64,26 @@ TEST_F(HttpBadRequests, EachIsAnsweredWithTheRightProblemAndTheServerStaysHealth
       R"({"asset":{"version":"2.0"},"buffers":[{"uri":"http://example.org/x.bin","byteLength":36}],)"
       R"("bufferViews":[{"buffer":0,"byteLength":36}],"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],)"
       R"("meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],"nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}]})";
+  // Relative URIs too: only the command-line tool reads files beside a .gltf (issue 18).
+  std::string gltf_relative_buffer = gltf_external;
+  gltf_relative_buffer.replace(gltf_relative_buffer.find("http://example.org/x.bin"), 24, "x.bin");
+  const std::string gltf_external_image =
+      R"({"asset":{"version":"2.0"},"images":[{"uri":"texture.png"}],"buffers":[{"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA","byteLength":36}],)"
+      R"("bufferViews":[{"buffer":0,"byteLength":36}],"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}],)"
+      R"("meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],"nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}]})";
+  // STL: a binary file cut short, and an ASCII one that stops inside a facet.
+  std::string truncated_stl(80, ' ');
+  truncated_stl += std::string("\x02\x00\x00\x00", 4) + std::string(50, '\0');  // two facets declared, one given
+  const std::string cut_ascii_stl = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n";
+  // EXT_meshopt_compression that lies: the first ATTRIBUTES stream claims one element more
+  // than its buffer view holds (same number of digits, so the GLB's lengths still agree).
+  std::string lying_meshopt = test_io::meshopt_sphere_glb(test_io::make_sphere(), true);
+  {
+    const std::size_t mode = lying_meshopt.find(R"("mode":"ATTRIBUTES")");
+    const std::size_t last_digit = lying_meshopt.rfind(',', mode) - 1;
+    char& digit = lying_meshopt[last_digit];
+    digit = digit == '9' ? '8' : static_cast<char>(digit + 1);
+  }
   const std::string p = "/v1/denoise?params=";
 
   std::vector<BadRequest> table = {
@@ -70,6 +91,12 @@ TEST_F(HttpBadRequests, EachIsAnsweredWithTheRightProblemAndTheServerStaysHealth
       {"glb with an impossible length", [&](auto& c) { return post(c, "/v1/denoise", huge_glb, "model/gltf-binary"); }, "", 400, "malformed-mesh", ""},
       {"malformed gltf json", [&](auto& c) { return post(c, "/v1/denoise", "{\"asset\": [", "model/gltf+json"); }, "", 400, "malformed-mesh", ""},
       {"gltf with an external buffer", [&](auto& c) { return post(c, "/v1/denoise", gltf_external, "model/gltf+json"); }, "", 422, "unsupported-content", ""},
+      {"gltf with a relative buffer uri", [&](auto& c) { return post(c, "/v1/denoise", gltf_relative_buffer, "model/gltf+json"); }, "", 422, "unsupported-content", ""},
+      {"gltf with an external image", [&](auto& c) { return post(c, "/v1/denoise", gltf_external_image, "model/gltf+json"); }, "", 422, "unsupported-content", ""},
+      {"meshopt stream that lies about its count", [&](auto& c) { return post(c, "/v1/denoise", lying_meshopt, "model/gltf-binary"); }, "", 400, "malformed-mesh", ""},
+      {"truncated binary stl", [&](auto& c) { return post(c, "/v1/denoise", truncated_stl, "model/stl"); }, "", 400, "malformed-mesh", ""},
+      {"ascii stl cut inside a facet", [&](auto& c) { return post(c, "/v1/denoise", cut_ascii_stl, "model/stl"); }, "", 400, "malformed-mesh", ""},
+      {"meshopt output asked for", [&](auto& c) { return post(c, p + url_encode("{\"output\":{\"format\":\"glb\",\"compression\":\"meshopt\"}}"), good, "model/x-off"); }, "", 422, "unsupported-content", ""},
       {"malformed drc", [&](auto& c) { return post(c, "/v1/denoise", "DRACO\x02\x02\x01\x01garbage", "model/x-draco"); }, "", 400, "malformed-mesh", ""},
       {"unrecognisable octet-stream", [&](auto& c) { return post(c, "/v1/denoise", std::string(64, '\x07'), "application/octet-stream"); }, "", 415, "unsupported-media-type", ""},
       {"wrong content type", [&](auto& c) { return post(c, "/v1/denoise", good, "image/png"); }, "", 415, "unsupported-media-type", ""},
@@ -100,7 +127,7 @@ TEST_F(HttpBadRequests, EachIsAnsweredWithTheRightProblemAndTheServerStaysHealth
       {"non-integer iterations", [&](auto& c) { return post(c, p + url_encode("{\"n_normal\":2.5}"), good, "model/x-off"); }, "", 400, "invalid-params", "n_normal"},
       {"unknown parameter", [&](auto& c) { return post(c, p + url_encode("{\"sigma\":1}"), good, "model/x-off"); }, "", 400, "invalid-params", "sigma"},
       {"unknown enumeration value", [&](auto& c) { return post(c, p + url_encode("{\"region_mode\":\"maybe\"}"), good, "model/x-off"); }, "", 400, "invalid-params", "region_mode"},
-      {"unknown output format", [&](auto& c) { return post(c, p + url_encode("{\"output\":{\"format\":\"stl\"}}"), good, "model/x-off"); }, "", 400, "invalid-params", "output.format"},
+      {"unknown output format", [&](auto& c) { return post(c, p + url_encode("{\"output\":{\"format\":\"xyz\"}}"), good, "model/x-off"); }, "", 400, "invalid-params", "output.format"},
       {"draco bits out of range", [&](auto& c) { return post(c, p + url_encode("{\"output\":{\"position_bits\":4}}"), good, "model/x-off"); }, "", 400, "invalid-params", "output.position_bits"},
       {"parameters given twice", [&](auto& c) { return post(c, p + url_encode("{}"), good, "model/x-off", {{"X-Denoise-Params", "{}"}}); }, "", 400, "invalid-params", ""},
       {"form without mesh", [&](auto& c) { return c.Post("/v1/denoise", httplib::MultipartFormDataItems{{"params", "{}", "", ""}}); }, "", 400, "bad-form", ""},
@@ -375,7 +402,9 @@ TEST_F(HttpBadRequests, MeshesDracoCannotEncodeAre422NotACrash) {
   const std::string huge = "OFF\n3 1 0\n1e300 0 0\n0 0 0\n0 1 0\n3 0 1 2\n";
   for (const std::string& body : {span, huge})
     for (const char* format : {"glb", "drc"}) {
-      const std::string params = std::string(R"({"mode":"manual","output":{"format":")") + format + "\"}}";
+      // Draco asked for: glTF output follows the input's compression (none for OFF) by default.
+      const std::string params =
+          std::string(R"({"mode":"manual","output":{"compression":"draco","format":")") + format + "\"}}";
       const json p = expect_problem(c->Post("/v1/denoise", {{"X-Denoise-Params", params}}, body, "model/x-off"), 422);
       EXPECT_EQ(p.value("type", ""), "urn:meshdenoise:problem:unsupported-content") << format << " " << p.dump();
     }

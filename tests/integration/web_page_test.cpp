@@ -215,12 +215,12 @@ TEST(WebPage, DenoisesAnUploadedMeshAndShowsBeforeAndAfter) {
   json heavy = json::object();
   for (const auto& [k, v] : heavy_params.items()) heavy[k] = std::to_string(v.get<int>());
 
-  // Pinned in the form: one method parameter and the output container (Draco glTF: the page
+  // Pinned in the form: one method parameter, the output container and Draco (the page
   // must read it back through DRACOLoader's worker).
   const json plan = {{"url", "http://127.0.0.1:" + std::to_string(server.port()) + "/"},
                      {"out", artifacts_dir()},
                      {"mesh", dir + "/noisy-cube.off"},
-                     {"set", {{"n_normal", "12"}, {"output.format", "\"glb\""}}},
+                     {"set", {{"n_normal", "12"}, {"output.format", "\"glb\""}, {"output.compression", "\"draco\""}}},
                      {"refused", {dir + "/photo.png", dir + "/broken.off"}},
                      {"formats", formats},
                      {"drop", formats[0]},
@@ -254,7 +254,7 @@ TEST(WebPage, DenoisesAnUploadedMeshAndShowsBeforeAndAfter) {
 
   // The CLI command carries the run's parameters; the file downloaded in the browser is what
   // POST /v1/denoise returns for the same input and parameters, byte for byte.
-  const std::string params_text = R"({"n_normal":12,"output":{"format":"glb"}})";
+  const std::string params_text = R"({"n_normal":12,"output":{"format":"glb","compression":"draco"}})";
   EXPECT_NE(report.value("cli", "").find("--params '" + params_text + "'"), std::string::npos) << report.value("cli", "");
   EXPECT_NE(report.value("curl", "").find("/v1/denoise"), std::string::npos) << report.value("curl", "");
   EXPECT_EQ(report.at("download_state"), "completed");

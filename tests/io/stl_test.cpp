@@ -57,7 +57,7 @@ Vertices corners(const TriMesh& m) {
 TEST(StlDetection, SizeIdentityTellsSolidHeadedBinaryFromAscii) {
   const TriMesh m = grid(3);
   EXPECT_EQ(format_from_extension("scan/Part.STL"), Format::Stl);
-  EXPECT_EQ(format_from_string("stl"), std::nullopt);  // until the service's contract names it
+  EXPECT_EQ(format_from_string("stl"), Format::Stl);
   EXPECT_EQ(to_string(Format::Stl), "stl");
   EXPECT_EQ(media_type(Format::Stl), "model/stl");
   EXPECT_EQ(sniff_format(binary_stl(m)), Format::Stl);

@@ -9,6 +9,8 @@
 #include "core/io/document.h"
 #include "core/metrics.h"
 #include "io/gltf_fixtures.h"
+#include "io/meshopt_fixture.h"
+#include "server/job_json.h"
 #include "server/job_runner.h"
 
 namespace mdn::service {
@@ -41,8 +43,81 @@ JobOutput run(const std::string& glb, bool draco) {
   JobInput in;
   in.bytes = glb;
   in.format = io::Format::Glb;
-  in.params.output.draco = draco;
+  in.params.output.compression = draco ? io::Compression::Draco : io::Compression::None;
   return run_job(in, {});
+}
+
+JobOutput run_with(const std::string& glb, const Json& params) {
+  JobInput in;
+  in.bytes = glb;
+  in.format = io::Format::Glb;
+  in.params = job_params_from_json(params);
+  return run_job(in, {});
+}
+
+bool uses_draco(const std::string& glb) { return glb.find("KHR_draco_mesh_compression") != std::string::npos; }
+
+// Issue 18: by default the output keeps the input's compression (a pipeline step should not
+// change it unless asked); "compression" and the older "draco" override it; the result says
+// what was written.
+TEST(GltfJob, OutputCompressionFollowsTheInput) {
+  const test_io::SphereFixture f = test_io::make_sphere();
+  const std::string plain = test_io::sphere_scene_glb(f);
+  const JobOutput from_plain = run_with(plain, Json::object());
+  EXPECT_EQ(from_plain.compression, io::Compression::None);
+  EXPECT_FALSE(uses_draco(from_plain.bytes));
+  EXPECT_EQ(output_to_json(from_plain)["compression"], "none");
+  EXPECT_EQ(output_to_json(from_plain)["params"]["output"]["compression"], "none");  // as resolved
+
+  const std::string draco = run(plain, /*draco=*/true).bytes;
+  ASSERT_TRUE(uses_draco(draco));
+  const JobOutput from_draco = run_with(draco, Json::object());
+  EXPECT_EQ(from_draco.compression, io::Compression::Draco);
+  EXPECT_TRUE(uses_draco(from_draco.bytes));
+  EXPECT_EQ(output_to_json(from_draco)["compression"], "draco");
+  EXPECT_FALSE(uses_draco(run_with(draco, {{"output", {{"draco", false}}}}).bytes));
+  EXPECT_FALSE(uses_draco(run_with(draco, {{"output", {{"compression", "none"}}}}).bytes));
+  EXPECT_TRUE(uses_draco(run_with(plain, {{"output", {{"compression", "draco"}}}}).bytes));
+  EXPECT_TRUE(uses_draco(run_with(plain, {{"output", {{"draco", true}}}}).bytes));
+
+  // Meshopt in: meshopt output is not written yet, so none; asked for, refused before decoding.
+  const JobOutput from_meshopt = run_with(test_io::meshopt_sphere_glb(f, true), Json::object());
+  EXPECT_EQ(from_meshopt.compression, io::Compression::None);
+  EXPECT_EQ(from_meshopt.bytes.find("EXT_meshopt_compression"), std::string::npos);
+  JobInput asked;
+  asked.bytes = "not even a glb";
+  asked.format = io::Format::Glb;
+  asked.params = job_params_from_json({{"output", {{"compression", "meshopt"}}}});
+  EXPECT_THROW(run_job(asked, {}), io::UnsupportedError);
+
+  // Other containers: DRC is Draco, the rest none, whatever was asked.
+  EXPECT_EQ(run_with(plain, {{"output", {{"format", "drc"}, {"compression", "none"}}}}).compression, io::Compression::Draco);
+  EXPECT_EQ(run_with(draco, {{"output", {{"format", "off"}}}}).compression, io::Compression::None);
+}
+
+// "mode": "none" converts only: the positions come back as they went in, nothing ran.
+TEST(GltfJob, ModeNoneConvertsWithoutDenoising) {
+  const test_io::SphereFixture f = test_io::make_sphere();
+  const std::string plain = test_io::sphere_scene_glb(f);
+  const TriMesh input = io::decode(plain, io::Format::Glb)->surfaces()[0];
+  const JobOutput out = run_with(plain, {{"mode", "none"}});
+  const TriMesh output = io::decode(out.bytes, io::Format::Glb)->surfaces()[0];
+  ASSERT_EQ(output.V.rows(), input.V.rows());
+  EXPECT_EQ(output.F, input.F);
+  EXPECT_EQ((output.V - input.V).cwiseAbs().maxCoeff(), 0.0);
+  ASSERT_EQ(out.reports.size(), 1u);
+  const Json report = output_to_json(out);
+  EXPECT_EQ(report["params"]["mode"], "none");
+  EXPECT_EQ(report["reports"][0]["mode"], "none");
+  EXPECT_FALSE(report["reports"][0].contains("selection"));
+  EXPECT_FALSE(report["reports"][0].contains("measures"));
+  for (const char* stage : {"measure", "initial_prefilter", "region_prefilter", "anisotropic_prefilter", "normal_filter",
+                            "vertex_update"})
+    EXPECT_EQ(report["timings_ms"][stage], 0.0) << stage;
+  // To another container: a conversion.
+  const JobOutput off = run_with(plain, {{"mode", "none"}, {"output", {{"format", "stl"}}}});
+  EXPECT_EQ(off.format, io::Format::Stl);
+  EXPECT_EQ(output_to_json(off)["format"], "stl");
 }
 
 TEST(GltfJob, NoisySceneIsDenoisedAndReadsBack) {

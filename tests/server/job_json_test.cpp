@@ -90,6 +90,26 @@ TEST(JobJson, OutputRoundTripsThroughJson) {
   EXPECT_EQ(output_to_json(back, bytes, reports), j);
 }
 
+// What the Redis store keeps: an STL result and a Draco glTF one read back with their format
+// and compression (format_from_string names STL since issue 18).
+TEST(JobJson, StlAndCompressionRoundTrip) {
+  for (const char* output : {R"({"mode":"none","output":{"format":"stl"}})",
+                             R"({"mode":"none","output":{"format":"glb","compression":"draco"}})"}) {
+    JobInput input;
+    input.format = io::Format::Off;
+    input.bytes = test::off_text(test::sphere(1));
+    input.params = job_params_from_text(output);
+    const JobOutput out = run_job(input, io::Limits{});
+    const json j = output_to_json(out);
+    json reports;
+    std::int64_t bytes = 0;
+    const JobOutput back = output_from_json(j, reports, bytes);
+    EXPECT_EQ(back.format, out.format) << output;
+    EXPECT_EQ(back.compression, out.compression) << output;
+    EXPECT_EQ(output_to_json(back, bytes, reports), j) << output;
+  }
+}
+
 TEST(JobJson, ADocumentWithoutARequiredPartIsRefused) {
   json j = output_to_json(sample_output());
   j.erase("params");

@@ -58,7 +58,7 @@ TEST(ParamsJson, EmptyObjectGivesCoreDefaults) {
   EXPECT_EQ(p.denoise.kmeans_seed, d.kmeans_seed);
   const io::EncodeOptions o;
   EXPECT_FALSE(p.output.format.has_value());
-  EXPECT_EQ(p.output.draco, o.draco);
+  EXPECT_EQ(p.output.compression, io::Compression::AsInput);  // the input's, issue 18
   EXPECT_EQ(p.output.position_bits, o.position_bits);
   EXPECT_EQ(p.output.compression_level, o.compression_level);
 }
@@ -81,7 +81,9 @@ TEST(ParamsJson, ToJsonEmitsEveryFieldWithItsDefault) {
   EXPECT_EQ(j["kmeans_seed"], d.kmeans_seed);
   ASSERT_TRUE(j["output"].is_object());
   EXPECT_TRUE(j["output"]["format"].is_null());
-  for (const char* key : {"draco", "position_bits", "normal_bits", "texcoord_bits", "color_bits", "generic_bits",
+  EXPECT_EQ(j["output"]["compression"], "as_input");
+  EXPECT_FALSE(j["output"].contains("draco"));  // accepted, not echoed
+  for (const char* key : {"compression", "position_bits", "normal_bits", "texcoord_bits", "color_bits", "generic_bits",
                           "compression_level"}) {
     EXPECT_TRUE(j["output"].contains(key)) << key;
   }
@@ -104,6 +106,7 @@ TEST(ParamsJson, ParsesEveryKindOfField) {
   EXPECT_EQ(p.denoise.solver, LinearSolver::ConjugateGradient);
   EXPECT_EQ(p.output.format, io::Format::Glb);
   EXPECT_FALSE(p.output.draco);
+  EXPECT_EQ(p.output.compression, io::Compression::None);  // draco false overrides the default
   EXPECT_EQ(p.output.position_bits, 20);
   EXPECT_EQ(p.output.normal_bits, 8);
   EXPECT_EQ(p.output.texcoord_bits, 14);
@@ -144,7 +147,7 @@ TEST(ParamsJson, AutoIsTheDefaultAndExplicitFieldsArePinned) {
 
   const auto e = parse_error({{"mode", "automatic"}});
   EXPECT_EQ(e.field(), "mode");
-  EXPECT_NE(std::string(e.what()).find("\"auto\", \"search\" or \"manual\""), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("\"auto\", \"search\", \"manual\" or \"none\""), std::string::npos) << e.what();
   EXPECT_EQ(parse_error({{"mode", 1}}).field(), "mode");
 }
 
@@ -276,8 +279,41 @@ TEST(ParamsJson, UnknownFieldsAndEnumerationValues) {
   EXPECT_EQ(parse_error({{"output", {{"quality", 3}}}}).field(), "output.quality");
   EXPECT_EQ(parse_error({{"region_mode", "sometimes"}}).field(), "region_mode");
   EXPECT_EQ(parse_error({{"solver", "LDLT"}}).field(), "solver");
-  EXPECT_EQ(parse_error({{"output", {{"format", "stl"}}}}).field(), "output.format");
+  EXPECT_EQ(parse_error({{"output", {{"format", "xyz"}}}}).field(), "output.format");
   EXPECT_NO_THROW(job_params_from_json({{"output", {{"format", nullptr}}}}));  // null: like the input
+}
+
+TEST(ParamsJson, CompressionByNameAndTheDracoOverride) {
+  const auto compression = [](const json& output) { return job_params_from_json({{"output", output}}).output.compression; };
+  EXPECT_EQ(compression(json::object()), io::Compression::AsInput);
+  EXPECT_EQ(compression({{"compression", "none"}}), io::Compression::None);
+  EXPECT_EQ(compression({{"compression", "DRACO"}}), io::Compression::Draco);
+  EXPECT_EQ(compression({{"compression", "as_input"}}), io::Compression::AsInput);
+  EXPECT_EQ(compression({{"compression", "meshopt"}}), io::Compression::Meshopt);  // refused when the job runs (422)
+  EXPECT_EQ(compression({{"draco", true}}), io::Compression::Draco);
+  EXPECT_EQ(compression({{"draco", false}}), io::Compression::None);
+  EXPECT_EQ(compression({{"draco", true}, {"compression", "draco"}}), io::Compression::Draco);
+  EXPECT_EQ(parse_error({{"output", {{"draco", false}, {"compression", "draco"}}}}).field(), "output.draco");
+  EXPECT_EQ(parse_error({{"output", {{"draco", true}, {"compression", "as_input"}}}}).field(), "output.draco");
+  EXPECT_EQ(parse_error({{"output", {{"compression", "zip"}}}}).field(), "output.compression");
+  EXPECT_EQ(parse_error({{"output", {{"compression", true}}}}).field(), "output.compression");
+  // The echo names the compression, and parses back to it.
+  for (const char* name : {"as_input", "none", "draco"}) {
+    const json echo = to_json(job_params_from_json({{"output", {{"compression", name}}}}));
+    EXPECT_EQ(echo["output"]["compression"], name);
+    EXPECT_EQ(to_json(job_params_from_json(echo)), echo);
+  }
+}
+
+TEST(ParamsJson, ModeNoneAndStlByName) {
+  const JobParams p = job_params_from_json({{"mode", "none"}, {"output", {{"format", "stl"}}}});
+  EXPECT_EQ(p.denoise.mode, ParamMode::None);
+  EXPECT_EQ(p.output.format, io::Format::Stl);
+  const json echo = to_json(p);
+  EXPECT_EQ(echo["mode"], "none");
+  EXPECT_EQ(echo["output"]["format"], "stl");
+  EXPECT_EQ(to_json(job_params_from_json(echo)), echo);
+  EXPECT_NE(std::string(parse_error({{"mode", "convert"}}).what()).find("\"none\""), std::string::npos);
 }
 
 TEST(ParamsJson, NonObjectsAndBadTextNameParams) {
