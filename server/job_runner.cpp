@@ -24,8 +24,12 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
   JobOutput out;
   out.effective = input.params;
 
+  // The job's time limit and cancellation reach the decoder and encoder loops too (not only
+  // the core's iterations), so a job stuck in a huge input stops within its limit.
+  io::Limits bounded = limits;
+  bounded.cancel = progress;
   auto start = Clock::now();
-  std::unique_ptr<io::MeshDocument> document = io::decode(input.bytes, input.format, limits);
+  std::unique_ptr<io::MeshDocument> document = io::decode(input.bytes, input.format, bounded);
   out.timings.decode_ms = ms_since(start);
 
   const RunOptions options{.threads = input.threads < 1 ? 1 : input.threads, .progress = progress};
@@ -42,6 +46,7 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
   out.timings.denoise_ms = ms_since(start);
 
   io::EncodeOptions encode = input.params.output;
+  encode.cancel = progress;
   if (!encode.format) encode.format = document->format();
   out.format = *encode.format;
   out.media_type = std::string(io::media_type(out.format));
