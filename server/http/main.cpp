@@ -110,7 +110,7 @@ int main(int argc, char** argv) {
                             {"threads_per_job", config.threads_per_job},
                             {"queue_capacity", config.queue_capacity},
                             {"job_store", config.queue ? "redis" : "memory"},
-                            {"io_threads", config.io_threads},
+                            {"io_threads", config.effective_io_threads()},
                             {"max_body", config.max_body_bytes},
                             {"auth", !config.auth_token.empty()}});
     bool serve_ok = true;
