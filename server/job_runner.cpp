@@ -35,9 +35,13 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
   if (is_gltf(input.params.output.format.value_or(input.format)))
     (void)io::resolve_compression(input.params.output, io::Compression::None);
 
+  // The job's time limit and cancellation reach the decoder and encoder loops too (not only
+  // the core's iterations), so a job stuck in a huge input stops within its limit.
+  io::Limits bounded = limits;
+  bounded.cancel = progress;
   auto start = Clock::now();
   std::unique_ptr<io::MeshDocument> document =
-      io::decode(input.bytes, input.format, io::DecodeOptions{.limits = limits, .resource_dir = input.resource_dir});
+      io::decode(input.bytes, input.format, io::DecodeOptions{.limits = bounded, .resource_dir = input.resource_dir});
   out.timings.decode_ms = ms_since(start);
 
   const RunOptions options{.threads = input.threads < 1 ? 1 : input.threads, .progress = progress};
@@ -54,6 +58,7 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
   out.timings.denoise_ms = ms_since(start);
 
   io::EncodeOptions encode = input.params.output;
+  encode.cancel = progress;
   if (!encode.format) encode.format = document->format();
   out.format = *encode.format;
   out.media_type = std::string(io::media_type(out.format));

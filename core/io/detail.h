@@ -3,6 +3,7 @@
 #pragma once
 
 #include <charconv>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -82,6 +83,26 @@ class LineReader {
   std::string_view text_;
   std::size_t pos_ = 0;
   std::int64_t number_ = 0;
+};
+
+// Cooperative cancellation in the decode and encode loops: poll() asks the observer every
+// kCancelStride calls (a few hundred microseconds of text parsing) and throws CancelledError
+// when it wants to stop. A null observer costs one branch per call.
+inline constexpr std::uint32_t kCancelStride = 4096;
+class CancelPoll {
+ public:
+  explicit CancelPoll(ProgressObserver* observer) : observer_(observer) {}
+  void poll() {
+    if (observer_ && ++count_ % kCancelStride == 0) check();
+  }
+  // Asks at once (before and after a step that cannot be interrupted).
+  void check() {
+    if (observer_ && observer_->cancel_requested()) throw CancelledError();
+  }
+
+ private:
+  ProgressObserver* observer_;
+  std::uint32_t count_ = 0;
 };
 
 // Checks a declared element count against a limit before anything is allocated.

@@ -15,6 +15,7 @@
 
 #include "core/errors.h"
 #include "core/mesh.h"
+#include "core/progress.h"
 
 namespace mdn::io {
 
@@ -58,6 +59,12 @@ struct Limits {
   int max_json_depth = 64;             // nesting of JSON objects and arrays (extras included)
   std::int64_t max_nodes = 100'000;    // entries of "nodes"
   std::int64_t max_accessors = 1'000'000;  // entries of "accessors" + "bufferViews"; primitives
+
+  // Not a size: the job's time limit and DELETE. Polled (cancel_requested()) every
+  // kCancelStride items of the decoders' loops (text lines, PLY rows, accessor elements, the
+  // weld); true makes decode() throw CancelledError. Null: never cancelled. Draco's own
+  // decoder cannot be interrupted: its work is bounded by the declared-size check instead.
+  ProgressObserver* cancel = nullptr;
 };
 
 struct EncodeOptions {
@@ -77,6 +84,9 @@ struct EncodeOptions {
   int color_bits = 0;
   int generic_bits = 0;
   int compression_level = 7;     // Draco encoder speed/size trade-off, [0, 10] (10 = smallest)
+  // Not a parameter: the job's time limit and DELETE, polled like Limits::cancel by the
+  // encoders' loops (the Draco encoder itself runs to its end). Null: never cancelled.
+  ProgressObserver* cancel = nullptr;
 };
 
 class MeshDocument {

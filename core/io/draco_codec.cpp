@@ -141,7 +141,12 @@ std::unique_ptr<draco::Mesh> draco_decode(std::string_view bytes, const std::str
   else throw FormatError(what + ": unknown Draco encoding method " + std::to_string(header.encoder_method));
   auto mesh = std::make_unique<draco::Mesh>();
   const draco::DecoderOptions options;
+  // Draco's decoder cannot be interrupted: the job's cancellation is asked before and after,
+  // and its work in between is bounded by the declared sizes checked above (DracoBudget).
+  CancelPoll cancel(limits.cancel);
+  cancel.check();
   const draco::Status decoded = decoder->Decode(options, &buffer, mesh.get());
+  cancel.check();
   if (!budget.refused.empty()) throw LimitError(what + ": " + budget.refused);
   if (!decoded.ok()) throw FormatError(what + ": corrupt Draco payload (" + decoded.error_msg_string() + ")");
   check_count(mesh->num_faces(), limits.max_faces, "faces");
@@ -208,6 +213,7 @@ std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options, 
   check_bits(options.normal_bits, "normal_bits");
   check_bits(options.texcoord_bits, "texcoord_bits");
   check_bits(options.color_bits, "color_bits");
+  CancelPoll(options.cancel).check();  // the encoder itself runs to its end
   check_bits(options.generic_bits, "generic_bits");
   if (options.compression_level < 0 || options.compression_level > 10)
     throw InvalidParamsError("compression_level", "compression_level must be in [0, 10]");

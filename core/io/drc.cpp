@@ -42,7 +42,7 @@ std::unique_ptr<MeshDocument> decode_drc(std::string_view bytes, const Limits& l
   auto doc = std::make_unique<DrcDocument>();
   doc->mesh_ = draco_decode(bytes, "DRC", limits);
   // Draco splits points wherever any attribute differs (e.g. at UV seams): weld them.
-  Weld weld = weld_positions(draco_positions(*doc->mesh_));
+  Weld weld = weld_positions(draco_positions(*doc->mesh_), 1e-6, limits.cancel);
   const Triangles F = draco_faces(*doc->mesh_);
   TriMesh surface;
   surface.V = std::move(weld.V);

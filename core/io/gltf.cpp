@@ -134,7 +134,7 @@ class GltfDocument;
 // Bounds-checked access to the model's buffers.
 class Reader {
  public:
-  Reader(const tinygltf::Model& model, const Limits& limits) : model_(model), limits_(limits) {}
+  Reader(const tinygltf::Model& model, const Limits& limits) : model_(model), limits_(limits), cancel_(limits.cancel) {}
 
   std::string_view view_bytes(int index, const std::string& what) const {
     if (index < 0 || index >= static_cast<int>(model_.bufferViews.size()))
@@ -182,7 +182,7 @@ class Reader {
                           data.size() - acc.byteOffset < element))
         throw FormatError(where + ": " + std::to_string(a.count) + " elements do not fit in buffer view " + std::to_string(acc.bufferView));
       a.bytes.resize(static_cast<std::size_t>(total));
-      for (std::int64_t i = 0; i < a.count; ++i)
+      for (std::int64_t i = 0; i < a.count; ++i, cancel_.poll())
         std::memcpy(a.bytes.data() + static_cast<std::size_t>(i) * element,
                     data.data() + acc.byteOffset + static_cast<std::size_t>(i) * stride, element);
     } else {
@@ -199,6 +199,7 @@ class Reader {
     if (a.count > limits_.max_faces * 3) throw LimitError(what + ": more indices than the face limit allows");
     std::vector<std::uint32_t> out(static_cast<std::size_t>(a.count));
     for (std::int64_t i = 0; i < a.count; ++i) {
+      cancel_.poll();
       const double v = a.value(i, 0);
       if (v >= static_cast<double>(points))
         throw FormatError(what + ": index " + std::to_string(static_cast<std::int64_t>(v)) + " is out of range (" +
@@ -210,6 +211,7 @@ class Reader {
 
   const tinygltf::Model& model() const { return model_; }
   const Limits& limits() const { return limits_; }
+  CancelPoll& cancel() { return cancel_; }
 
  private:
   void apply_sparse(const tinygltf::Accessor& acc, Attribute& a, const std::string& where) {
@@ -243,6 +245,7 @@ class Reader {
 
   const tinygltf::Model& model_;
   const Limits& limits_;
+  CancelPoll cancel_;
   std::int64_t decoded_ = 0;
 };
 
@@ -1245,6 +1248,7 @@ static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes,
       out.point_offset = static_cast<std::int64_t>(all_points.size());
       const Attribute& position = out.attributes[static_cast<std::size_t>(out.position)];
       for (std::int64_t i = 0; i < out.points; ++i) {
+        reader.cancel().poll();
         const Vec3 v(position.value(i, 0), position.value(i, 1), position.value(i, 2));
         if (!v.allFinite()) throw FormatError(what + ": non-finite POSITION");
         all_points.push_back(v);
@@ -1255,7 +1259,7 @@ static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes,
 
     Vertices P(static_cast<Eigen::Index>(all_points.size()), 3);
     for (std::size_t i = 0; i < all_points.size(); ++i) P.row(static_cast<Eigen::Index>(i)) = all_points[i].transpose();
-    Weld weld = weld_positions(P);
+    Weld weld = weld_positions(P, 1e-6, limits.cancel);
     TriMesh tri;
     tri.V = std::move(weld.V);
     std::int64_t faces = 0;

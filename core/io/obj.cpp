@@ -107,7 +107,9 @@ std::unique_ptr<MeshDocument> decode_obj(std::string_view bytes, const Limits& l
   std::int64_t normal_count = 0, texcoord_count = 0;
   std::vector<std::int64_t> face_normals;  // per polygon corner
   std::string_view line;
+  CancelPoll cancel(limits.cancel);
   while (true) {
+    cancel.poll();
     const std::size_t line_begin = reader.position();
     if (!reader.next(line)) break;
     std::string_view rest = line;

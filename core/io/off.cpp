@@ -32,7 +32,9 @@ class OffDocument final : public MeshDocument {
     out += std::to_string(mesh.V.rows()) + ' ' + std::to_string(mesh.F.rows()) + " 0\n";
     Vertices normals;
     if (has_normals_) normals = vertex_normals(mesh.V, mesh.F);
+    CancelPoll cancel(options.cancel);
     for (Eigen::Index i = 0; i < mesh.V.rows(); ++i) {
+      cancel.poll();
       for (int k = 0; k < 3; ++k) {
         if (k) out += ' ';
         append_number(out, mesh.V(i, k));
@@ -49,6 +51,7 @@ class OffDocument final : public MeshDocument {
       out += '\n';
     }
     for (Eigen::Index f = 0; f < mesh.F.rows(); ++f) {
+      cancel.poll();
       out += '3';
       for (int k = 0; k < 3; ++k) {
         out += ' ';
@@ -123,7 +126,9 @@ std::unique_ptr<MeshDocument> decode_off(std::string_view bytes, const Limits& l
 
   PolygonMesh poly;
   poly.V.resize(nv, 3);
+  CancelPoll cancel(limits.cancel);
   for (std::int64_t i = 0; i < nv; ++i) {
+    cancel.poll();
     if (!next_content_line(reader, line)) fail(reader, "the file ends after " + std::to_string(i) + " of " + std::to_string(nv) + " vertices");
     rest = line;
     for (int k = 0; k < 3; ++k) {
@@ -139,6 +144,7 @@ std::unique_ptr<MeshDocument> decode_off(std::string_view bytes, const Limits& l
   poly.offsets.reserve(static_cast<std::size_t>(nf) + 1);
   poly.indices.reserve(static_cast<std::size_t>(nf) * 3);
   for (std::int64_t f = 0; f < nf; ++f) {
+    cancel.poll();
     if (!next_content_line(reader, line)) fail(reader, "the file ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces");
     rest = line;
     std::int64_t n = 0;

@@ -125,6 +125,7 @@ std::string write_drc(const TriMesh& mesh, const EncodeOptions& options) {
 std::string encode_plain(const std::vector<TriMesh>& surfaces, Format format, const EncodeOptions& options) {
   if (format == Format::Ply || format == Format::Stl || format == Format::Glb || format == Format::Gltf)
     check_float_coordinates(surfaces, format);
+  CancelPoll(options.cancel).check();  // the writers below are linear in the (limited) mesh size
   switch (format) {
     case Format::Off: return write_off(concatenate(surfaces));
     case Format::Obj: return write_obj(concatenate(surfaces));

@@ -168,6 +168,7 @@ class AsciiReader {
 template <class Reader>
 void read_body(Reader& reader, std::vector<Element>& elements, std::size_t min_row_bytes_unit, const Limits& limits) {
   std::int64_t decoded_bytes = 0;
+  CancelPoll cancel(limits.cancel);
   for (auto& element : elements) {
     // A row of an element without properties takes no bytes at all, so nothing would bound
     // its count (4e18 empty rows pin a thread; written back as ascii, they fill memory).
@@ -182,7 +183,7 @@ void read_body(Reader& reader, std::vector<Element>& elements, std::size_t min_r
     decoded_bytes += element.count * static_cast<std::int64_t>(element.properties.size()) * 8;
     if (decoded_bytes > limits.max_decoded_bytes) throw LimitError("PLY: the declared elements exceed the decoded size limit");
     for (auto& p : element.properties) p.values.reserve(static_cast<std::size_t>(element.count) * (p.is_list ? 3 : 1));
-    for (std::int64_t row = 0; row < element.count; ++row)
+    for (std::int64_t row = 0; row < element.count; ++row, cancel.poll())
       for (auto& p : element.properties) {
         if (!p.is_list) {
           p.values.push_back(reader.read(p.type));
@@ -249,10 +250,12 @@ std::string PlyDocument::encode(const EncodeOptions& options) const {
   const bool host_little = std::endian::native == std::endian::little;
   const bool swap = encoding_ == Encoding::BinaryBig ? host_little : (encoding_ == Encoding::BinaryLittle && !host_little);
   std::string out = header_;
+  CancelPoll cancel(options.cancel);
   for (std::size_t e = 0; e < elements_.size(); ++e) {
     const Element& element = e == vertex_element_ ? vertex : elements_[e];
     std::vector<std::size_t> cursor(element.properties.size(), 0);
     for (std::int64_t row = 0; row < element.count; ++row) {
+      cancel.poll();
       for (std::size_t j = 0; j < element.properties.size(); ++j) {
         const Property& p = element.properties[j];
         if (encoding_ == Encoding::Ascii && j > 0) out += ' ';

@@ -86,7 +86,9 @@ std::unique_ptr<StlDocument> read_binary(std::string_view bytes, const Limits& l
   Vertices P(3 * n, 3);
   doc->attributes_.resize(static_cast<std::size_t>(n));
   const char* facet = bytes.data() + kHeaderBytes + 4;
+  CancelPoll cancel(limits.cancel);
   for (std::int64_t f = 0; f < n; ++f, facet += kFacetBytes) {
+    cancel.poll();
     float corner[9];
     std::memcpy(corner, facet + 12, sizeof corner);
     for (int k = 0; k < 9; ++k) {
@@ -157,7 +159,9 @@ std::unique_ptr<StlDocument> read_ascii(std::string_view bytes, const Limits& li
   expect("solid");
   doc->name_ = std::string(tokens.rest_of_line().substr(0, 1024));
   // Several solids may follow one another; their facets form one surface.
+  CancelPoll cancel(limits.cancel);
   for (;;) {
+    cancel.poll();
     const std::string_view token = tokens.next();
     if (token == "endsolid") {
       tokens.rest_of_line();
@@ -227,7 +231,7 @@ std::unique_ptr<MeshDocument> decode_stl(std::string_view bytes, const Limits& l
   std::unique_ptr<StlDocument> doc =
       !is_binary_stl_size(bytes) && looks_like_ascii_stl(bytes) ? read_ascii(bytes, limits) : read_binary(bytes, limits);
   TriMesh& soup = doc->surfaces_.front();
-  Weld weld = weld_positions(soup.V);
+  Weld weld = weld_positions(soup.V, 1e-6, limits.cancel);
   check_count(weld.V.rows(), limits.max_vertices, "vertices (welded)");
   const Eigen::Index facets = soup.V.rows() / 3;
   soup.F.resize(facets, 3);

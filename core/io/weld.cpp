@@ -5,9 +5,11 @@
 #include <limits>
 #include <vector>
 
+#include "core/io/detail.h"
+
 namespace mdn::io::detail {
 
-Weld weld_positions(const Vertices& P, double relative_tolerance) {
+Weld weld_positions(const Vertices& P, double relative_tolerance, ProgressObserver* cancel) {
   Weld weld;
   const Eigen::Index n = P.rows();
   weld.map.assign(static_cast<std::size_t>(n), 0);
@@ -43,7 +45,9 @@ Weld weld_positions(const Vertices& P, double relative_tolerance) {
   std::vector<std::int32_t> next;  // per representative: the previous one in its cell, or -1
   representatives.reserve(static_cast<std::size_t>(n));
   next.reserve(static_cast<std::size_t>(n));
+  CancelPoll poll(cancel);
   for (Eigen::Index i = 0; i < n; ++i) {
+    poll.poll();
     std::int64_t c[3], side[3];
     for (int a = 0; a < 3; ++a) {
       const double u = P(i, a) / cell, f = std::isfinite(u) ? std::floor(u) : 0;  // |u| <= 5e5 when finite

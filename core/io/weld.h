@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/mesh.h"
+#include "core/progress.h"
 
 namespace mdn::io::detail {
 
@@ -22,7 +23,8 @@ struct Weld {
 // Two points weld when they are within `relative_tolerance` x max(bounding-box diagonal,
 // largest |coordinate|) of each other (a few float32 ulps at the default of 1e-6).
 // Deterministic: the result depends only on the input order.
-Weld weld_positions(const Vertices& P, double relative_tolerance = 1e-6);
+// `cancel` (the job's time limit and DELETE) is polled every few thousand points.
+Weld weld_positions(const Vertices& P, double relative_tolerance = 1e-6, ProgressObserver* cancel = nullptr);
 
 // Area-weighted normals accumulated per "slot": corner k of face f contributes the
 // (unnormalised) face normal to slot corner_slot[3 f + k] (or to none if negative). Used to

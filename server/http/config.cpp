@@ -1,5 +1,6 @@
 #include "server/http/config.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <sstream>
@@ -120,9 +121,24 @@ const std::vector<Setting>& settings() {
       {"max-vertices", "MDN_MAX_VERTICES", "largest number of vertices of one surface",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_vertices = parse_int(n, v, 1, std::int64_t{1} << 31); },
        [](const ServerConfig& c) { return std::to_string(c.max_vertices); }},
-      {"io-threads", "MDN_IO_THREADS", "HTTP threads; each open connection holds one; at most half wait in long polls",
-       [](ServerConfig& c, const std::string& n, const std::string& v) { c.io_threads = int(parse_int(n, v, 4, 4096)); },
-       [](const ServerConfig& c) { return std::to_string(c.io_threads); }},
+      {"max-decoded-bytes", "MDN_MAX_DECODED_BYTES", "bytes a decoder may allocate for one input, scene JSON and node trees included (suffix K, M or G)",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_decoded_bytes = parse_int(n, v, 1 << 20, std::int64_t{1} << 40); },
+       [](const ServerConfig& c) { return std::to_string(c.max_decoded_bytes); }},
+      {"max-json-depth", "MDN_MAX_JSON_DEPTH", "glTF: deepest nesting of JSON objects and arrays, [1, 1000]",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_json_depth = int(parse_int(n, v, 1, 1000)); },
+       [](const ServerConfig& c) { return std::to_string(c.max_json_depth); }},
+      {"max-nodes", "MDN_MAX_NODES", "glTF: most entries of \"nodes\"",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_nodes = parse_int(n, v, 1, 100'000'000); },
+       [](const ServerConfig& c) { return std::to_string(c.max_nodes); }},
+      {"max-accessors", "MDN_MAX_ACCESSORS", "glTF: most accessors plus buffer views (and primitives)",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_accessors = parse_int(n, v, 1, 100'000'000); },
+       [](const ServerConfig& c) { return std::to_string(c.max_accessors); }},
+      {"io-threads", "MDN_IO_THREADS", "HTTP threads; each open connection holds one; at most half wait in long polls; 0 = 4 per core, at least 8",
+       [](ServerConfig& c, const std::string& n, const std::string& v) {
+         c.io_threads = int(parse_int(n, v, 0, 4096));
+         if (c.io_threads > 0 && c.io_threads < 4) throw ConfigError(n + ": " + v + " is below 4 (0 picks 4 per core)");
+       },
+       [](const ServerConfig& c) { return std::to_string(c.io_threads) + " (" + std::to_string(c.effective_io_threads()) + " here)"; }},
       {"keep-alive-timeout", "MDN_KEEP_ALIVE_TIMEOUT", "seconds an idle keep-alive connection is kept",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.keep_alive_timeout_s = parse_seconds(n, v, 0, 3600, true); },
        [](const ServerConfig& c) { return show_double(c.keep_alive_timeout_s); }},
@@ -132,6 +148,10 @@ const std::vector<Setting>& settings() {
       {"read-timeout", "MDN_READ_TIMEOUT", "seconds to wait for request bytes",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.read_timeout_s = parse_seconds(n, v, 0, 3600, true); },
        [](const ServerConfig& c) { return show_double(c.read_timeout_s); }},
+      {"body-stall-timeout", "MDN_BODY_STALL_TIMEOUT",
+       "seconds a request body may send nothing before the answer is 408 and the connection closes",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.body_stall_timeout_s = parse_seconds(n, v, 0, 3600, true); },
+       [](const ServerConfig& c) { return show_double(c.body_stall_timeout_s); }},
       {"write-timeout", "MDN_WRITE_TIMEOUT", "seconds to wait while sending response bytes",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.write_timeout_s = parse_seconds(n, v, 0, 3600, true); },
        [](const ServerConfig& c) { return show_double(c.write_timeout_s); }},
@@ -226,6 +246,14 @@ std::string show_queue_setting(const std::optional<RedisAddress>& queue) {
          std::to_string(queue->port) + "/" + std::to_string(queue->db);
 }
 
+int ServerConfig::effective_io_threads() const {
+  if (io_threads > 0) return io_threads;
+  // One thread per open connection: a few per core, and enough for a handful of long polls
+  // and uploads on a small machine (64 fixed threads were too many on 2 cores).
+  const unsigned cores = std::thread::hardware_concurrency();
+  return std::max(8, 4 * int(cores > 0 ? cores : 1));
+}
+
 int ServerConfig::effective_workers() const {
   if (workers > 0) return workers;
   const unsigned cores = std::thread::hardware_concurrency();
@@ -280,7 +308,8 @@ std::string help_text() {
   out << "  --help     this text\n  --version  print the version\n\n"
       << "API: GET /openapi.yaml describes every route; GET /v1/params lists the parameters.\n"
       << "SIGTERM/SIGINT: /readyz turns 503, new jobs get 503, accepted jobs finish within\n"
-      << "--drain-grace seconds, then the process exits 0.\n";
+      << "--drain-grace seconds, then the process exits 0 (1 if the drain ran out of grace; jobs\n"
+      << "still stuck 5 s after it are not waited for).\n";
   return out.str();
 }
 

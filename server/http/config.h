@@ -54,12 +54,21 @@ struct ServerConfig {
   std::int64_t max_body_bytes = std::int64_t{256} << 20;  // --max-body; request body bytes
   std::int64_t max_faces = 5'000'000;                     // --max-faces; per surface
   std::int64_t max_vertices = 5'000'000;                  // --max-vertices; per surface
+  // Decoder limits (core/io/document.h io::Limits, whose defaults these repeat; checked before
+  // anything is allocated, refused with 413 naming the limit).
+  std::int64_t max_decoded_bytes = std::int64_t{1} << 30;  // --max-decoded-bytes; bytes a decoder may allocate
+  int max_json_depth = 64;                                  // --max-json-depth; glTF JSON nesting, [1, 1000]
+  std::int64_t max_nodes = 100'000;                         // --max-nodes; glTF "nodes" entries
+  std::int64_t max_accessors = 1'000'000;                   // --max-accessors; glTF accessors + buffer views
 
   // --- Connections (cpp-httplib holds one I/O thread per open connection) ---
-  int io_threads = 64;              // --io-threads; HTTP threads, >= 4
+  int io_threads = 0;               // --io-threads; HTTP threads, 0 = 4 per core, at least 8; [0, 4096], >= 4 if set
   double keep_alive_timeout_s = 2;  // --keep-alive-timeout; short, idle clients hold a thread
   int keep_alive_max = 100;         // --keep-alive-max; requests per connection
   double read_timeout_s = 30;       // --read-timeout
+  // --body-stall-timeout: seconds a request body may send nothing before 408 and close (the
+  // socket read timeout in effect is the smaller of this and --read-timeout).
+  double body_stall_timeout_s = 10;
   double write_timeout_s = 30;      // --write-timeout
 
   // --- Operations ---
@@ -71,6 +80,7 @@ struct ServerConfig {
   std::string log_level = "info";          // --log-level trace|debug|info|warn|error|off
 
   int effective_workers() const;
+  int effective_io_threads() const;  // io_threads, or for 0: max(8, 4 x hardware_concurrency)
 };
 
 // A bad flag, environment variable or value; what() names it.

@@ -63,7 +63,7 @@ struct HttpService::Impl {
         metrics(*parts.metrics),
         queue(*parts.queue),
         store(parts.store.get()),
-        bodies(config.max_body_bytes, metrics) {
+        bodies(config.max_body_bytes, std::min(config.read_timeout_s, config.body_stall_timeout_s), metrics) {
     std::random_device rd;
     char buf[16];
     std::snprintf(buf, sizeof buf, "%08x", unsigned(rd()));
@@ -95,12 +95,15 @@ struct HttpService::Impl {
 
   // ---------------------------------------------------------------- wiring
   void install() {
-    const int io_threads = config.io_threads;
+    const int io_threads = config.effective_io_threads();
     svr.new_task_queue = [this, io_threads] { return new ConnectionTaskQueue(std::size_t(io_threads), listen_fd); };
     auto secs = [](double s) { return std::pair<time_t, time_t>(time_t(s), time_t((s - double(time_t(s))) * 1e6)); };
     svr.set_keep_alive_timeout(std::max<time_t>(1, time_t(config.keep_alive_timeout_s + 0.5)));
     svr.set_keep_alive_max_count(std::size_t(config.keep_alive_max));
-    svr.set_read_timeout(secs(config.read_timeout_s).first, secs(config.read_timeout_s).second);
+    // One socket read timeout for the request line, headers and body (cpp-httplib has no other):
+    // the smaller of the two settings. A body that stalls that long is answered 408 (BodyReader).
+    const double read_s = std::min(config.read_timeout_s, config.body_stall_timeout_s);
+    svr.set_read_timeout(secs(read_s).first, secs(read_s).second);
     svr.set_write_timeout(secs(config.write_timeout_s).first, secs(config.write_timeout_s).second);
     // Only bodies read by httplib itself (routes without a ContentReader) obey this; our
     // POST routes count bytes themselves because chunked uploads bypass it (0.11.4).
@@ -378,7 +381,7 @@ struct HttpService::Impl {
       std::atomic<int>& n;
       ~Leave() { --n; }
     } leave{waiting_requests};
-    if (waiting >= std::max(1, config.io_threads / 2)) return find_job(ctx, false);
+    if (waiting >= std::max(1, config.effective_io_threads() / 2)) return find_job(ctx, false);
     const std::string id = ctx.req.matches[1];
     return found(id, store->wait_finished(
                          id, Clock::now() + std::chrono::microseconds(std::int64_t(std::llround(seconds * 1e6)))));

@@ -2,9 +2,12 @@
 // metrics, the job queue and the job store (memory or Redis), runs the HTTP service over them,
 // and drains on SIGTERM/SIGINT: /readyz turns 503, new jobs get 503, accepted jobs finish
 // within --drain-grace seconds, then the process exits 0; a drain that runs out of grace logs
-// every job it abandons and exits 1. A second signal stops at once.
+// every job it abandons and exits 1. A second signal stops at once. Either way the process
+// ends within kStopBound of the drain's end: a worker stuck in a step that cannot be
+// interrupted is not joined (the stuck jobs are logged, then std::_Exit(1)).
 #include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -17,11 +20,17 @@
 #include <pthread.h>
 
 #include "server/http/config.h"
+#include "server/http/exit_watchdog.h"
 #include "server/http/http_server.h"
 #include "server/http/log.h"
 #include "server/http/service_parts.h"
 
 namespace {
+
+// After the drain (or a forced stop): time for the store, the listener and the workers to
+// stop before the process exits without joining them. Cancelled jobs stop within one poll
+// (a few milliseconds); only a step that polls no cancellation (Draco) takes longer.
+constexpr std::chrono::seconds kStopBound{5};
 
 // Writes the port atomically (write then rename) so a reader never sees a partial file.
 void write_port_file(const std::string& path, int port) {
@@ -84,6 +93,13 @@ int main(int argc, char** argv) {
   std::signal(SIGPIPE, SIG_IGN);  // a vanished client must not kill the process
 
   auto log = std::make_shared<const EventLog>(config);
+  // Declared before the service, so destroyed after it: it also bounds the service's destructor.
+  ExitWatchdog watchdog([&log] {
+    log->error("exit_without_join", {{"bound_s", kStopBound.count()},
+                                     {"detail", "workers still running after the drain; exiting without joining them"}});
+    std::fflush(stderr);
+    std::_Exit(1);
+  });
   try {
     HttpService service(config, log, make_service_parts(config, log));
     const int port = service.bind();
@@ -94,7 +110,7 @@ int main(int argc, char** argv) {
                             {"threads_per_job", config.threads_per_job},
                             {"queue_capacity", config.queue_capacity},
                             {"job_store", config.queue ? "redis" : "memory"},
-                            {"io_threads", config.io_threads},
+                            {"io_threads", config.effective_io_threads()},
                             {"max_body", config.max_body_bytes},
                             {"auth", !config.auth_token.empty()}});
     bool serve_ok = true;
@@ -122,6 +138,7 @@ int main(int argc, char** argv) {
     while (!drained_done) {
       if (wait_for_signal(signals, 0.1)) {
         log->warn("forced_stop", {{"queued", service.queue().queued()}, {"running", service.queue().running()}});
+        watchdog.arm(kStopBound);
         service.stop();
       }
     }
@@ -136,6 +153,7 @@ int main(int argc, char** argv) {
       for (const auto& job : abandoned)
         log->warn("job_abandoned", {{"job_id", job.id}, {"state", std::string(to_string(job.state))}, {"async", job.asynchronous}});
     }
+    watchdog.arm(kStopBound);
     service.stop();
     server.join();
     log->info("stopped", {{"drained", drained}});

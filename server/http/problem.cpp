@@ -34,6 +34,7 @@ constexpr ProblemKind kCatalogue[] = {
     {T::Unauthorized, "unauthorized", "Unauthorized", 401},
     {T::NotFound, "not-found", "Not found", 404},
     {T::MethodNotAllowed, "method-not-allowed", "Method not allowed", 405},
+    {T::RequestTimeout, "request-timeout", "Request body stalled", 408},
     {T::LengthRequired, "length-required", "Length required", 411},
     {T::TooLarge, "too-large", "Content too large", 413},
     {T::UriTooLong, "uri-too-long", "URI too long", 414},

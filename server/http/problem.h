@@ -45,7 +45,7 @@ class HttpError : public std::runtime_error {
 enum class ProblemType {
   // Requests the HTTP layer refuses.
   BadRequest, BadBody, BadForm, BadIdempotencyKey, EmptyBody, InvalidQuery, Unauthorized, NotFound,
-  MethodNotAllowed, LengthRequired, TooLarge, UriTooLong, UnsupportedMediaType, RangeNotSatisfiable,
+  MethodNotAllowed, RequestTimeout, LengthRequired, TooLarge, UriTooLong, UnsupportedMediaType, RangeNotSatisfiable,
   MultipleRanges, TooManyHeaders, HttpError,
   // The job's input and parameters.
   InvalidParams, MalformedMesh, InvalidMesh, UnsupportedContent, SolverFailed, ResultTooLarge,

@@ -1,6 +1,7 @@
 #include "server/http/request_body.h"
 
 #include <charconv>
+#include <cstdio>
 #include <optional>
 #include <utility>
 
@@ -75,7 +76,9 @@ std::string BodyReader::read_body(Context& ctx, const httplib::ContentReader& re
   std::string body;
   check_declared_length(ctx);
   bool over = false;
+  auto last_byte = std::chrono::steady_clock::now();
   const bool ok = reader([&](const char* data, std::size_t n) {
+    last_byte = std::chrono::steady_clock::now();
     if (std::int64_t(body.size() + n) > max_body_bytes_) {
       over = true;
       return false;
@@ -86,8 +89,22 @@ std::string BodyReader::read_body(Context& ctx, const httplib::ContentReader& re
   metrics_.add_bytes_in(std::int64_t(body.size()));
   if (over) throw_too_large(ctx);
   ctx.body_consumed = ok;
+  if (!ok) check_stall(ctx, last_byte);
   if (!ok) throw HttpError(make_problem(ProblemType::BadBody, "the request body could not be read"));
   return body;
+}
+
+void BodyReader::check_stall(Context& ctx, std::chrono::steady_clock::time_point last_byte) {
+  // cpp-httplib's read gives up after the socket read timeout without saying why; a failure
+  // that long after the last byte is the stall (a little less: select() may wake early).
+  const double idle_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_byte).count();
+  if (idle_s < 0.9 * stall_timeout_s_) return;
+  close_after_response(ctx.req, ctx.res);  // the rest of the body may still come: never read it
+  char seconds[32];
+  std::snprintf(seconds, sizeof seconds, "%g", stall_timeout_s_);
+  Problem p = make_problem(ProblemType::RequestTimeout, std::string("the request body sent nothing for ") + seconds + " s");
+  p.extensions["body_stall_timeout_s"] = stall_timeout_s_;
+  throw HttpError(std::move(p));
 }
 
 void BodyReader::throw_too_large(Context& ctx) {
@@ -133,8 +150,10 @@ service::JobInput BodyReader::read_job_input(Context& ctx) {
     bool has_mesh = false, has_params = false, over = false, unexpected = false;
     std::string unexpected_name;
     std::int64_t total = 0;
+    auto last_byte = std::chrono::steady_clock::now();
     const bool ok = (*ctx.reader)(
         [&](const httplib::MultipartFormData& part) {
+          last_byte = std::chrono::steady_clock::now();
           current = part.name;
           if (current == "mesh") {
             if (has_mesh) return unexpected = true, unexpected_name = "mesh (twice)", false;
@@ -152,6 +171,7 @@ service::JobInput BodyReader::read_job_input(Context& ctx) {
           return true;
         },
         [&](const char* data, std::size_t n) {
+          last_byte = std::chrono::steady_clock::now();
           total += std::int64_t(n);
           if (total > max_body_bytes_) return over = true, false;
           (current == "mesh" ? mesh : params_part).append(data, n);
@@ -160,6 +180,7 @@ service::JobInput BodyReader::read_job_input(Context& ctx) {
     metrics_.add_bytes_in(total);
     if (over) throw_too_large(ctx);
     ctx.body_consumed = ok && !unexpected;
+    if (!ok && !unexpected) check_stall(ctx, last_byte);
     if (unexpected)
       throw HttpError(make_problem(ProblemType::BadForm, "unexpected form field '" + unexpected_name + "'; expected 'mesh' and 'params'"));
     if (!ok) throw HttpError(make_problem(ProblemType::BadForm, "the multipart body could not be parsed"));

@@ -17,6 +17,10 @@ JobQueueOptions make_queue_options(const ServerConfig& c) {
   o.max_stored = c.max_stored_jobs;
   o.limits.max_faces = c.max_faces;
   o.limits.max_vertices = c.max_vertices;
+  o.limits.max_decoded_bytes = c.max_decoded_bytes;
+  o.limits.max_json_depth = c.max_json_depth;
+  o.limits.max_nodes = c.max_nodes;
+  o.limits.max_accessors = c.max_accessors;
   return o;
 }
 

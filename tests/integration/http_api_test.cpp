@@ -371,6 +371,9 @@ TEST_F(HttpApi, HelpListsEverySettingAndBadFlagsFail) {
   EXPECT_EQ(run_command(server_binary() + " --workers -3 2>&1").first, 2);
   EXPECT_EQ(run_command(server_binary() + " --no-such-flag 2>&1").first, 2);
   EXPECT_EQ(run_command("MDN_QUEUE_CAPACITY=zero " + server_binary() + " 2>&1").first, 2);
+  const auto [bad_limit, message] = run_command(server_binary() + " --max-json-depth 0 2>&1");
+  EXPECT_EQ(bad_limit, 2);
+  EXPECT_NE(message.find("--max-json-depth"), std::string::npos) << message;
 }
 
 TEST_F(HttpApi, JsonLogsCarryRequestIds) {

@@ -413,5 +413,45 @@ TEST_F(HttpBadRequests, MeshesDracoCannotEncodeAre422NotACrash) {
   EXPECT_EQ(health->status, 200);
 }
 
+// Issue 17, protocol: a stalled upload held an I/O thread for the whole read timeout and got no
+// 408. Now a body that sends nothing for --body-stall-timeout seconds is answered 408 (problem
+// JSON) and its connection closed, for Content-Length and chunked bodies alike.
+TEST(HttpBodyStall, AStalledBodyGets408AndTheConnectionClosesWithinTheTimeout) {
+  ServerProcess server({"--body-stall-timeout", "1", "--io-threads", "4"});
+  ASSERT_TRUE(server.started()) << server.log();
+  const std::string heads[] = {
+      "POST /v1/denoise HTTP/1.1\r\nHost: x\r\nContent-Type: model/x-off\r\nContent-Length: 1000\r\n\r\nOFF\n3 1 0\n",
+      "POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: model/x-off\r\nTransfer-Encoding: chunked\r\n\r\n4\r\nOFF\n\r\n",
+  };
+  for (const std::string& head : heads) {
+    const int fd = connect_loopback(server.port());
+    ASSERT_GE(fd, 0);
+    const auto start = std::chrono::steady_clock::now();
+    ASSERT_EQ(send(fd, head.data(), head.size(), MSG_NOSIGNAL), ssize_t(head.size()));
+    const std::string response = read_until_close(fd, 10);  // the server closes: recv returns 0
+    const double after_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    close(fd);
+    std::printf("stalled body: answered and closed after %.2f s (stall timeout 1 s)\n", after_s);
+    EXPECT_EQ(response.rfind("HTTP/1.1 408 ", 0), 0u) << response;
+    EXPECT_NE(response.find("urn:meshdenoise:problem:request-timeout"), std::string::npos) << response;
+    EXPECT_NE(response.find("Connection: close"), std::string::npos) << response;
+    EXPECT_GE(after_s, 0.8);
+    EXPECT_LT(after_s, 3.0);
+  }
+  // The I/O threads are free again: four stalled uploads at once, then a request answered.
+  std::vector<int> stalled;
+  for (int i = 0; i < 4; ++i) {
+    const int fd = connect_loopback(server.port());
+    send(fd, heads[0].data(), heads[0].size(), MSG_NOSIGNAL);
+    stalled.push_back(fd);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  auto c = server.client(5);
+  auto r = c->Get("/healthz");
+  ASSERT_TRUE(r) << httplib::to_string(r.error());
+  EXPECT_EQ(r->status, 200);
+  for (int fd : stalled) close(fd);
+}
+
 }  // namespace
 }  // namespace mdn::test

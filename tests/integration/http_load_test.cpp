@@ -5,6 +5,7 @@
 #include <sys/socket.h>
 
 #include <atomic>
+#include <fstream>
 #include <map>
 #include <mutex>
 #include <sstream>
@@ -256,6 +257,70 @@ TEST(HttpLoad, AFullJobStoreRefusesNewJobsAndEvictsNone) {
   EXPECT_EQ(again->status, 202) << again->body;
 }
 
+// VmRSS or VmHWM of a process, in MiB (0 if unreadable).
+double status_mib(pid_t pid, const std::string& field) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind(field + ":", 0) == 0) return std::atof(line.c_str() + field.size() + 1) / 1024.0;
+  return 0;
+}
+
+// Issue 17: after an overload, accepted jobs returned 404 before their lifetime. Eight seconds
+// of four clients posting as fast as they can (far beyond one worker's capacity): every job
+// answered 202 is still there, finished, with its result. The memory figures are printed, not
+// asserted (the 1.5x target is a benchmark figure).
+TEST(HttpLoad, AnOverloadLosesNoAcceptedJob) {
+  ServerProcess server({"--workers", "1", "--queue-capacity", "8", "--max-stored-jobs", "256", "--result-ttl", "120"});
+  ASSERT_TRUE(server.started()) << server.log();
+  const std::string small = noisy_sphere_off(1);
+  const std::string params = R"({"n_normal":5,"n_vertex":5})";
+  const double rss_before = status_mib(server.pid(), "VmRSS");
+  std::mutex mutex;
+  std::vector<std::string> accepted;
+  std::map<int, int> statuses;
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(8);
+  std::vector<std::thread> clients;
+  for (int k = 0; k < 4; ++k)
+    clients.emplace_back([&] {
+      auto c = server.client();
+      while (std::chrono::steady_clock::now() < end) {
+        auto r = c->Post("/v1/jobs", {{"X-Denoise-Params", params}}, small, "model/x-off");
+        std::lock_guard lock(mutex);
+        ++statuses[r ? r->status : -1];
+        if (r && r->status == 202) accepted.push_back(parse_json(r->body)["id"]);
+        if (r && r->status == 503) {
+          EXPECT_FALSE(r->get_header_value("Retry-After").empty());
+        }
+      }
+    });
+  for (auto& t : clients) t.join();
+  const double rss_peak = status_mib(server.pid(), "VmHWM");
+  auto c = server.client();
+  int lost = 0, succeeded = 0;
+  for (const auto& id : accepted) {
+    const json job = wait_job(*c, id);
+    if (job.value("state", "") != "succeeded") {
+      ++lost;
+      ADD_FAILURE() << id << ": " << job.dump();
+      continue;
+    }
+    auto result = c->Get("/v1/jobs/" + id + "/result");
+    if (result && result->status == 200) ++succeeded;
+    else ++lost;
+  }
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  const double rss_after = status_mib(server.pid(), "VmRSS");
+  std::ostringstream counts;
+  for (const auto& [status, n] : statuses) counts << ' ' << status << ':' << n;
+  std::printf("overload 8 s, 4 clients, 1 worker: answers%s; accepted %zu, lost %d; RSS before %.1f MiB, peak %.1f, after %.1f\n",
+              counts.str().c_str(), accepted.size(), lost, rss_before, rss_peak, rss_after);
+  EXPECT_EQ(lost, 0);
+  EXPECT_EQ(succeeded, int(accepted.size()));
+  EXPECT_GT(accepted.size(), 0u);
+  for (const auto& [status, n] : statuses) EXPECT_TRUE(status == 202 || status == 503) << status << " x " << n;
+  EXPECT_EQ(c->Get("/healthz")->status, 200);
+}
+
 // Issue 17: a drain out of grace dropped queued jobs without a log line and exited 0.
 TEST(HttpLoad, ADrainOutOfGraceNamesEveryAbandonedJobAndExitsNonZero) {
   ServerProcess server({"--workers", "1", "--drain-grace", "0.5"});
@@ -265,8 +330,13 @@ TEST(HttpLoad, ADrainOutOfGraceNamesEveryAbandonedJobAndExitsNonZero) {
   const std::string params = R"({"n_normal":200,"n_vertex":200})";
   const std::vector<std::string> ids = post_jobs(*c, 3, medium, params);
   ASSERT_EQ(ids.size(), 3u);
+  const auto signalled = std::chrono::steady_clock::now();
   server.signal(SIGTERM);
   EXPECT_EQ(server.wait_exit(std::chrono::seconds(60)), 1) << server.log();
+  // SIGTERM always ends the process within the grace plus the stop bound (5 s, main.cpp).
+  const double exit_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
+  std::printf("SIGTERM with a running job, grace 0.5 s: exited after %.2f s\n", exit_s);
+  EXPECT_LT(exit_s, 0.5 + 5 + 2);
   const std::string log = server.log();
   EXPECT_NE(log.find("drain_incomplete"), std::string::npos) << log;
   std::string abandoned;  // the job_abandoned lines

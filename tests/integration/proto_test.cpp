@@ -258,6 +258,14 @@ TEST(Proto, OpenApiDocumentsExactlyTheServersRoutesAndStatuses) {
     EXPECT_EQ(c->Get("/v1/report/schema")->body, read_file(proto_dir() + "/report.schema.json"));
   }
   {
+    // A body that stalls: 408.
+    ServerProcess server({"--body-stall-timeout", "0.3"});
+    ASSERT_TRUE(server.started()) << server.log();
+    for (const std::string route : {"/v1/denoise", "/v1/jobs"})
+      seen[{"POST", route}].insert(raw_status(
+          server.port(), "POST " + route + " HTTP/1.1\r\nHost: x\r\nContent-Type: model/x-off\r\nContent-Length: 100\r\n\r\nOFF\n"));
+  }
+  {
     ServerProcess server({"--auth-token", "t0ken"});
     ASSERT_TRUE(server.started()) << server.log();
     auto c = server.client();

@@ -587,6 +587,30 @@ TEST_F(RedisQueue, AStoppingReplicaHandsItsJobBack) {
   EXPECT_EQ(metric(*b, "mdn_queue_reclaimed_total"), 0);
 }
 
+// Issue 17: a drain out of grace keeps every job it did not finish in Redis for another
+// replica: the running one is handed back, those still queued in the stream stay there.
+TEST_F(RedisQueue, JobsADrainAbandonsStayInRedisForAnotherReplica) {
+  RedisServer redis;
+  auto a = replica(redis, {"--workers", "1", "--drain-grace", "0.2"});
+  // One job long enough to be running when the signal comes, two small ones queued behind it.
+  std::vector<std::string> ids{post_job(*a, noisy_sphere_off(4, 14), kMediumParams)};
+  for (int i = 0; i < 2; ++i) ids.push_back(post_job(*a, noisy_sphere_off(1, 15 + std::uint64_t(i)), kSmallParams));
+  ASSERT_EQ(wait_state(*a, ids[0], {"running", "succeeded"}).value("state", ""), "running");
+  a->signal(SIGTERM);
+  EXPECT_EQ(a->wait_exit(Seconds(60)), 1) << a->log();
+  // The queued ones never left the stream (A ran only the first, cancelled and handed back).
+  std::istringstream lines(a->log());
+  for (std::string line; std::getline(lines, line);) {
+    if (line.find("job_finished") == std::string::npos) continue;
+    for (std::size_t i = 1; i < ids.size(); ++i) EXPECT_EQ(line.find(ids[i]), std::string::npos) << line;
+  }
+  auto b = replica(redis, {"--queue-reclaim-idle", "3600"});
+  for (const auto& id : ids) {
+    const json job = wait_state(*b, id, {"succeeded", "failed", "cancelled"}, Seconds(120));
+    EXPECT_EQ(job.value("state", ""), "succeeded") << id << ": " << job.dump() << "\n" << a->log();
+  }
+}
+
 TEST_F(RedisQueue, ADrainingReplicaFinishesItsJobAndExits) {
   RedisServer redis;
   auto a = replica(redis);

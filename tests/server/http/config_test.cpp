@@ -4,9 +4,15 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <thread>
+
 #include <map>
 #include <string>
 #include <vector>
+
+#include "core/io/document.h"
+#include "server/http/service_parts.h"
 
 namespace mdn::http {
 namespace {
@@ -84,9 +90,52 @@ TEST(Config, RedisBoundsTheBodyAtWhatItCanStore) {
   EXPECT_NE(error_of({"--max-body", "1G", "--queue", "redis://h"}).find("512M"), std::string::npos);
 }
 
+TEST(Config, DecoderLimitsDefaultToTheDecodersOwnAndReachTheQueue) {
+  const ServerConfig defaults = parse({});
+  const io::Limits io_defaults;
+  EXPECT_EQ(defaults.max_decoded_bytes, io_defaults.max_decoded_bytes);
+  EXPECT_EQ(defaults.max_json_depth, io_defaults.max_json_depth);
+  EXPECT_EQ(defaults.max_nodes, io_defaults.max_nodes);
+  EXPECT_EQ(defaults.max_accessors, io_defaults.max_accessors);
+  const ServerConfig c = parse({"--max-decoded-bytes", "64M", "--max-json-depth", "32", "--max-nodes=500"},
+                               {{"MDN_MAX_ACCESSORS", "2000"}, {"MDN_MAX_NODES", "7"}});
+  const io::Limits limits = make_queue_options(c).limits;
+  EXPECT_EQ(limits.max_decoded_bytes, std::int64_t{64} << 20);
+  EXPECT_EQ(limits.max_json_depth, 32);
+  EXPECT_EQ(limits.max_nodes, 500);  // the flag wins over MDN_MAX_NODES
+  EXPECT_EQ(limits.max_accessors, 2000);
+}
+
+TEST(Config, BadDecoderLimitsAreRefusedNamingTheSetting) {
+  EXPECT_NE(error_of({"--max-decoded-bytes", "1000"}).find("--max-decoded-bytes"), std::string::npos);  // below 1M
+  EXPECT_NE(error_of({"--max-json-depth", "0"}).find("--max-json-depth"), std::string::npos);
+  EXPECT_NE(error_of({"--max-json-depth", "20000"}).find("outside [1, 1000]"), std::string::npos);
+  EXPECT_NE(error_of({"--max-nodes", "-5"}).find("--max-nodes"), std::string::npos);
+  EXPECT_NE(error_of({}, {{"MDN_MAX_ACCESSORS", "many"}}).find("MDN_MAX_ACCESSORS"), std::string::npos);
+}
+
+TEST(Config, BodyStallTimeoutIsASettingOfItsOwn) {
+  EXPECT_EQ(parse({}).body_stall_timeout_s, 10);
+  EXPECT_EQ(parse({"--body-stall-timeout", "2.5"}).body_stall_timeout_s, 2.5);
+  EXPECT_EQ(parse({}, {{"MDN_BODY_STALL_TIMEOUT", "4"}}).body_stall_timeout_s, 4);
+  EXPECT_NE(error_of({"--body-stall-timeout", "0"}).find("--body-stall-timeout"), std::string::npos);
+}
+
+TEST(Config, IoThreadsDefaultToTheMachine) {
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  EXPECT_EQ(parse({}).io_threads, 0);
+  EXPECT_EQ(parse({}).effective_io_threads(), std::max(8, 4 * int(cores)));
+  EXPECT_EQ(parse({"--io-threads", "16"}).effective_io_threads(), 16);
+  EXPECT_NE(error_of({"--io-threads", "2"}).find("below 4"), std::string::npos);
+  EXPECT_NE(help_text().find("0 = 4 per core, at least 8; default: 0 ("), std::string::npos) << help_text();
+}
+
 TEST(Config, HelpNamesEveryFlagWithItsVariable) {
   const std::string help = help_text();
-  for (const char* s : {"--port (MDN_PORT)", "--queue (MDN_QUEUE)", "--auth-token (MDN_AUTH_TOKEN)"})
+  for (const char* s : {"--port (MDN_PORT)", "--queue (MDN_QUEUE)", "--auth-token (MDN_AUTH_TOKEN)",
+                        "--max-decoded-bytes (MDN_MAX_DECODED_BYTES)", "--max-json-depth (MDN_MAX_JSON_DEPTH)",
+                        "--max-nodes (MDN_MAX_NODES)", "--max-accessors (MDN_MAX_ACCESSORS)",
+                        "--body-stall-timeout (MDN_BODY_STALL_TIMEOUT)"})
     EXPECT_NE(help.find(s), std::string::npos) << s;
 }
 
