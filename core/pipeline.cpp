@@ -92,7 +92,7 @@ DenoiseResult denoise(const TriMesh& input, const DenoiseParams& requested, cons
   StageTimings& times = report.timings;
   report.mode = requested.mode;
   report.params = requested;
-  if (requested.mode == ParamMode::None) {  // convert only: no stage runs
+  if (requested.mode == ParamMode::None) {  // convert only: no stage runs (core/README.md, decision 23)
     result.mesh = input;
     times.total_ms = ms_since(t_start);
     return result;
