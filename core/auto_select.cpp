@@ -129,6 +129,7 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
     const int draws = scorer.draws();
     const bool staged = options.refine > 0 && draws > 1;
     std::vector<std::size_t> order;
+    const auto by_score = [&](std::size_t x, std::size_t y) { return sel.candidates[x].score < sel.candidates[y].score; };
     for (std::size_t k = 0; k < sel.candidates.size(); ++k) {
       checkpoint(progress, Stage::SelectParameters, static_cast<double>(k) / static_cast<double>(sel.candidates.size()));
       ScoredCandidate& c = sel.candidates[k];
@@ -137,7 +138,7 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
       ++sel.evaluations;
       order.push_back(k);
     }
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return sel.candidates[x].score < sel.candidates[y].score; });
+    std::stable_sort(order.begin(), order.end(), by_score);
     if (staged) {
       order.resize(std::min(order.size(), static_cast<std::size_t>(options.refine)));
       for (const std::size_t k : order) {
@@ -148,7 +149,7 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
         c.residual = std::sqrt((c.residual * c.residual + residual * residual * (draws - 1)) / draws);
         c.draws = draws;
       }
-      std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return sel.candidates[x].score < sel.candidates[y].score; });
+      std::stable_sort(order.begin(), order.end(), by_score);
     }
     sel.chosen = static_cast<int>(order.front());
   };
