@@ -82,7 +82,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // What we write must read back (without limits smaller than what we accepted).
     std::unique_ptr<io::MeshDocument> again;
     try {
-      again = io::decode(out, target, {});
+      again = io::decode(out, target, io::Limits{});
     } catch (const std::exception& e) {
       finding("our output does not decode", e.what());
     }
