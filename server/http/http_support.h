@@ -9,6 +9,8 @@
 #include <string>
 #include <string_view>
 
+#include <nlohmann/json.hpp>
+
 namespace mdn::http {
 
 // What a route handler gets (http_server.cpp's dispatch builds it).
@@ -20,6 +22,8 @@ struct Context {
   bool body_consumed = false;  // POST routes: the whole body was read
 };
 
+// Status and a JSON body (invalid UTF-8 replaced).
+void set_json(httplib::Response& res, const nlohmann::json& j, int status = 200);
 std::string lower(std::string s);
 std::string trim(std::string_view s);
 // "model/gltf-binary; charset=x" -> "model/gltf-binary"
