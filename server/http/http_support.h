@@ -1,4 +1,4 @@
-// Small pieces the HTTP service's files share (http_server.cpp, request_body.cpp,
+// Small pieces the HTTP service's files share (http_server.cpp, job_routes.cpp, request_body.cpp,
 // job_resource.cpp): a handler's Context, header and text helpers, and the per-request flag
 // that closes a connection whose request body stays unread. Internal to the service.
 #pragma once
