@@ -1,5 +1,5 @@
 // The command line of meshdenoise: its options, the usage text (which documents the exit codes)
-// and the parser. Parsing only: what the options mean is meshdenoise_main.cpp's.
+// and the parser. Parsing only: what the options mean is meshdenoise_main.cpp's and its cli_* parts'.
 #pragma once
 
 #include <optional>

@@ -1,4 +1,4 @@
-// Small pieces the HTTP service's files share (http_server.cpp, request_body.cpp,
+// Small pieces the HTTP service's files share (http_server.cpp, job_routes.cpp, request_body.cpp,
 // job_resource.cpp): a handler's Context, header and text helpers, and the per-request flag
 // that closes a connection whose request body stays unread. Internal to the service.
 #pragma once
@@ -8,6 +8,8 @@
 #include <chrono>
 #include <string>
 #include <string_view>
+
+#include <nlohmann/json.hpp>
 
 namespace mdn::http {
 
@@ -20,6 +22,8 @@ struct Context {
   bool body_consumed = false;  // POST routes: the whole body was read
 };
 
+// Status and a JSON body (invalid UTF-8 replaced).
+void set_json(httplib::Response& res, const nlohmann::json& j, int status = 200);
 std::string lower(std::string s);
 std::string trim(std::string_view s);
 // "model/gltf-binary; charset=x" -> "model/gltf-binary"
