@@ -244,7 +244,7 @@ void JobQueue::settle(const std::shared_ptr<Job>& job, bool keep) {
     end = std::move(job->held_end_);
     job->held_end_.reset();
   }
-  if (end) end_run(*job, std::move(*end), keep);
+  if (end) end_run(*job, std::move(*end), keep, false);  // the worker was given back at its end
   else if (!keep) cancel(job);  // queued: ends now; running: its end goes unreported
 }
 
@@ -368,11 +368,9 @@ void JobQueue::worker_loop() {
       const double wait = seconds_between(job->created_, *job->started_), old = queue_wait_s_.load();
       queue_wait_s_.store(old < 0 ? wait : 0.7 * old + 0.3 * wait);
     }
-    run(job);
+    run(job);  // gives the worker back (running_) as it publishes the end, or holds it
     {
       std::lock_guard lock(mutex_);
-      --running_;
-      if (!job->external_ && job->asynchronous_) finished_order_.push_back(job->id_);
       sweep_locked();
     }
     idle_cv_.notify_all();
@@ -410,17 +408,19 @@ void JobQueue::run(const std::shared_ptr<Job>& job) {
   input = {};  // free the request bytes before publishing
   bool report = true;
   {
-    std::lock_guard lock(job->mutex_);
-    if (job->held_) {  // not accepted yet: settle() ends it
+    std::lock_guard lock(mutex_);  // the queue's mutex first (lock order)
+    std::lock_guard job_lock(job->mutex_);
+    if (job->held_) {  // not accepted yet: settle() ends it; the worker is free already
       job->held_end_ = Job::End{state, std::move(error), std::move(output)};
+      --running_;
       return;
     }
     report = !job->discarded_;
   }
-  end_run(*job, Job::End{state, std::move(error), std::move(output)}, report);
+  end_run(*job, Job::End{state, std::move(error), std::move(output)}, report, true);
 }
 
-void JobQueue::end_run(Job& job, Job::End end, bool report) {
+void JobQueue::end_run(Job& job, Job::End end, bool report, bool from_worker) {
   if (on_finished_ && report) {
     // Before the final state is published: a client that sees the job finished (the waiting
     // request, a poll) also sees it counted in the metrics.
@@ -432,7 +432,16 @@ void JobQueue::end_run(Job& job, Job::End end, bool report) {
     if (end.state == JobState::Succeeded) s.stage = "done", s.fraction = 1;
     on_finished_(s);
   }
-  std::lock_guard lock(job.mutex_);
+  // The worker is given back (running_) and the job's end published (its state, waking the
+  // waiting request) in one critical section of the queue's mutex: whoever sees the job
+  // finished (a synchronous response, a poll) and then reads running() (GET /metrics) no
+  // longer finds it counted, and wait_drained() never sees running_ at 0 with the job still
+  // running. Lowering running_ after finish_locked() let a client read mdn_jobs_running 1
+  // after its result.
+  std::lock_guard lock(mutex_);
+  if (from_worker) --running_;
+  if (!job.external_ && job.asynchronous_) finished_order_.push_back(job.id_);
+  std::lock_guard job_lock(job.mutex_);
   finish_locked(job, end.state, std::move(end.error), std::move(end.output));
 }
 

@@ -181,8 +181,9 @@ class JobQueue {
  private:
   void worker_loop();
   void run(const std::shared_ptr<Job>& job);
-  // The end of a run: the finished hook (unless discarded), then the final state.
-  void end_run(Job& job, Job::End end, bool report);
+  // The end of a run: the finished hook (unless discarded), then the final state, with the
+  // worker given back (running_) in the same critical section when `from_worker`.
+  void end_run(Job& job, Job::End end, bool report, bool from_worker);
   void finish_locked(Job& job, JobState state, std::optional<Problem> error,
                      std::shared_ptr<const service::JobOutput> output);  // job.mutex_ held
   void sweep_locked();  // mutex_ held: drops finished jobs past their result lifetime

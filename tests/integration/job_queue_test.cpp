@@ -1,6 +1,7 @@
 // JobQueue::run_external(held) and settle(), used by the Redis store to start a job while Redis
 // is still accepting it: a held run publishes its end (the finished hook, its final state) only
 // once kept, and a run that was not accepted is never reported, whether it had ended or not.
+// And a run's end is published with its worker given back (running() no longer counts it).
 #include <atomic>
 #include <chrono>
 #include <thread>
@@ -96,6 +97,20 @@ TEST(JobQueueHeld, ARunNotAcceptedIsNeverReported) {
   auto plain = q.run_external("plain", off_input(1));
   ASSERT_TRUE(plain->wait_for(60s));
   EXPECT_EQ(reported.count, 1);
+}
+
+// Whoever sees a job finished (the waiting request, a poll) and then reads running() (what
+// GET /metrics shows as mdn_jobs_running) no longer finds it counted: the worker is given back
+// as the end is published, not after. Repeated, since the old order failed only sometimes.
+TEST(JobQueue, AJobSeenFinishedIsNoLongerCountedRunning) {
+  JobQueue q(one_worker());
+  int counted_after_end = 0;
+  for (int i = 0; i < 200; ++i) {
+    auto job = q.submit(off_input(1), i % 2 == 1).job;
+    ASSERT_TRUE(job->wait_for(60s));
+    if (q.running() != 0) ++counted_after_end;
+  }
+  EXPECT_EQ(counted_after_end, 0) << "runs of 200 still counted as running after their end was seen";
 }
 
 }  // namespace
