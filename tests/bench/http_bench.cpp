@@ -134,7 +134,7 @@ int main(int argc, char** argv) {
               std::thread::hardware_concurrency());
 
   // 1. In-process pipeline (decode + denoise + encode) vs one synchronous HTTP request.
-  mdn::service::JobInput input{glb, mdn::io::Format::Glb, {}, 1};
+  mdn::service::JobInput input{glb, mdn::io::Format::Glb, {}, 1, std::nullopt};
   std::vector<double> direct, http;
   mdn::service::run_job(input, {});  // warm-up
   for (int i = 0; i < runs; ++i) {

@@ -76,7 +76,7 @@ Outcome run_one(const std::string& bytes, io::Format format, const service::JobP
   limits.max_faces = 200'000;
   limits.max_vertices = 200'000;
   limits.max_decoded_bytes = std::int64_t{256} << 20;
-  service::JobInput input{bytes, format, params, 1};
+  service::JobInput input{bytes, format, params, 1, std::nullopt};
   try {
     const service::JobOutput out = service::run_job(input, limits);
     // A result: it must read back, every coordinate finite.

@@ -101,7 +101,9 @@ TEST_F(HttpServiceTest, StoreUnavailableAnswers503WithRetryAfterUntilItIsBack) {
   for (const char* path : {"/readyz", "/v1/jobs/abc"}) {
     auto r = c.Get(path);
     expect_problem(r, 503, "queue-unavailable", path);
-    if (r) EXPECT_EQ(r->get_header_value("Retry-After"), "2") << path;
+    if (r) {
+      EXPECT_EQ(r->get_header_value("Retry-After"), "2") << path;
+    }
   }
   auto posted = c.Post("/v1/jobs", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "model/x-off");
   ASSERT_TRUE(posted);
