@@ -1,6 +1,8 @@
 #include "core/noise_estimate.h"
 
 #include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
+#include <cstdlib>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -35,6 +37,57 @@ Vertices umbrella_smooth(const Vertices& P, const Topology& topo, int steps, dou
 
 Vertices smoothed_normals(const Vertices& P, const Triangles& F, const Topology& topo, Executor* executor) {
   return vertex_normals(umbrella_smooth(P, topo, 4, 0.5, executor), F);
+}
+
+Vertices patch_normals(const Vertices& P, const Topology& topo, const Vertices& normals, double spread, Executor* executor) {
+  Executor serial(1);
+  Executor& ex = executor ? *executor : serial;
+  constexpr int kMaxRings = 12;
+  constexpr std::size_t kMaxVertices = 200;
+  constexpr double kMaxTilt = 0.7;  // cosine: the patch's normal replaces the given one within ~45 degrees of it
+  Vertices N = normals;
+  ex.parallel_for(P.rows(), [&](std::int64_t begin, std::int64_t end) {
+    std::vector<std::int32_t> seen(static_cast<std::size_t>(P.rows()), -1), patch;
+    for (std::int64_t i = begin; i < end; ++i) {
+      if (normals.row(i).squaredNorm() == 0) continue;
+      const auto me = static_cast<std::int32_t>(i);
+      patch.assign(1, me);
+      seen[static_cast<std::size_t>(i)] = me;
+      // Running sums of the patch's offsets from vertex i: mean and covariance without a rescan.
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      Eigen::Matrix3d squares = Eigen::Matrix3d::Zero();
+      for (int ring = 0, first = 0; ring < kMaxRings; ++ring) {
+        const auto last = static_cast<int>(patch.size());
+        for (int q = first; q < last; ++q) {
+          const auto j = static_cast<std::size_t>(patch[static_cast<std::size_t>(q)]);
+          for (auto a = topo.vv_offsets[j]; a < topo.vv_offsets[j + 1]; ++a) {
+            const std::int32_t v = topo.vv_vertices[static_cast<std::size_t>(a)];
+            if (seen[static_cast<std::size_t>(v)] != me) {
+              seen[static_cast<std::size_t>(v)] = me;
+              patch.push_back(v);
+              const Eigen::Vector3d d = (P.row(v) - P.row(i)).transpose();
+              sum += d;
+              squares += d * d.transpose();
+            }
+          }
+        }
+        first = last;
+        const double count = static_cast<double>(patch.size());
+        const Eigen::Vector3d mean = sum / count;
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(squares / count - mean * mean.transpose());
+        const double narrow = std::sqrt(std::max(0.0, eig.eigenvalues()(1))), wide = std::sqrt(std::max(0.0, eig.eigenvalues()(2)));
+        // A 1-ring wider than `spread` both ways, or about as wide across as along: keep the given normal.
+        if (ring == 0 && (narrow >= spread || narrow >= 0.5 * wide)) break;
+        if (narrow >= spread || patch.size() >= kMaxVertices || static_cast<int>(patch.size()) == last) {
+          Eigen::Vector3d normal = eig.eigenvectors().col(0);
+          if (normal.dot(normals.row(i).transpose()) < 0) normal = -normal;
+          if (normal.dot(normals.row(i).transpose()) >= kMaxTilt) N.row(i) = normal.transpose();
+          break;
+        }
+      }
+    }
+  });
+  return N;
 }
 
 namespace {
@@ -242,6 +295,18 @@ NoiseEstimate estimate_noise(const Vertices& P, const Triangles&, const Topology
     const std::optional<Reading> r = read(local_fit_residuals(P, topo, normals, fit, vertices, executor, &first));
     if (r && (!best || r->sigma < best->sigma)) best = r;
     if (fit.rings == 2) one_pass = read(std::move(first));
+  }
+  // Decision 19: a second reading in frames from patches 3 sigma wide across slivers (none
+  // where no frame changed: the same reading).
+  if (best && best->sigma > 0) {
+    const Vertices widened = patch_normals(P, topo, normals, 3 * best->sigma, executor);
+    std::optional<Reading> second;
+    if ((widened.array() != normals.array()).any())
+      for (const LocalFit fit : {LocalFit{1, 1, 3}, LocalFit{2, 2, 2}}) {
+        const std::optional<Reading> r = read(local_fit_residuals(P, topo, widened, fit, vertices, executor));
+        if (r && (!second || r->sigma < second->sigma)) second = r;
+      }
+    if (second) best = second;
   }
   if (best) {
     est.sigma = best->sigma;

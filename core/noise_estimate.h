@@ -49,6 +49,12 @@ std::vector<double> local_fit_residuals(const Vertices& P, const Topology& topo,
 // measured and reads low at high noise.
 Vertices smoothed_normals(const Vertices& P, const Triangles& F, const Topology& topo, Executor* executor = nullptr);
 
+// Decision 19: where vertex i's 1-ring is narrow across (its second principal spread under
+// `spread` and under half its first: long thin triangles), the normal of the PCA plane of a patch
+// grown ring by ring until it is `spread` wide across (at most 12 rings, 200 vertices); elsewhere,
+// or where that plane tilts more than ~45 degrees from `normals`, `normals` itself.
+Vertices patch_normals(const Vertices& P, const Topology& topo, const Vertices& normals, double spread, Executor* executor = nullptr);
+
 // Umbrella smoothing p_i += lambda (mean of neighbours - p_i), Jacobi, `steps` times.
 Vertices umbrella_smooth(const Vertices& P, const Topology& topo, int steps, double lambda, Executor* executor = nullptr);
 

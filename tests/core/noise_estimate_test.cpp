@@ -75,6 +75,19 @@ TEST(LocalFitResiduals, RepeatedPassesRemoveTheShapesShare) {
   EXPECT_LT(rms_over_noise(test::cube(8), 0.1, LocalFit{2, 2, 3}), 1.3);
 }
 
+// Long thin triangles (CAD exports): across them the vertices sit closer than the noise, so the
+// normals of a few umbrella steps tilt with the noise, the fits' tangent coordinates carry it and
+// their linear terms absorb it (0.7x the noise). The frame from a patch grown until it is wider
+// than the noise across the slivers reads it (decision 19).
+TEST(EstimateNoise, TracksNoiseOnSlivers) {
+  TriMesh slivers = test::plane(40);
+  slivers.V.col(0) *= 12;  // 12:1 triangles
+  for (const double sigma : {0.1, 0.2}) {
+    SCOPED_TRACE("sigma " + std::to_string(sigma));
+    EXPECT_NEAR(estimate(test::with_noise(slivers, sigma)).sigma_edges / sigma, 1.0, 0.15);
+  }
+}
+
 TEST(EstimateNoise, ImpulseNoiseGivesItsRmsWhileTheMedianSeesOnlyTheCleanCore) {
   const TriMesh clean = test::sphere(4);
   NoiseSpec spec;
