@@ -50,7 +50,10 @@ Weld weld_positions(const Vertices& P, double relative_tolerance, ProgressObserv
     poll.poll();
     std::int64_t c[3], side[3];
     for (int a = 0; a < 3; ++a) {
-      const double u = P(i, a) / cell, f = std::isfinite(u) ? std::floor(u) : 0;  // |u| <= 5e5 when finite
+      // |u| <= 5e5 for finite coordinates and a finite tolerance; a non-finite one (which the
+      // decoders refuse later) makes the tolerance infinite and the cell 1: clamp the cell index
+      // so it and its neighbours stay representable (the distance test decides the weld).
+      const double u = P(i, a) / cell, f = std::isfinite(u) ? std::clamp(std::floor(u), -0x1p62, 0x1p62) : 0;
       c[a] = static_cast<std::int64_t>(f);
       side[a] = u - f < 0.5 ? -1 : 1;
     }

@@ -92,5 +92,16 @@ TEST(Weld, EmptyAndAllEqualInputs) {
   EXPECT_EQ(same.map, (std::vector<std::int32_t>{0, 0, 0, 0, 0}));
 }
 
+// A non-finite coordinate (decoders refuse it after welding) makes the tolerance infinite and
+// the grid's cell 1: huge finite coordinates then have cell indices beyond int64 unless clamped
+// (UBSan caught the overflow on a mutated STL). Everything is within an infinite tolerance.
+TEST(Weld, HugeAndInfiniteCoordinatesStayDefined) {
+  Vertices P(4, 3);
+  P << 1e300, -1e300, 0, -1e300, 1e300, 1, std::numeric_limits<double>::infinity(), 0, 0, 0, 0, 0;
+  const Weld w = weld_positions(P);
+  EXPECT_EQ(w.map.size(), 4u);
+  EXPECT_GE(w.V.rows(), 1);
+}
+
 }  // namespace
 }  // namespace mdn::io::detail
