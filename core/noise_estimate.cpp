@@ -2,7 +2,6 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
-#include <cstdlib>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -75,10 +74,11 @@ Vertices patch_normals(const Vertices& P, const Topology& topo, const Vertices& 
         const double count = static_cast<double>(patch.size());
         const Eigen::Vector3d mean = sum / count;
         const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(squares / count - mean * mean.transpose());
-        const double narrow = std::sqrt(std::max(0.0, eig.eigenvalues()(1))), wide = std::sqrt(std::max(0.0, eig.eigenvalues()(2)));
-        // A 1-ring wider than `spread` both ways, or about as wide across as along: keep the given normal.
-        if (ring == 0 && (narrow >= spread || narrow >= 0.5 * wide)) break;
-        if (narrow >= spread || patch.size() >= kMaxVertices || static_cast<int>(patch.size()) == last) {
+        // The patch's principal spreads in its plane: across (the second) and along (the first).
+        const double across = std::sqrt(std::max(0.0, eig.eigenvalues()(1))), along = std::sqrt(std::max(0.0, eig.eigenvalues()(2)));
+        // A 1-ring `spread` wide across, or about as wide across as along: keep the given normal.
+        if (ring == 0 && (across >= spread || across >= 0.5 * along)) break;
+        if (across >= spread || patch.size() >= kMaxVertices || static_cast<int>(patch.size()) == last) {
           Eigen::Vector3d normal = eig.eigenvectors().col(0);
           if (normal.dot(normals.row(i).transpose()) < 0) normal = -normal;
           if (normal.dot(normals.row(i).transpose()) >= kMaxTilt) N.row(i) = normal.transpose();

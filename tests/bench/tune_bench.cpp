@@ -7,7 +7,7 @@
 //       fits the rule on the training rows; prints the C++ table. --matrix caches the cost
 //       matrix (every case with every candidate, the expensive part): read if FILE holds it,
 //       else computed and written there.
-//   tune_bench report  [--data DIR] [--jobs N] ROWS.tsv
+//   tune_bench report  [--data DIR] [--jobs N] [--set S] [--search] [--only MESH] ROWS.tsv
 //       re-creates every case, runs Auto (the rule compiled in now) and prints, per set, the
 //       ratios MSAE(auto)/MSAE(best found) and MSAE(auto)/MSAE(paper's Fandisk parameters),
 //       and the ceiling of the rule's form: the best of its prototypes / MSAE(best found).
