@@ -124,10 +124,16 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
   const Vertices normals = smoothed_normals(sample.P, sample.F, sample.topo, &executor);
   sel.noise = estimate_noise(sample.P, sample.F, sample.topo, normals, sample.scored_vertices, &executor);
   sel.candidates = auto_candidates(measures, requested);
-  const auto score_all = [&](RecorruptedScorer& scorer) {
+  const auto score_all = [&](RecorruptedScorer& scorer, double noise) {
     // Decision 21: every candidate on the first draw; the best `refine` of them on the others.
     const int draws = scorer.draws();
     const bool staged = options.refine > 0 && draws > 1;
+    // Decision 24: a candidate that takes more off y1 than the noise can explain removes shape.
+    const auto eligible = [&](std::size_t k) {
+      ScoredCandidate& c = sel.candidates[k];
+      c.eligible = options.remove_at_most <= 0 || c.residual <= options.remove_at_most * noise;
+      return c.eligible;
+    };
     std::vector<std::size_t> order;
     const auto by_score = [&](std::size_t x, std::size_t y) { return sel.candidates[x].score < sel.candidates[y].score; };
     for (std::size_t k = 0; k < sel.candidates.size(); ++k) {
@@ -136,7 +142,7 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
       c.draws = staged ? 1 : draws;
       c.score = scorer.score(c.params, &c.residual, 0, c.draws);
       ++sel.evaluations;
-      order.push_back(k);
+      if (eligible(k)) order.push_back(k);
     }
     std::stable_sort(order.begin(), order.end(), by_score);
     if (staged) {
@@ -149,9 +155,10 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
         c.residual = std::sqrt((c.residual * c.residual + residual * residual * (draws - 1)) / draws);
         c.draws = draws;
       }
+      std::erase_if(order, [&](std::size_t k) { return !eligible(k); });
       std::stable_sort(order.begin(), order.end(), by_score);
     }
-    sel.chosen = static_cast<int>(order.front());
+    sel.chosen = order.empty() ? 0 : static_cast<int>(order.front());  // "identity" removes nothing
   };
   // Decision 20: below 2% of an edge, noise tilts a face by ~1 degree at most (no more than the
   // flattest shape detail): such a surface is taken as clean and left alone, without scoring.
@@ -160,17 +167,17 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
   }
   auto scoring = std::make_unique<RecorruptedScorer>(sample, normals, options.sigma > 0 ? options.sigma : options.scale * sel.noise.sigma,
                                                     options, executor, progress);
-  score_all(*scoring);
+  score_all(*scoring, sel.noise.sigma);
   // Decision 20: the winner's residual on y1, less the recorruption's share, is the noise it
   // found. Far less than the estimate means the estimate read shape as noise (a clean or nearly
   // clean surface with many features): score again at the noise the winner found.
   const double found = sel.candidates[static_cast<std::size_t>(sel.chosen)].residual;
-  if (options.sigma <= 0 && found < options.rescore_below * sel.noise.sigma) {
+  if (options.sigma <= 0 && found > 0 && found < options.rescore_below * sel.noise.sigma) {
     sel.noise.sigma = found;
     sel.noise.sigma_edges = sel.noise.edge_length > 0 ? found / sel.noise.edge_length : 0;
     scoring = std::make_unique<RecorruptedScorer>(sample, normals, std::max(options.scale * found, 1e-12 * sel.noise.edge_length),
                                                   options, executor, progress);
-    score_all(*scoring);
+    score_all(*scoring, found);
   }
   RecorruptedScorer& scorer = *scoring;
   if (requested.mode == ParamMode::Search) {
@@ -194,9 +201,13 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
     DenoiseParams best = d.best;
     best.pinned = requested.pinned;
     sel.evaluations += d.evaluations;
-    const double score = scorer.score(best);
-    sel.candidates.push_back({"search", best, score, scorer.draws()});
-    if (score < sel.candidates[static_cast<std::size_t>(sel.chosen)].score) sel.chosen = static_cast<int>(sel.candidates.size() - 1);
+    ScoredCandidate found_by_search{"search", best, 0, scorer.draws()};
+    found_by_search.score = scorer.score(best, &found_by_search.residual);
+    // Decision 24 holds for the search's result too.
+    found_by_search.eligible = options.remove_at_most <= 0 || found_by_search.residual <= options.remove_at_most * sel.noise.sigma;
+    sel.candidates.push_back(found_by_search);
+    if (found_by_search.eligible && found_by_search.score < sel.candidates[static_cast<std::size_t>(sel.chosen)].score)
+      sel.chosen = static_cast<int>(sel.candidates.size() - 1);
   }
   return sel;
 }

@@ -31,6 +31,7 @@ struct SelectionOptions {
   int refine = 3;                  // > 0: only this many candidates, the best after one draw, get the other draws
   double scale = 0.92;             // the recorruption's sigma over the estimated noise (decision 20)
   double rescore_below = 0.5;      // rescore at the noise the winner found when under this share of the estimate (0: never)
+  double remove_at_most = 1.5;     // > 0: a candidate that removes more than this multiple of the noise is not picked (decision 24)
   std::uint64_t seed = 1;          // of the recorruption draws
   double sigma = 0;                // > 0: the noise level to use (positions' units) instead of the estimate
   bool isotropic = true;           // recorrupt every coordinate (true) or along the normal only (false); decision 20
@@ -42,6 +43,7 @@ struct ScoredCandidate {
   double score = 0;       // recorrupted normal error, mean over `draws` draws (lower is better)
   int draws = 0;          // draws the score averages: the pick is among those with the most
   double residual = 0;    // RMS of (y1 - f(y1)) along the normal, less the recorruption's share: the noise f removed
+  bool eligible = true;   // false: it removed more than remove_at_most times the noise, so it is not picked (decision 24)
 };
 
 struct Selection {
@@ -84,7 +86,8 @@ class RecorruptedScorer {
 std::vector<ScoredCandidate> auto_candidates(const InputMeasures& measures, const DenoiseParams& requested);
 
 // Estimates the noise on a sample of P (unit-box frame), scores every candidate on recorrupted
-// copies of the sample and returns them with the pick (ties keep the earlier candidate).
+// copies of the sample and returns them with the pick: the best score among the eligible
+// candidates (decision 24; ties keep the earlier candidate).
 Selection select_parameters(const Vertices& P, const Triangles& F, const Topology& topo, const DenoiseParams& requested,
                             const InputMeasures& measures, Executor& executor, ProgressObserver* progress = nullptr,
                             const SelectionOptions& options = {});

@@ -31,7 +31,12 @@ json report_to_json(const DenoiseReport& report) {
     const Selection& sel = *report.selection;
     json candidates = json::array();
     for (const ScoredCandidate& c : sel.candidates)
-      candidates.push_back({{"name", c.name}, {"score", c.score}, {"draws", c.draws}, {"params", method_params_json(c.params)}});
+      candidates.push_back({{"name", c.name},
+                            {"score", c.score},
+                            {"draws", c.draws},
+                            {"removed_edges", sel.noise.edge_length > 0 ? c.residual / sel.noise.edge_length : 0.0},
+                            {"eligible", c.eligible},
+                            {"params", method_params_json(c.params)}});
     j["selection"] = {{"noise",
                        {{"sigma_edges", sel.noise.sigma_edges},
                         {"sigma", sel.noise.sigma},

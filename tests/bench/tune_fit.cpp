@@ -20,6 +20,7 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <thread>
 
@@ -62,67 +63,83 @@ void write_matrix(const std::string& path, const std::vector<FitCase>& cases,
   if (!out) throw std::runtime_error("cannot write " + path);
 }
 
-// The cached matrix, or an empty one when the file is missing or holds other cases or candidates.
-Matrix read_matrix(const std::string& path, const std::vector<FitCase>& cases,
-                   const std::vector<mdn::DenoiseParams>& cand) {
+std::string candidate_key(const mdn::DenoiseParams& c) {
+  char line[256];
+  std::snprintf(line, sizeof line, "%.17g %.17g %d %.17g %d %d", c.alpha, c.sigma_theta, c.n_aniso, c.sigma_gamma, c.n_normal,
+                c.n_vertex);
+  return line;
+}
+
+// Whatever the cache holds, by case name and candidate (empty when the file is missing): a
+// cache written for other cases or candidates still provides the entries they share.
+std::map<std::pair<std::string, std::string>, double> read_matrix(const std::string& path) {
+  std::map<std::pair<std::string, std::string>, double> known;
   std::ifstream in(path);
   std::string line, word;
   std::size_t count = 0;
-  if (!in || !std::getline(in, line) || !(in >> word >> count) || word != "candidates" || count != cand.size()) return {};
-  for (const auto& c : cand) {
+  if (!in || !std::getline(in, line) || !(in >> word >> count) || word != "candidates") return {};
+  std::vector<std::string> keys(count);
+  for (auto& key : keys) {
     mdn::DenoiseParams p;
     in >> p.alpha >> p.sigma_theta >> p.n_aniso >> p.sigma_gamma >> p.n_normal >> p.n_vertex;
-    if (!in || !same_params(p, c)) return {};
+    key = candidate_key(p);
   }
-  if (!(in >> word >> count) || word != "cases" || count != cases.size()) return {};
-  Matrix cost(cases.size(), std::vector<double>(cand.size()));
-  for (std::size_t i = 0; i < cases.size(); ++i) {
-    if (!(in >> word) || word != cases[i].name) return {};
-    for (double& c : cost[i]) in >> c;
-  }
-  return in ? cost : Matrix{};
+  if (!(in >> word >> count) || word != "cases") return {};
+  for (std::size_t i = 0; i < count && in >> word; ++i)
+    for (const auto& key : keys) {
+      double c = 0;
+      if (!(in >> c)) return known;
+      known[{word, key}] = c;
+    }
+  return known;
 }
 
 }  // namespace
 
-int fit(const std::vector<FitCase>& train, const FitScore& score, int jobs, const std::string& matrix_path, int prototypes) {
+int fit(const std::vector<FitCase>& train, const FitScore& score, int jobs, const std::string& matrix_path, int prototypes,
+        const std::vector<mdn::DenoiseParams>& start) {
   const std::size_t n = train.size();
   if (n < 8) {
     std::fprintf(stderr, "fit: %zu training cases, need at least 8\n", n);
     return 1;
   }
-  // Candidates (deduplicated), the paper's row first.
+  // Candidates (deduplicated): the paper's row first, then `start`, then the search's optima.
   std::vector<mdn::DenoiseParams> cand{mdn::DenoiseParams{}};
+  for (const auto& c : start)
+    if (std::none_of(cand.begin(), cand.end(), [&](const auto& d) { return same_params(d, c); })) cand.push_back(c);
+  const std::size_t kept = cand.size();
   for (const auto& c : train)
     if (std::none_of(cand.begin(), cand.end(), [&](const auto& d) { return same_params(d, c.best); }))
       cand.push_back(c.best);
   const std::size_t m = cand.size();
   std::fprintf(stderr, "fit: %zu cases x %zu candidates\n", n, m);
 
-  // Cost matrix: cached, or computed in parallel over cases.
-  Matrix cost = matrix_path.empty() ? Matrix{} : read_matrix(matrix_path, train, cand);
-  if (!cost.empty()) {
-    std::fprintf(stderr, "fit: cost matrix read from %s\n", matrix_path.c_str());
-  } else {
-    cost.assign(n, std::vector<double>(m));
-    std::atomic<std::size_t> next{0};
-    std::vector<std::thread> pool;
-    for (int t = 0; t < jobs; ++t)
-      pool.emplace_back([&] {
-        for (std::size_t i; (i = next++) < n;) {
-          for (std::size_t j = 0; j < m; ++j) {
-            mdn::DenoiseParams p = cand[j];
-            p.region_mode = train[i].measures.cluster_area_ratio >= p.irregular_area_ratio ? mdn::RegionMode::On
-                                                                                            : mdn::RegionMode::Off;
-            cost[i][j] = std::log(std::max(score(i, p), 1e-300) / train[i].best_msae);
+  // Cost matrix: the cached entries, the others computed in parallel over cases.
+  const auto known = matrix_path.empty() ? decltype(read_matrix("")){} : read_matrix(matrix_path);
+  Matrix cost(n, std::vector<double>(m));
+  std::atomic<std::size_t> next{0}, computed{0};
+  std::vector<std::thread> pool;
+  for (int t = 0; t < jobs; ++t)
+    pool.emplace_back([&] {
+      for (std::size_t i; (i = next++) < n;) {
+        for (std::size_t j = 0; j < m; ++j) {
+          if (const auto it = known.find({train[i].name, candidate_key(cand[j])}); it != known.end()) {
+            cost[i][j] = it->second;
+            continue;
           }
+          mdn::DenoiseParams p = cand[j];
+          p.region_mode = train[i].measures.cluster_area_ratio >= p.irregular_area_ratio ? mdn::RegionMode::On
+                                                                                          : mdn::RegionMode::Off;
+          cost[i][j] = std::log(std::max(score(i, p), 1e-300) / train[i].best_msae);
+          ++computed;
         }
-      });
-    for (auto& t : pool) t.join();
-    if (!matrix_path.empty()) {
-      write_matrix(matrix_path, train, cand, cost);
-      std::fprintf(stderr, "fit: cost matrix written to %s\n", matrix_path.c_str());
-    }
+      }
+    });
+  for (auto& t : pool) t.join();
+  std::fprintf(stderr, "fit: %zu of %zu costs computed, the others read from the cache\n", computed.load(), n * m);
+  if (!matrix_path.empty() && computed > 0) {
+    write_matrix(matrix_path, train, cand, cost);
+    std::fprintf(stderr, "fit: cost matrix written to %s\n", matrix_path.c_str());
   }
 
   // Greedy cover after the paper's row (candidate 0). Leave-one-mesh-out: a case is covered
@@ -132,9 +149,16 @@ int fit(const std::vector<FitCase>& train, const FitScore& score, int jobs, cons
       if (mesh_of(train[k].name) == mesh_of(train[i].name) && same_params(train[k].best, cand[j])) return true;
     return false;
   };
-  std::vector<std::size_t> order{0};
-  std::vector<double> cover(n), held_out(n);
-  for (std::size_t i = 0; i < n; ++i) cover[i] = held_out[i] = cost[i][0];
+  std::vector<std::size_t> order;
+  std::vector<double> cover(n, std::numeric_limits<double>::infinity()), held_out = cover;
+  const auto add = [&](std::size_t j) {
+    order.push_back(j);
+    for (std::size_t i = 0; i < n; ++i) {
+      cover[i] = std::min(cover[i], cost[i][j]);
+      if (j == 0 || !own(i, j)) held_out[i] = std::min(held_out[i], cost[i][j]);  // the paper's row covers all
+    }
+  };
+  for (std::size_t j = 0; j < kept; ++j) add(j);  // the paper's row and `start`
   const auto print_cover = [&] {
     std::vector<double> in, out;
     for (std::size_t i = 0; i < n; ++i) {
@@ -146,7 +170,7 @@ int fit(const std::vector<FitCase>& train, const FitScore& score, int jobs, cons
                  *std::max_element(out.begin(), out.end()));
   };
   print_cover();
-  while (order.size() < std::min<std::size_t>(m, static_cast<std::size_t>(prototypes))) {
+  while (order.size() < std::min<std::size_t>(m, std::max(kept, static_cast<std::size_t>(prototypes)))) {
     std::size_t pick = 0;
     double pick_total = std::numeric_limits<double>::infinity();
     for (std::size_t j = 1; j < m; ++j) {
@@ -158,11 +182,7 @@ int fit(const std::vector<FitCase>& train, const FitScore& score, int jobs, cons
         pick = j;
       }
     }
-    order.push_back(pick);
-    for (std::size_t i = 0; i < n; ++i) {
-      cover[i] = std::min(cover[i], cost[i][pick]);
-      if (!own(i, pick)) held_out[i] = std::min(held_out[i], cost[i][pick]);
-    }
+    add(pick);
     print_cover();
   }
 

@@ -17,9 +17,9 @@ struct FitCase {
 // MSAE of training case i denoised with the given parameters.
 using FitScore = std::function<double(std::size_t i, const mdn::DenoiseParams& params)>;
 
-// Prints `prototypes` candidates (the paper's row and a greedy cover) as the C++ data
-// core/auto_rule.inc holds; returns a process exit code.
-// matrix_path (optional): the cost matrix's cache. Read from there when the file exists and
-// holds the same cases and candidates; otherwise computed (the expensive part) and written there.
+// Prints `prototypes` candidates (the paper's row, `start`, then a greedy cover) as the C++
+// data core/auto_rule.inc holds; returns a process exit code.
+// matrix_path (optional): the cost matrix's cache, by case name and candidate. Entries found
+// there are read; the others are computed (the expensive part) and the whole matrix written back.
 int fit(const std::vector<FitCase>& cases, const FitScore& score, int jobs, const std::string& matrix_path = {},
-        int prototypes = 10);
+        int prototypes = 10, const std::vector<mdn::DenoiseParams>& start = {});

@@ -32,6 +32,36 @@ TEST(AutoSelect, ACleanSurfaceComesBackUnchanged) {
   }
 }
 
+TEST(AutoSelect, ACandidateThatRemovesShapeIsNotPickedSoACoarseCleanPartStaysPut) {
+  // Decision 24. The estimate reads the creases of a clean low-poly cylinder as noise; the
+  // best-scored candidate at that noise flattens them. Without the guard auto would move the
+  // part by more than 1% of its diagonal; with it nothing moves.
+  const TriMesh clean = test::closed_cylinder(32, 4, 1.0);
+  const double diagonal = (clean.V.colwise().maxCoeff() - clean.V.colwise().minCoeff()).norm();
+  const Vertices P = UnitBox::of(clean.V).apply(clean.V);
+  const Topology topo = Topology::build(clean.F, static_cast<int>(clean.V.rows()));
+  const InputMeasures m = measure_input(P, clean.F, topo, automatic());
+  Executor ex(1);
+  SelectionOptions unguarded;
+  unguarded.remove_at_most = 0;
+  const Selection loose = select_parameters(P, clean.F, topo, automatic(), m, ex, nullptr, unguarded);
+  const ScoredCandidate& flattening = loose.candidates[static_cast<std::size_t>(loose.chosen)];
+  ASSERT_NE(flattening.name, "identity");
+  EXPECT_GT(max_displacement(denoise(clean, flattening.params).mesh, clean), 0.01 * diagonal);
+
+  const Selection sel = select_parameters(P, clean.F, topo, automatic(), m, ex);
+  const ScoredCandidate& chosen = sel.candidates[static_cast<std::size_t>(sel.chosen)];
+  EXPECT_TRUE(chosen.eligible);
+  for (const ScoredCandidate& c : sel.candidates) {
+    EXPECT_EQ(c.eligible, c.residual <= 1.5 * sel.noise.sigma) << c.name;
+    if (c.eligible) {
+      EXPECT_GE(c.score, chosen.score) << c.name;
+    }
+  }
+  EXPECT_FALSE(sel.candidates[static_cast<std::size_t>(loose.chosen)].eligible);
+  EXPECT_LT(max_displacement(denoise(clean, automatic()).mesh, clean), 0.001 * diagonal);
+}
+
 TEST(AutoSelect, NoisySurfacesAreFilteredAndTheCadShapeBeatsThePaperRow) {
   for (const TriMesh& clean : {test::cube(16), test::sphere(4)}) {
     const TriMesh noisy = test::with_noise(clean, 0.3);
@@ -53,7 +83,11 @@ TEST(AutoSelect, ReportsEveryCandidateAndRunsTheBestScoredOne) {
   ASSERT_GE(sel.candidates.size(), 3u);
   EXPECT_EQ(sel.candidates[0].name, "identity");
   EXPECT_EQ(sel.candidates[1].name, "paper");
-  for (const ScoredCandidate& c : sel.candidates) EXPECT_GE(c.score, sel.candidates[static_cast<std::size_t>(sel.chosen)].score);
+  for (const ScoredCandidate& c : sel.candidates) {
+    if (c.eligible) {
+      EXPECT_GE(c.score, sel.candidates[static_cast<std::size_t>(sel.chosen)].score) << c.name;
+    }
+  }
   const DenoiseParams& ran = r.report.params;
   EXPECT_EQ(ran.mode, ParamMode::Manual);
   const DenoiseResult manual = denoise(noisy, ran);

@@ -60,7 +60,7 @@ TEST_F(ClientExamples, PythonSyncAndAsync) {
 // The Python client's --help, from the repository root and from its own folder (it used to die
 // with an IndexError); a wrong argument count is a usage error (2).
 TEST_F(ClientExamples, PythonHelpFromAnyFolder) {
-  for (const std::string folder : {std::string(source_dir()), std::string(source_dir()) + "/client-examples"}) {
+  for (const std::string& folder : {std::string(source_dir()), std::string(source_dir()) + "/client-examples"}) {
     const std::string script = folder == source_dir() ? "client-examples/python/denoise_client.py" : "python/denoise_client.py";
     const auto [code, out] = run_command("cd " + shell_quote(folder) + " && python3 " + script + " --help 2>&1");
     EXPECT_EQ(code, 0) << folder << ": " << out;

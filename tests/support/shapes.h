@@ -131,6 +131,37 @@ inline TriMesh fold(int n, double opening_deg) {
   return m;
 }
 
+// A closed unit-radius cylinder of the given height, as a low-poly exporter writes it:
+// `around` segments, `rows` rings of quads split in two, flat caps fanned from their centres
+// (long thin triangles; every ring vertex but the middle rows' lies on a 90-degree crease).
+inline TriMesh closed_cylinder(int around, int rows, double height) {
+  TriMesh m;
+  const int ring = around * (rows + 1);
+  m.V.resize(ring + 2, 3);
+  for (int r = 0; r <= rows; ++r)
+    for (int a = 0; a < around; ++a) {
+      const double t = 2 * std::numbers::pi * a / around;
+      m.V.row(r * around + a) << std::cos(t), std::sin(t), height * r / rows;
+    }
+  const int bottom = ring, top = ring + 1;
+  m.V.row(bottom) << 0, 0, 0;
+  m.V.row(top) << 0, 0, height;
+  m.F.resize(2 * around * rows + 2 * around, 3);
+  Eigen::Index f = 0;
+  for (int r = 0; r < rows; ++r)
+    for (int a = 0; a < around; ++a) {
+      const int b = (a + 1) % around;
+      m.F.row(f++) << r * around + a, r * around + b, (r + 1) * around + b;
+      m.F.row(f++) << r * around + a, (r + 1) * around + b, (r + 1) * around + a;
+    }
+  for (int a = 0; a < around; ++a) {
+    const int b = (a + 1) % around;
+    m.F.row(f++) << bottom, b, a;
+    m.F.row(f++) << top, rows * around + a, rows * around + b;
+  }
+  return m;
+}
+
 }  // namespace mdn::test
 
 namespace mdn::test {
