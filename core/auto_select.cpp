@@ -124,14 +124,19 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
   const Vertices normals = smoothed_normals(sample.P, sample.F, sample.topo, &executor);
   sel.noise = estimate_noise(sample.P, sample.F, sample.topo, normals, sample.scored_vertices, &executor);
   sel.candidates = auto_candidates(measures, requested);
+  // Decision 24: a candidate that takes more off y1 than the noise can explain removes shape,
+  // where the noise is low enough for the input to be a clean surface read as noisy.
+  const auto removes_shape = [&](double residual, double noise) {
+    const bool low = options.guard_below <= 0 || noise < options.guard_below * sel.noise.edge_length;
+    return options.remove_at_most > 0 && low && residual > options.remove_at_most * noise;
+  };
   const auto score_all = [&](RecorruptedScorer& scorer, double noise) {
     // Decision 21: every candidate on the first draw; the best `refine` of them on the others.
     const int draws = scorer.draws();
     const bool staged = options.refine > 0 && draws > 1;
-    // Decision 24: a candidate that takes more off y1 than the noise can explain removes shape.
     const auto eligible = [&](std::size_t k) {
       ScoredCandidate& c = sel.candidates[k];
-      c.eligible = options.remove_at_most <= 0 || c.residual <= options.remove_at_most * noise;
+      c.eligible = !removes_shape(c.residual, noise);
       return c.eligible;
     };
     std::vector<std::size_t> order;
@@ -167,7 +172,7 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
   }
   auto scoring = std::make_unique<RecorruptedScorer>(sample, normals, options.sigma > 0 ? options.sigma : options.scale * sel.noise.sigma,
                                                     options, executor, progress);
-  score_all(*scoring, sel.noise.sigma);
+  score_all(*scoring, options.sigma > 0 ? options.sigma : sel.noise.sigma);
   // Decision 20: the winner's residual on y1, less the recorruption's share, is the noise it
   // found. Far less than the estimate means the estimate read shape as noise (a clean or nearly
   // clean surface with many features): score again at the noise the winner found.
@@ -204,7 +209,7 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
     ScoredCandidate found_by_search{"search", best, 0, scorer.draws()};
     found_by_search.score = scorer.score(best, &found_by_search.residual);
     // Decision 24 holds for the search's result too.
-    found_by_search.eligible = options.remove_at_most <= 0 || found_by_search.residual <= options.remove_at_most * sel.noise.sigma;
+    found_by_search.eligible = !removes_shape(found_by_search.residual, sel.noise.sigma);
     sel.candidates.push_back(found_by_search);
     if (found_by_search.eligible && found_by_search.score < sel.candidates[static_cast<std::size_t>(sel.chosen)].score)
       sel.chosen = static_cast<int>(sel.candidates.size() - 1);

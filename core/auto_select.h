@@ -32,6 +32,7 @@ struct SelectionOptions {
   double scale = 0.92;             // the recorruption's sigma over the estimated noise (decision 20)
   double rescore_below = 0.5;      // rescore at the noise the winner found when under this share of the estimate (0: never)
   double remove_at_most = 1.5;     // > 0: a candidate that removes more than this multiple of the noise is not picked (decision 24)
+  double guard_below = 0.3;        // the guard applies where the noise reads below this many edge lengths (0: always)
   std::uint64_t seed = 1;          // of the recorruption draws
   double sigma = 0;                // > 0: the noise level to use (positions' units) instead of the estimate
   bool isotropic = true;           // recorrupt every coordinate (true) or along the normal only (false); decision 20
@@ -42,7 +43,7 @@ struct ScoredCandidate {
   DenoiseParams params;   // mode Manual; what was scored
   double score = 0;       // recorrupted normal error, mean over `draws` draws (lower is better)
   int draws = 0;          // draws the score averages: the pick is among those with the most
-  double residual = 0;    // RMS of (y1 - f(y1)) along the normal, less the recorruption's share: the noise f removed
+  double residual = 0;    // RMS of (y1 - f(y1)) along the normal, less the recorruption's share: the noise f removed (units of `noise.sigma`)
   bool eligible = true;   // false: it removed more than remove_at_most times the noise, so it is not picked (decision 24)
 };
 

@@ -270,7 +270,7 @@ std::vector<double> local_fit_residuals(const Vertices& P, const Topology& topo,
   return out;
 }
 
-NoiseEstimate estimate_noise(const Vertices& P, const Triangles&, const Topology& topo, const Vertices& normals,
+NoiseEstimate estimate_noise(const Vertices& P, const Triangles& F, const Topology& topo, const Vertices& smoothed,
                              const std::vector<std::int32_t>& vertices, Executor* executor) {
   const auto t0 = std::chrono::steady_clock::now();
   NoiseEstimate est;
@@ -292,10 +292,25 @@ NoiseEstimate estimate_noise(const Vertices& P, const Triangles&, const Topology
   std::optional<Reading> best, one_pass;
   for (const LocalFit fit : {LocalFit{1, 1, 3}, LocalFit{2, 2, 2}}) {
     std::vector<double> first;
-    const std::optional<Reading> r = read(local_fit_residuals(P, topo, normals, fit, vertices, executor, &first));
+    const std::optional<Reading> r = read(local_fit_residuals(P, topo, smoothed, fit, vertices, executor, &first));
     if (r && (!best || r->sigma < best->sigma)) best = r;
     if (fit.rings == 2) one_pass = read(std::move(first));
   }
+  const double noisy_edge = topo.mean_edge_length(P);
+  // Decision 19: at high noise (a first reading above 0.3 noisy edge lengths, about 0.35 l) four
+  // smoothing steps leave the frames tilted by the noise and the fits' linear terms absorb part
+  // of it; read again in frames from 16 steps.
+  constexpr double kHighNoiseEdges = 0.3;
+  Vertices frames = smoothed;
+  if (best && noisy_edge > 0 && best->sigma > kHighNoiseEdges * noisy_edge) {
+    frames = vertex_normals(umbrella_smooth(P, topo, 16, 0.5, executor), F);
+    best.reset();
+    for (const LocalFit fit : {LocalFit{1, 1, 3}, LocalFit{2, 2, 2}}) {
+      const std::optional<Reading> r = read(local_fit_residuals(P, topo, frames, fit, vertices, executor));
+      if (r && (!best || r->sigma < best->sigma)) best = r;
+    }
+  }
+  const Vertices& normals = frames;
   // Decision 19: a second reading in frames from patches 3 sigma wide across slivers (none
   // where no frame changed: the same reading).
   if (best && best->sigma > 0) {
@@ -312,7 +327,6 @@ NoiseEstimate estimate_noise(const Vertices& P, const Triangles&, const Topology
     est.sigma = best->sigma;
     est.gaussian_sigma = best->core;
   }
-  const double noisy_edge = topo.mean_edge_length(P);
   // Noise lengthens edges: |e + d|^2 = |e|^2 + 2 e.d + |d|^2 with E|d|^2 = 2 sigma^2 for the
   // difference d of two normal displacements, so the clean length is about
   // sqrt(l^2 - 2 sigma^2) (decision 19; at most halved, for estimates beyond the model).

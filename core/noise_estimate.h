@@ -24,10 +24,10 @@ struct NoiseEstimate {
 // smoothed normal is predicted from its ring by least squares, and the prediction error,
 // filtered again by the same operator, is normalised by its variance under white noise.
 // Planes over the 1-ring (three passes) and quadrics over the 2-ring (two); the smaller
-// reading is kept. Features
-// and impulses give large errors; see decision 19 for how they are combined. `vertices`: where
-// to estimate (all if empty). `normals`: smoothed_normals(P, F, topo), passed in by callers
-// that need them too.
+// reading is kept; above 0.3 edge lengths it is read again in frames smoothed 16 steps.
+// Features and impulses give large errors; see decision 19 for how they are combined.
+// `vertices`: where to estimate (all if empty). `normals`: smoothed_normals(P, F, topo),
+// passed in by callers that need them too.
 NoiseEstimate estimate_noise(const Vertices& P, const Triangles& F, const Topology& topo, const Vertices& normals,
                              const std::vector<std::int32_t>& vertices = {}, Executor* executor = nullptr);
 

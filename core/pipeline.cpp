@@ -120,6 +120,7 @@ DenoiseResult denoise(const TriMesh& input, const DenoiseParams& requested, cons
     noise.sigma /= box.scale;
     noise.gaussian_sigma /= box.scale;
     noise.edge_length /= box.scale;
+    for (ScoredCandidate& c : report.selection->candidates) c.residual /= box.scale;
     report.params.validate();
     times.measure_ms = ms_since(t0);
   }

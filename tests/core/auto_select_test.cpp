@@ -62,6 +62,21 @@ TEST(AutoSelect, ACandidateThatRemovesShapeIsNotPickedSoACoarseCleanPartStaysPut
   EXPECT_LT(max_displacement(denoise(clean, automatic()).mesh, clean), 0.001 * diagonal);
 }
 
+TEST(AutoSelect, AtHighNoiseEveryCandidateStaysEligible) {
+  // Decision 24: above 0.3 edge lengths the input is noisy whatever its tessellation, and a
+  // strong filter's shrinkage of a smooth shape is no sign of a clean surface.
+  const TriMesh noisy = test::with_noise(test::torus(96, 32, 0.35), 0.6);
+  const DenoiseResult r = denoise(noisy, automatic());
+  const Selection& sel = *r.report.selection;
+  ASSERT_GT(sel.noise.sigma_edges, 0.3);
+  bool removes_more = false;
+  for (const ScoredCandidate& c : sel.candidates) {
+    EXPECT_TRUE(c.eligible) << c.name;
+    removes_more = removes_more || c.residual > 1.5 * sel.noise.sigma;
+  }
+  EXPECT_TRUE(removes_more);  // the guard would have excluded one below 0.3 edge lengths
+}
+
 TEST(AutoSelect, NoisySurfacesAreFilteredAndTheCadShapeBeatsThePaperRow) {
   for (const TriMesh& clean : {test::cube(16), test::sphere(4)}) {
     const TriMesh noisy = test::with_noise(clean, 0.3);
@@ -93,6 +108,15 @@ TEST(AutoSelect, ReportsEveryCandidateAndRunsTheBestScoredOne) {
   const DenoiseResult manual = denoise(noisy, ran);
   EXPECT_TRUE(manual.mesh.V == r.mesh.V);  // auto = select + the manual pipeline
   EXPECT_FALSE(manual.report.selection.has_value());
+  // The noise and what each candidate removed are reported in the input's units.
+  TriMesh larger = noisy;
+  larger.V *= 250.0;
+  const DenoiseResult big = denoise(larger, automatic());
+  const Selection& scaled = *big.report.selection;
+  EXPECT_NEAR(scaled.noise.sigma, 250.0 * sel.noise.sigma, 1e-6 * scaled.noise.sigma);
+  ASSERT_EQ(scaled.candidates.size(), sel.candidates.size());
+  for (std::size_t k = 0; k < sel.candidates.size(); ++k)
+    EXPECT_NEAR(scaled.candidates[k].residual, 250.0 * sel.candidates[k].residual, 1e-6 * scaled.noise.sigma) << sel.candidates[k].name;
 }
 
 TEST(AutoSelect, PinnedFieldsKeepTheirValueInEveryCandidate) {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <map>
 #include <numbers>
@@ -129,6 +130,38 @@ inline TriMesh fold(int n, double opening_deg) {
     m.V(i, 2) = std::abs(x) * std::sin(half);
   }
   return m;
+}
+
+// A (u, v) grid of nu x nv quads, each split along alternating diagonals, mapped through
+// `at`; `wrap_u` / `wrap_v` close the grid into a tube or a torus.
+inline TriMesh parametric(int nu, int nv, bool wrap_u, bool wrap_v, const std::function<Vec3(double, double)>& at) {
+  const int cu = wrap_u ? nu : nu + 1, cv = wrap_v ? nv : nv + 1;
+  TriMesh m;
+  m.V.resize(cu * cv, 3);
+  for (int i = 0; i < cu; ++i)
+    for (int j = 0; j < cv; ++j) m.V.row(i * cv + j) = at(static_cast<double>(i) / nu, static_cast<double>(j) / nv).transpose();
+  m.F.resize(2 * nu * nv, 3);
+  int f = 0;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const int a = i * cv + j, b = ((i + 1) % cu) * cv + j, c = ((i + 1) % cu) * cv + (j + 1) % cv, d = i * cv + (j + 1) % cv;
+      if ((i + j) % 2) {
+        m.F.row(f++) << a, b, c;
+        m.F.row(f++) << a, c, d;
+      } else {
+        m.F.row(f++) << a, b, d;
+        m.F.row(f++) << b, c, d;
+      }
+    }
+  return m;
+}
+
+// A torus of radii 1 and `r` on an nu x nv grid.
+inline TriMesh torus(int nu, int nv, double r) {
+  return parametric(nu, nv, true, true, [r](double u, double v) {
+    const double a = 2 * std::numbers::pi * u, b = 2 * std::numbers::pi * v, rho = 1 + r * std::cos(b);
+    return Vec3(rho * std::cos(a), rho * std::sin(a), r * std::sin(b));
+  });
 }
 
 // A closed unit-radius cylinder of the given height, as a low-poly exporter writes it:
