@@ -289,39 +289,37 @@ NoiseEstimate estimate_noise(const Vertices& P, const Triangles& F, const Topolo
     const double rms = std::sqrt(std::accumulate(s.begin(), s.end(), 0.0) / static_cast<double>(s.size()));
     return Reading{std::min(rms, 4 * core), core};
   };
-  std::optional<Reading> best, one_pass;
-  for (const LocalFit fit : {LocalFit{1, 1, 3}, LocalFit{2, 2, 2}}) {
-    std::vector<double> first;
-    const std::optional<Reading> r = read(local_fit_residuals(P, topo, smoothed, fit, vertices, executor, &first));
-    if (r && (!best || r->sigma < best->sigma)) best = r;
-    if (fit.rings == 2) one_pass = read(std::move(first));
-  }
+  // The smaller reading of the two fits in the given frames (decision 19).
+  const auto smaller = [&](const Vertices& frames, std::optional<Reading>* one_pass) {
+    std::optional<Reading> best;
+    for (const LocalFit fit : {LocalFit{1, 1, 3}, LocalFit{2, 2, 2}}) {
+      std::vector<double> first;
+      const bool quadric = fit.rings == 2 && one_pass;
+      const std::optional<Reading> r = read(local_fit_residuals(P, topo, frames, fit, vertices, executor, quadric ? &first : nullptr));
+      if (r && (!best || r->sigma < best->sigma)) best = r;
+      if (quadric) *one_pass = read(std::move(first));
+    }
+    return best;
+  };
+  std::optional<Reading> one_pass;
+  std::optional<Reading> best = smaller(smoothed, &one_pass);
   const double noisy_edge = topo.mean_edge_length(P);
   // Decision 19: at high noise (a first reading above 0.3 noisy edge lengths, about 0.35 l) four
   // smoothing steps leave the frames tilted by the noise and the fits' linear terms absorb part
   // of it; read again in frames from 16 steps.
   constexpr double kHighNoiseEdges = 0.3;
-  Vertices frames = smoothed;
+  std::optional<Vertices> steadier;
   if (best && noisy_edge > 0 && best->sigma > kHighNoiseEdges * noisy_edge) {
-    frames = vertex_normals(umbrella_smooth(P, topo, 16, 0.5, executor), F);
-    best.reset();
-    for (const LocalFit fit : {LocalFit{1, 1, 3}, LocalFit{2, 2, 2}}) {
-      const std::optional<Reading> r = read(local_fit_residuals(P, topo, frames, fit, vertices, executor));
-      if (r && (!best || r->sigma < best->sigma)) best = r;
-    }
+    steadier = vertex_normals(umbrella_smooth(P, topo, 16, 0.5, executor), F);
+    best = smaller(*steadier, nullptr);
   }
-  const Vertices& normals = frames;
+  const Vertices& normals = steadier ? *steadier : smoothed;
   // Decision 19: a second reading in frames from patches 3 sigma wide across slivers (none
   // where no frame changed: the same reading).
   if (best && best->sigma > 0) {
     const Vertices widened = patch_normals(P, topo, normals, 3 * best->sigma, executor);
-    std::optional<Reading> second;
     if ((widened.array() != normals.array()).any())
-      for (const LocalFit fit : {LocalFit{1, 1, 3}, LocalFit{2, 2, 2}}) {
-        const std::optional<Reading> r = read(local_fit_residuals(P, topo, widened, fit, vertices, executor));
-        if (r && (!second || r->sigma < second->sigma)) second = r;
-      }
-    if (second) best = second;
+      if (const std::optional<Reading> second = smaller(widened, nullptr)) best = second;
   }
   if (best) {
     est.sigma = best->sigma;
