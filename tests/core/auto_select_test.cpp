@@ -80,7 +80,7 @@ TEST(AutoSelect, AtHighNoiseEveryCandidateStaysEligible) {
 TEST(AutoSelect, ASmoothTubeGetsTheAnisotropicFewIterationsCandidate) {
   // Decision 25: smooth organic surfaces want the anisotropic pre-filter and two normal
   // iterations. Measured on this torus at 0.3 edge lengths: 0.07x the paper row's MSAE with that
-  // candidate, 0.42-0.85x among the other ten.
+  // candidate, 0.42-0.85x when auto picks among the others.
   const TriMesh clean = test::torus(64, 24, 0.3);
   for (const std::uint64_t seed : {7u, 8u}) {
     SCOPED_TRACE("seed " + std::to_string(seed));
