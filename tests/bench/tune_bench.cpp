@@ -11,6 +11,9 @@
 //   tune_bench clean   [--data DIR] [--jobs N] [--only MESH]
 //       every CGAL demo mesh of 500 to 30,000 vertices through auto without noise: what auto
 //       does to a clean asset (the largest vertex displacement; the target is at most 0.1%).
+//   tune_bench select  [--data DIR] [--jobs N] [--set S] [--only MESH] [--seed N]
+//       each candidate's true MSAE on the whole mesh against the pick of several selection
+//       variants; --seed sets the recorruption draws' seed (run two or three to see the spread).
 //   tune_bench report  [--data DIR] [--jobs N] [--set S] [--search] [--only MESH] ROWS.tsv
 //       re-creates every case, runs Auto (the rule compiled in now) and prints, per set, the
 //       ratios MSAE(auto)/MSAE(best found) and MSAE(auto)/MSAE(paper's Fandisk parameters),
@@ -509,7 +512,9 @@ int noise_command(const fs::path& data, int jobs, const std::string& which) {
 
 // Selection by estimated error on every case, without the search table: each candidate's
 // true MSAE on the whole mesh, auto's pick with the estimated noise and with the true noise.
-int select_command(const fs::path& data, int jobs, const std::string& which, const std::string& only) {
+// `seed`: of the recorruption draws, for every variant (the pick's spread over seeds is the
+// score's noise floor: core/README.md, "The score's own noise floor").
+int select_command(const fs::path& data, int jobs, const std::string& which, const std::string& only, std::uint64_t seed) {
   std::vector<Case> cases = build_cases(data, which, only);
   std::erase_if(cases, [](const Case& c) { return c.config == "clean"; });
   // Variants of the selection: draws, how many candidates get every draw, the recorruption's
@@ -544,6 +549,7 @@ int select_command(const fs::path& data, int jobs, const std::string& which, con
       so.rescore_below = v.rescore_below;
       so.remove_at_most = v.remove_at_most;
       so.guard_below = v.guard_below;
+      so.seed = seed;
       return so;
     };
     const auto t0 = std::chrono::steady_clock::now();
@@ -654,7 +660,7 @@ int clean_command(const fs::path& data, int jobs, const std::string& only) {
                "usage: tune_bench search [--data DIR] [--jobs N] [--set train|validation|all] [--only MESH] OUT.tsv\n"
                "       tune_bench fit [--data DIR] [--jobs N] [--matrix FILE] [--prototypes N | --extend K] ROWS.tsv\n"
                "       tune_bench report [--data DIR] [--jobs N] [--set train|validation|all] [--search] [--only MESH] ROWS.tsv\n"
-               "       tune_bench noise|select [--data DIR] [--jobs N] [--set train|validation|all] [--only MESH]\n"
+               "       tune_bench noise|select [--data DIR] [--jobs N] [--set train|validation|all] [--only MESH] [--seed N]\n"
                "       tune_bench clean [--data DIR] [--jobs N] [--only MESH]\n");
   std::exit(code);
 }
@@ -670,6 +676,7 @@ int main(int argc, char** argv) {
   std::string which = "all", only, matrix;
   bool with_search = false;
   int prototypes = 10, extend = 0;
+  std::uint64_t seed = SelectionOptions{}.seed;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     const auto value = [&]() -> std::string {
@@ -680,6 +687,7 @@ int main(int argc, char** argv) {
     else if (a == "--jobs") jobs = std::max(1, std::stoi(value()));
     else if (a == "--set") which = value();
     else if (a == "--only") only = value();
+    else if (a == "--seed") seed = std::stoull(value());
     else if (a == "--matrix") matrix = value();
     else if (a == "--search") with_search = true;
     else if (a == "--prototypes") prototypes = std::max(1, std::stoi(value()));
@@ -694,7 +702,7 @@ int main(int argc, char** argv) {
     if (command == "search") return search(data, jobs, which, only, file);
     if (command == "report") return report(data, jobs, which, file, with_search, only);
     if (command == "noise") return noise_command(data, jobs, which);
-    if (command == "select") return select_command(data, jobs, which, only);
+    if (command == "select") return select_command(data, jobs, which, only, seed);
     if (command == "clean") return clean_command(data, jobs, only);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "tune_bench: %s\n", e.what());
