@@ -11,7 +11,7 @@ namespace mdn {
 
 using Vertices = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;      // #V by 3
 // Observes an iterative filter: called with its input (count 0), then after each iteration
-// with the count done so far and the current iterate (positions or normals). Used by the parameter search (core/tune.h),
+// with the count done so far and the current iterate (positions or normals). Used by the parameter search (core/auto/tune.h),
 // which reads every iteration count of one run instead of rerunning the filter.
 using IterationHook = std::function<void(int iterations_done, const Vertices& state)>;
 using Triangles = Eigen::Matrix<std::int32_t, Eigen::Dynamic, 3, Eigen::RowMajor>; // #F by 3

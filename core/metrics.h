@@ -15,7 +15,7 @@ class Executor;
 // invalid (validate_mesh), or if every face is degenerate.
 double msae(const TriMesh& result, const TriMesh& truth);
 // The same mean from the two meshes' face normals (#F by 3 each, unit or zero rows), for
-// callers that compare many results with one truth (core/tune.h). Throws InvalidMeshError if
+// callers that compare many results with one truth (core/auto/tune.h). Throws InvalidMeshError if
 // the row counts differ or every face is degenerate.
 double msae_of_normals(const Vertices& result_normals, const Vertices& truth_normals);
 

@@ -82,7 +82,8 @@ NormalFilterSettings normal_filter_settings(const DenoiseParams& params) {
   return nfs;
 }
 
-DenoiseResult denoise(const TriMesh& input, const DenoiseParams& requested, const RunOptions& options) {
+DenoiseResult run_pipeline(const TriMesh& input, const DenoiseParams& requested, const RunOptions& options,
+                           const ParameterChooser& choose) {
   const auto t_start = Clock::now();
   requested.validate();
   validate_mesh(input);
@@ -97,6 +98,9 @@ DenoiseResult denoise(const TriMesh& input, const DenoiseParams& requested, cons
     times.total_ms = ms_since(t_start);
     return result;
   }
+  if (requested.mode != ParamMode::Manual && !choose)
+    throw InvalidParamsError("mode", "run_pipeline: mode " + std::string(to_string(requested.mode)) +
+                                         " needs a parameter chooser (use mdn::denoise, core/auto/denoise.h)");
   Executor executor(options.threads);
 
   // Sec. 3: work in the unit box (core/README.md, decision 1); undone at the end.
@@ -106,21 +110,13 @@ DenoiseResult denoise(const TriMesh& input, const DenoiseParams& requested, cons
   const Triangles& F = order.faces();
   Vertices P = box.apply(order.to_order(input.V));
   const Topology topo = Topology::build(F, static_cast<std::int32_t>(P.rows()));
-  report.fold_ratio = fold_ratio(P, F, topo, requested.fold_angle);  // on the noisy input (reading 5)
+  report.fold_ratio = fold_ratio(P, F, topo, requested.fold_angle);  // on the noisy input (decision 5)
   times.setup_ms = ms_since(t0);
 
-  // ParamMode::Auto / Search: measure the input, score the candidates on recorrupted copies
-  // of a sample (Search: then descend from the best) and run the winner (core/auto_select.h).
+  // ParamMode::Auto / Search: the parameters per input (core/auto/choose.h).
   if (requested.mode != ParamMode::Manual) {
     t0 = Clock::now();
-    report.measures = measure_input(P, F, topo, requested, &executor);
-    report.selection = select_parameters(P, F, topo, requested, *report.measures, executor, progress);
-    report.params = report.selection->candidates[static_cast<std::size_t>(report.selection->chosen)].params;
-    NoiseEstimate& noise = report.selection->noise;  // reported in the input's units
-    noise.sigma /= box.scale;
-    noise.gaussian_sigma /= box.scale;
-    noise.edge_length /= box.scale;
-    for (ScoredCandidate& c : report.selection->candidates) c.residual /= box.scale;
+    report.params = choose(P, F, topo, box.scale, executor, progress, report);
     report.params.validate();
     times.measure_ms = ms_since(t0);
   }

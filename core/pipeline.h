@@ -2,10 +2,9 @@
 // (Sec. 6). Re-entrant: concurrent calls on different meshes are safe.
 #pragma once
 
-#include <optional>
+#include <functional>
+#include <memory>
 
-#include "core/auto_params.h"
-#include "core/auto_select.h"
 #include "core/mesh.h"
 #include "core/normal_filter.h"
 #include "core/params.h"
@@ -14,6 +13,9 @@
 #include "core/topology.h"
 
 namespace mdn {
+
+class Executor;
+struct ParameterChoice;  // core/auto/choice.h: the pipeline never needs its contents
 
 struct RunOptions {
   int threads = 1;                        // worker threads for this call; output does not depend on it
@@ -41,9 +43,8 @@ struct DenoiseReport {
   bool region_prefilter_applied = false;
   std::int64_t region_vertices = 0;  // vertices smoothed by Eq. 2
   ParamMode mode = ParamMode::Manual;     // as requested
-  DenoiseParams params;                   // what ran (Auto: the rule's choice, pinned fields kept)
-  std::optional<InputMeasures> measures;  // ParamMode::Auto / Search only
-  std::optional<Selection> selection;     // ParamMode::Auto / Search only: the noise estimate, the candidates and the pick
+  DenoiseParams params;                   // what ran (Auto: the model's choice, pinned fields kept)
+  std::shared_ptr<const ParameterChoice> choice;  // ParamMode::Auto / Search only (core/auto/choice.h)
   StageTimings timings;
 };
 
@@ -52,10 +53,19 @@ struct DenoiseResult {
   DenoiseReport report;
 };
 
-// Throws InvalidMeshError, InvalidParamsError, SolverError or CancelledError.
-DenoiseResult denoise(const TriMesh& input, const DenoiseParams& params, const RunOptions& options = {});
+// Chooses the parameters of ParamMode::Auto / Search (core/auto/choose.h) on the input in the
+// unit-box frame (box_scale: UnitBox::scale); returns them (mode Manual) and sets report.choice.
+using ParameterChooser = std::function<DenoiseParams(const Vertices& P, const Triangles& F, const Topology& topo,
+                                                     double box_scale, Executor& executor, ProgressObserver* progress,
+                                                     DenoiseReport& report)>;
 
-// --- The stages of denoise(), for callers that run them one by one (core/tune.h). ---
+// The whole method on one input. ParamMode::Auto / Search need `choose` (the entry point for
+// every mode, with the trained choice, is mdn::denoise in core/auto/denoise.h).
+// Throws InvalidMeshError, InvalidParamsError, SolverError or CancelledError.
+DenoiseResult run_pipeline(const TriMesh& input, const DenoiseParams& params, const RunOptions& options = {},
+                           const ParameterChooser& choose = {});
+
+// --- The stages of denoise(), for callers that run them one by one (core/auto/tune.h). ---
 // Positions are in the unit-box frame; topo is Topology::build of F.
 
 // Sec. 4: Eq. 1, the region pre-filter by params.region_mode (Sec. 4.2; Auto reads

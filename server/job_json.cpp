@@ -3,11 +3,56 @@
 #include <string>
 #include <utility>
 
+#include "core/auto/choice.h"
 #include "server/params_json.h"
 
 namespace mdn::service {
 
 using nlohmann::json;
+
+namespace {
+
+json noise_to_json(const NoiseEstimate& n) {
+  return {{"sigma_edges", n.sigma_edges}, {"sigma", n.sigma}, {"gaussian_sigma", n.gaussian_sigma}, {"edge_length", n.edge_length}};
+}
+
+// ParamMode::Search's recorrupted scores and descent (core/auto/recorrupted.h).
+json search_to_json(const Selection& sel) {
+  json candidates = json::array();
+  for (const ScoredCandidate& c : sel.candidates)
+    candidates.push_back({{"name", c.name},
+                          {"score", c.score},
+                          {"draws", c.draws},
+                          {"removed_edges", sel.noise.edge_length > 0 ? c.residual / sel.noise.edge_length : 0.0},
+                          {"eligible", c.eligible},
+                          {"params", method_params_json(c.params)}});
+  return {{"noise", noise_to_json(sel.noise)},
+          {"sample_faces", sel.sample_faces},
+          {"scored_faces", sel.scored_faces},
+          {"candidates", std::move(candidates)},
+          {"chosen", sel.candidates[static_cast<std::size_t>(sel.chosen)].name},
+          {"evaluations", sel.evaluations}};
+}
+
+json choice_to_json(const ParameterChoice& c) {
+  json descriptors = json::object();
+  for (const auto& [name, value] : c.descriptors) descriptors[name] = value;
+  json sets = json::array();
+  for (const PredictedSet& s : c.sets) sets.push_back({{"name", s.name}, {"predicted_ratio", s.predicted}});
+  json j = {{"method", c.method},
+            {"model_version", c.model_version},
+            {"chosen", c.chosen},
+            {"predicted_ratio", c.predicted},
+            {"noise", noise_to_json(c.noise)},
+            {"descriptors", std::move(descriptors)},
+            {"sets", std::move(sets)},
+            {"notes", c.notes},
+            {"ms", c.ms}};
+  if (c.search) j["search"] = search_to_json(*c.search);
+  return j;
+}
+
+}  // namespace
 
 json report_to_json(const DenoiseReport& report) {
   json j = {
@@ -18,35 +63,16 @@ json report_to_json(const DenoiseReport& report) {
       {"mode", std::string(to_string(report.mode))},
       {"params", method_params_json(report.params)},
   };
-  if (report.measures) {
-    const InputMeasures& m = *report.measures;
+  if (report.choice) {
+    const ParameterChoice& c = *report.choice;
+    const InputMeasures& m = c.measures;
     j["measures"] = {{"noise", m.noise},
                      {"tail", m.tail},
                      {"feature_share", m.feature_share},
                      {"smooth_residual", m.smooth_residual},
                      {"smooth_tail", m.smooth_tail},
                      {"cluster_area_ratio", m.cluster_area_ratio}};
-  }
-  if (report.selection) {
-    const Selection& sel = *report.selection;
-    json candidates = json::array();
-    for (const ScoredCandidate& c : sel.candidates)
-      candidates.push_back({{"name", c.name},
-                            {"score", c.score},
-                            {"draws", c.draws},
-                            {"removed_edges", sel.noise.edge_length > 0 ? c.residual / sel.noise.edge_length : 0.0},
-                            {"eligible", c.eligible},
-                            {"params", method_params_json(c.params)}});
-    j["selection"] = {{"noise",
-                       {{"sigma_edges", sel.noise.sigma_edges},
-                        {"sigma", sel.noise.sigma},
-                        {"gaussian_sigma", sel.noise.gaussian_sigma},
-                        {"edge_length", sel.noise.edge_length}}},
-                      {"sample_faces", sel.sample_faces},
-                      {"scored_faces", sel.scored_faces},
-                      {"candidates", std::move(candidates)},
-                      {"chosen", sel.candidates[static_cast<std::size_t>(sel.chosen)].name},
-                      {"evaluations", sel.evaluations}};
+    j["choice"] = choice_to_json(c);
   }
   return j;
 }

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "core/io/document.h"
-#include "core/pipeline.h"
+#include "core/auto/denoise.h"
 #include "server/job_timings.h"
 #include "server/params_json.h"
 

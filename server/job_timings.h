@@ -5,7 +5,7 @@
 
 #include <string_view>
 
-#include "core/pipeline.h"
+#include "core/auto/denoise.h"
 
 namespace mdn::service {
 

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "core/noise.h"
-#include "core/tune.h"
+#include "core/auto/tune.h"
 #include "server/cli_batch.h"
 #include "server/cli_files.h"
 #include "server/cli_job.h"

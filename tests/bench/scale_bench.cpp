@@ -46,7 +46,7 @@
 #include "core/metrics.h"
 #include "core/noise.h"
 #include "core/parallel.h"
-#include "core/pipeline.h"
+#include "core/auto/denoise.h"
 #include "core/prefilter.h"
 #include "core/topology.h"
 #include "subdivide.h"

@@ -30,7 +30,7 @@
 #include "core/noise.h"
 #include "core/params.h"
 #include "core/parallel.h"
-#include "core/pipeline.h"
+#include "core/auto/denoise.h"
 #include "core/smoothing.h"
 #include "core/topology.h"
 

@@ -1,31 +1,24 @@
-// The tuning harness of ParamMode::Auto (core/auto_params.h). Asserts nothing; never in ctest.
+// The measuring harness of ParamMode::Auto (core/auto/choose.h). Asserts nothing; never in ctest.
 //
 //   tune_bench search  [--data DIR] [--jobs N] [--set train|validation|all] [--only NAME] OUT.tsv
 //       builds the cases (clean mesh + synthetic noise), measures each noisy input the way Auto
-//       does, and searches the best parameters (core/tune.h); one TSV row per case.
-//   tune_bench fit     [--data DIR] [--jobs N] [--matrix FILE] [--prototypes N | --extend K] ROWS.tsv
-//       fits the rule on the training rows; prints the C++ table. --matrix caches the cost
-//       matrix (every case with every candidate, the expensive part): the entries FILE holds
-//       are read, the others computed and the whole written back. --extend K keeps the
-//       compiled-in prototypes and adds K.
+//       does, and searches the best parameters (core/auto/tune.h); one TSV row per case.
 //   tune_bench clean   [--data DIR] [--jobs N] [--only MESH]
 //       every CGAL demo mesh of 500 to 30,000 vertices through auto without noise: what auto
 //       does to a clean asset (the largest vertex displacement; the target is at most 0.1%).
-//   tune_bench select  [--data DIR] [--jobs N] [--set S] [--only MESH] [--seed N]
-//       each candidate's true MSAE on the whole mesh against the pick of several selection
-//       variants; --seed sets the recorruption draws' seed (run two or three to see the spread).
-//   tune_bench report  [--data DIR] [--jobs N] [--set S] [--search] [--only MESH] ROWS.tsv
-//       re-creates every case, runs Auto (the rule compiled in now) and prints, per set, the
-//       ratios MSAE(auto)/MSAE(best found) and MSAE(auto)/MSAE(paper's Fandisk parameters),
-//       and the ceiling of the rule's form: the best of its prototypes / MSAE(best found).
+//   tune_bench report  [--data DIR] [--jobs N] [--set S] [--search] [--only MESH] [ROWS.tsv]
+//       re-creates every case, runs Auto (the trained model compiled in now) and prints, per
+//       set, the ratios MSAE(auto)/MSAE(best found) and MSAE(auto)/MSAE(paper's Fandisk
+//       parameters), the noise estimate, the cost, the clean inputs and Fandisk.
 //
-// Training meshes (issue 7): these CGAL demo meshes plus procedural shapes; every other CGAL
-// mesh with 1,000 to 20,000 triangles is validation, never used for fitting. Training cases per
-// mesh: along-normal noise 0.1 and 0.3 l, per-coordinate 0.2 l, impulse noise (10% of the
-// vertices, 0.6 l along the normal), irregular resampling (a slab refined twice, 16x
-// denser; meshes up to 8,000 faces) with along-normal 0.2 l, and along-normal 0.6 l (every
-// training mesh, every third validation mesh). Noise seeds hash the case name.
-// `search` appends each row as it finishes and skips cases already in OUT (resumable). Validation meshes get one of these, in turn.
+// The sets (issue 31). The trained model learns from tools/train's corpus, never from these
+// meshes. "validation": every CGAL demo mesh of 1,000 to 20,000 triangles that is not a corpus
+// training shape, plus the field's standard test shapes among CGAL's meshes at any size (fandisk,
+// joint, elephant, turbine, eight, ...), each with one noise kind in turn (along-normal 0.1 and
+// 0.3 l, per-coordinate 0.2 l, impulse noise on 10% of the vertices at 0.6 l, irregular
+// resampling with 0.2 l), every third also at along-normal 0.6 l. "train": the corpus training
+// meshes among CGAL's with the same noise kinds, for comparison only. Noise seeds hash the
+// case name. `search` appends each row as it finishes and skips cases already in OUT (resumable).
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -47,32 +40,32 @@
 
 #include "bench_stats.h"
 #include "cgal_data.h"
-#include "core/auto_params.h"
-#include "core/auto_select.h"
-#include "core/surface_sample.h"
+#include "core/auto/measures.h"
+#include "core/auto/recorrupted.h"
+#include "core/auto/surface_sample.h"
 #include "core/parallel.h"
 #include "core/metrics.h"
 #include "core/noise.h"
-#include "core/noise_estimate.h"
-#include "core/pipeline.h"
+#include "core/auto/noise_estimate.h"
+#include "core/auto/denoise.h"
 #include "core/topology.h"
-#include "core/tune.h"
+#include "core/auto/tune.h"
 #include "support/shapes.h"
-#include "tune_fit.h"
+#include "../../tools/train/corpus.h"
+#include "../../tools/train/labels.h"
 
 namespace fs = std::filesystem;
 using namespace mdn;
 
 namespace {
 
-const std::set<std::string> kTrainingMeshes = {"fandisk", "fandisk_large", "cube-meshed", "anchor_dense", "rotor",
-                                               "joint",   "elephant",      "dino",        "man",          "pig",
-                                               "cow",     "bull",          "camel",       "turbine"};
+// The field's standard test shapes among CGAL's demo meshes: validation at any size.
+const std::set<std::string> kStandardTestShapes = {"fandisk", "joint", "elephant", "turbine", "eight", "armadillo"};
 constexpr const char* kConfigs[] = {"along0.1", "along0.3", "coord0.2", "impulse", "irregular"};
 // High noise (the automatic-parameters issue's inputs reach 0.7 l): every training mesh and
 // every third validation mesh is also a case with along-normal noise 0.6 l.
 constexpr const char* kHighNoise = "along0.6";
-// Meshes that are also a case as they are, without noise (two per set): auto must leave them alone.
+// Meshes that are also a case as they are, without noise: auto must leave them alone.
 const std::set<std::string> kCleanCases = {"fandisk", "bull", "blobby", "couplingdown"};
 
 struct Case {
@@ -113,41 +106,6 @@ Case make_case(const std::string& set, const std::string& name, const TriMesh& c
   return c;
 }
 
-// Training shapes made in code. Smooth ones (issue 16: the CGAL training meshes are mostly
-// CAD parts and coarse animals) cover the regime of smooth organic surfaces without using a
-// validation mesh: a torus, a bumpy sphere, a smooth height field and a twisted tube.
-std::vector<std::pair<std::string, TriMesh>> procedural() {
-  const double pi = std::acos(-1.0);
-  TriMesh bumpy = test::sphere(4);
-  for (Eigen::Index i = 0; i < bumpy.V.rows(); ++i) {
-    const Vec3 p = bumpy.V.row(i).transpose();
-    const double r = 1 + 0.12 * std::sin(3 * std::atan2(p.y(), p.x())) * std::sin(4 * std::acos(std::clamp(p.z(), -1.0, 1.0))) +
-                     0.05 * std::cos(7 * p.x() + 2 * p.y());
-    bumpy.V.row(i) = (r * p).transpose();
-  }
-  return {{"proc_cube", test::cube(20)},
-          {"proc_sphere", test::sphere(4)},
-          {"proc_fold", test::fold(40, 120)},
-          {"proc_torus", test::torus(96, 32, 0.35)},
-          {"proc_bumpy", bumpy},
-          {"proc_terrain", test::parametric(64, 64, false, false,
-                                      [&](double u, double v) {
-                                        const double x = 2 * u - 1, y = 2 * v - 1;
-                                        const double z = 0.15 * std::sin(3 * x + 1) * std::cos(2.5 * y) +
-                                                         0.25 * std::exp(-8 * ((x - 0.3) * (x - 0.3) + (y + 0.2) * (y + 0.2))) -
-                                                         0.12 * std::exp(-12 * ((x + 0.4) * (x + 0.4) + (y - 0.4) * (y - 0.4)));
-                                        return Vec3(x, y, z);
-                                      })},
-          {"proc_twist", test::parametric(120, 24, false, true, [&](double u, double v) {
-             // A tube along a helix-like curve whose radius swells and shrinks.
-             const double t = 2 * pi * u, b = 2 * pi * v, r = 0.18 + 0.06 * std::sin(3 * t);
-             const Vec3 c(std::cos(t), std::sin(t), 0.4 * std::sin(2 * t));
-             const Vec3 tangent = Vec3(-std::sin(t), std::cos(t), 0.8 * std::cos(2 * t)).normalized();
-             const Vec3 n1 = tangent.cross(Vec3(0, 0, 1)).normalized(), n2 = tangent.cross(n1);
-             return Vec3(c + r * (std::cos(b) * n1 + std::sin(b) * n2));
-           })}};
-}
-
 // Every case of the sets asked for, in a fixed order.
 std::vector<Case> build_cases(const fs::path& data, const std::string& which, const std::string& only) {
   const fs::path dir = bench::cgal_meshes(data);
@@ -158,17 +116,12 @@ std::vector<Case> build_cases(const fs::path& data, const std::string& which, co
   std::vector<Case> cases;
   int validation_index = 0;
   const auto want = [&](const std::string& name) { return only.empty() || only == name; };
-  if (which != "validation")
-    for (const auto& [name, mesh] : procedural())
-      if (want(name))
-        for (const char* config : kConfigs) cases.push_back(make_case("train", name, mesh, config));
-  if (which != "validation")
-    for (const auto& [name, mesh] : procedural())
-      if (want(name)) cases.push_back(make_case("train", name, mesh, kHighNoise));
   for (const fs::path& file : files) {
     const std::string name = file.stem().string();
-    const bool train = kTrainingMeshes.count(name) > 0;
-    if ((train && which == "validation") || (!train && which == "train") || (train && !want(name))) continue;
+    if (name == "fandisk_large") continue;  // a finer Fandisk: neither set
+    const bool standard = kStandardTestShapes.count(name) > 0;
+    const bool train = train::is_training_cgal_mesh(name);
+    if ((train && which == "validation") || (!train && which == "train")) continue;
     TriMesh mesh;
     try {
       mesh = bench::load_off(file);
@@ -177,13 +130,13 @@ std::vector<Case> build_cases(const fs::path& data, const std::string& which, co
       continue;  // not a single valid surface: not a case
     }
     if (kCleanCases.count(name) && want(name)) cases.push_back(make_case(train ? "train" : "validation", name, mesh, "clean"));
-    if (train) {
+    if ((train || standard) && want(name)) {
       for (const char* config : kConfigs) {
         if (std::strcmp(config, "irregular") == 0 && mesh.num_faces() > 8000) continue;  // keeps the search affordable
-        cases.push_back(make_case("train", name, mesh, config));
+        cases.push_back(make_case(train ? "train" : "validation", name, mesh, config));
       }
-      cases.push_back(make_case("train", name, mesh, kHighNoise));
-    } else if (mesh.num_faces() >= 1000 && mesh.num_faces() <= 20000) {
+      cases.push_back(make_case(train ? "train" : "validation", name, mesh, kHighNoise));
+    } else if (!train && !standard && mesh.num_faces() >= 1000 && mesh.num_faces() <= 20000) {
       const int index = validation_index++;  // counts every mesh
       std::string config = kConfigs[index % 5];
       if (config == "irregular" && mesh.num_faces() > 8000) config = "along0.2";
@@ -298,13 +251,15 @@ Framed framed(const Case& c) {
 using bench::median;
 
 int report(const fs::path& data, int jobs, const std::string& which, const fs::path& rows_path, bool with_search, const std::string& only) {
-  const std::vector<Row> rows = read_rows(rows_path);
+  // ROWS.tsv (optional): `search`'s coordinate-descent optima; the dense label grid of
+  // tools/train (925 sets, exhaustive) is the ground-truth search run here on every case.
+  const std::vector<Row> rows = rows_path.empty() ? std::vector<Row>{} : read_rows(rows_path);
   std::map<std::string, const Row*> by_key;
   for (const Row& r : rows) by_key[r.field.at("mesh") + "/" + r.field.at("config")] = &r;
   std::vector<Case> cases = build_cases(data, which, only);
-  std::erase_if(cases, [&](const Case& c) { return c.config != "clean" && !by_key.count(c.mesh + "/" + c.config); });
   struct Out {
     double auto_msae = 0, search_msae = 0, sigma_true = 0, sigma_est = 0, auto_ms = 0, one_ms = 0, search_ms = 0, moved = 0;
+    double grid_best = 0, paper = 0;
     std::string chosen;
   };
   std::vector<Out> out(cases.size());
@@ -318,13 +273,18 @@ int report(const fs::path& data, int jobs, const std::string& which, const fs::p
     o.auto_ms = r.report.timings.total_ms;
     o.moved = (r.mesh.V - c.noisy.V).rowwise().norm().maxCoeff() / diagonal(c.noisy);
     o.sigma_true = true_sigma_edges(c);
-    o.sigma_est = r.report.selection->noise.sigma / mean_edge_length(c.truth.V, c.truth.F);
+    o.sigma_est = r.report.choice->noise.sigma / mean_edge_length(c.truth.V, c.truth.F);
     const DenoiseResult again = denoise(c.noisy, r.report.params);  // one run of what auto chose
     o.one_ms = again.report.timings.total_ms;
-    const auto& sel = *r.report.selection;
+    if (c.config != "clean") {
+      const train::Prepared prepared = train::prepare(c.truth, c.noisy.V);
+      const std::vector<double> grid = train::label_case(prepared, train::auto_region_mode(prepared));
+      o.grid_best = *std::min_element(grid.begin(), grid.end());
+      o.paper = msae(denoise(c.noisy, DenoiseParams{}).mesh, c.truth);
+    }
     const DenoiseParams& q = r.report.params;
     char text[200];
-    std::snprintf(text, sizeof text, "%-12s %s %.3g %g %d %g %d %d", sel.candidates[static_cast<std::size_t>(sel.chosen)].name.c_str(),
+    std::snprintf(text, sizeof text, "%-12s %s %.3g %g %d %g %d %d", r.report.choice->chosen.c_str(),
                   std::string(to_string(q.region_mode)).c_str(), q.alpha, q.sigma_theta, q.n_aniso, q.sigma_gamma, q.n_normal,
                   q.n_vertex);
     o.chosen = text;
@@ -343,12 +303,15 @@ int report(const fs::path& data, int jobs, const std::string& which, const fs::p
     const Case& c = cases[i];
     const Out& o = out[i];
     if (c.config == "clean") continue;
-    const Row& row = *by_key.at(c.mesh + "/" + c.config);
-    double best = std::min(row.num("best_msae"), o.auto_msae);
+    const auto row = by_key.find(c.mesh + "/" + c.config);
+    double best = std::min(o.grid_best, o.auto_msae);
+    if (row != by_key.end()) best = std::min(best, row->second->num("best_msae"));
     if (with_search) best = std::min(best, o.search_msae);
-    const double paper = row.num("paper_msae");
+    const double paper = o.paper;
     const double rb = o.auto_msae / best, rp = o.auto_msae / paper, rs = with_search ? o.search_msae / best : 0;
-    for (const std::string& set : {c.set, std::string("all")}) {
+    std::vector<std::string> groups{c.set, "all"};
+    if (c.config == kHighNoise || c.config == "impulse") groups.push_back(c.set + ":" + c.config);  // the issue's hard rows
+    for (const std::string& set : groups) {
       ratio_best[set].push_back(rb);
       ratio_paper[set].push_back(rp);
       if (with_search) ratio_search[set].push_back(rs);
@@ -361,7 +324,8 @@ int report(const fs::path& data, int jobs, const std::string& which, const fs::p
                 paper * 100, o.search_msae * 100, rb, rp, rs, o.sigma_true, o.sigma_est / o.sigma_true, o.auto_ms / o.one_ms,
                 o.chosen.c_str());
   }
-  std::printf("\nMSAE x 1e-2. best: the ground-truth search's best (or auto's or search's, where better). a/best: auto /\n"
+  std::printf("\nMSAE x 1e-2. best: the best of the ground-truth searches (the label grid's 925 sets, ROWS.tsv's descent if\n"
+              "given; auto's or search's where better). a/best: auto /\n"
               "best; a/pap: auto / the paper's Table 1 Fandisk row; s/best: mode search / best. sigma: the true RMS noise\n"
               "along the normal in mean edge lengths; est/t: auto's estimate / sigma. a/run: auto's time / one run of\n"
               "the parameters it chose (1 thread).\n\n");
@@ -408,44 +372,7 @@ int report(const fs::path& data, int jobs, const std::string& which, const fs::p
   return 0;
 }
 
-// The training rows with their cases measured again (the rule's features may have changed
-// since the search ran; the best parameters have not).
-int fit_command(const fs::path& data, int jobs, const fs::path& rows_path, const std::string& matrix_path, int prototypes,
-                int extend) {
-  std::map<std::string, DenoiseParams> best;
-  std::map<std::string, double> msae_of;
-  for (const Row& row : read_rows(rows_path)) {
-    if (row.field.at("set") != "train") continue;
-    DenoiseParams p;
-    p.region_mode = row.field.at("region") == "on" ? RegionMode::On : RegionMode::Off;
-    p.alpha = row.num("alpha");
-    p.sigma_theta = row.num("sigma_theta");
-    p.n_aniso = static_cast<int>(row.num("n_aniso"));
-    p.sigma_gamma = row.num("sigma_gamma");
-    p.n_normal = static_cast<int>(row.num("n_normal"));
-    p.n_vertex = static_cast<int>(row.num("n_vertex"));
-    best[row.field.at("mesh") + "/" + row.field.at("config")] = p;
-    msae_of[row.field.at("mesh") + "/" + row.field.at("config")] = row.num("best_msae");
-  }
-  std::vector<Case> all = build_cases(data, "train", "");
-  std::erase_if(all, [&](const Case& c) { return !best.count(c.mesh + "/" + c.config); });
-  std::vector<FitCase> cases;
-  for (const Case& c : all) {
-    const std::string key = c.mesh + "/" + c.config;
-    cases.push_back({key, measure(c.noisy, DenoiseParams{}), best.at(key), msae_of.at(key)});
-  }
-  const FitScore score = [&](std::size_t i, const DenoiseParams& p) { return msae(denoise(all[i].noisy, p).mesh, all[i].truth); };
-  // --extend K: the compiled-in prototypes stay, K more are added to them.
-  std::vector<DenoiseParams> start;
-  if (extend > 0) {
-    for (int k = 1; k < rule_prototype_count(); ++k) start.push_back(prototype_parameters(k, InputMeasures{}, DenoiseParams{}));
-    prototypes = rule_prototype_count() + extend;
-  }
-  return fit(cases, score, jobs, matrix_path, prototypes, start);
-}
-
-
-// The noise estimate (core/noise_estimate.h) against the truth on every case: the RMS of the
+// The noise estimate (core/auto/noise_estimate.h) against the truth on every case: the RMS of the
 // noisy-minus-clean displacement along the clean vertex normals, in clean mean edge lengths.
 // Besides the estimate itself, the statistic of decision 19 (min of the RMS and 4x the Gaussian
 // core, uncorrected) for each local fit, to compare fits.
@@ -510,106 +437,6 @@ int noise_command(const fs::path& data, int jobs, const std::string& which) {
 }
 
 
-// Selection by estimated error on every case, without the search table: each candidate's
-// true MSAE on the whole mesh, auto's pick with the estimated noise and with the true noise.
-// `seed`: of the recorruption draws, for every variant (the pick's spread over seeds is the
-// score's noise floor: core/README.md, "The score's own noise floor").
-int select_command(const fs::path& data, int jobs, const std::string& which, const std::string& only, std::uint64_t seed) {
-  std::vector<Case> cases = build_cases(data, which, only);
-  std::erase_if(cases, [](const Case& c) { return c.config == "clean"; });
-  // Variants of the selection: draws, how many candidates get every draw, the recorruption's
-  // sigma over the estimate (or over the truth, for an oracle variant).
-  struct Variant { const char* name; int draws, refine; double scale; bool oracle; double rescore_below = 0.5; double remove_at_most = 0; double guard_below = 0; };
-  const double guard = SelectionOptions{}.remove_at_most, below = SelectionOptions{}.guard_below;  // decision 24
-  const Variant variants[] = {{"default", 2, 3, 0.92, false, 0.5, guard, below}, {"no guard", 2, 3, 0.92, false, 0.5, 0},
-                              {"3 draws", 3, 3, 0.92, false, 0.5, guard, below}, {"true sigma", 2, 3, 0.92, true, 0.5, guard, below}};
-  constexpr int kVariants = 4;
-  const char* names[kVariants] = {variants[0].name, variants[1].name, variants[2].name, variants[3].name};
-  struct Out { double truth, est, refined; std::vector<double> msae; int pick[kVariants]; double ms, one_ms; std::vector<std::string> names; };
-  std::vector<Out> out(cases.size());
-  run_parallel(cases.size(), jobs, [&](std::size_t i) {
-    const Case& c = cases[i];
-    const Framed fr = framed(c);
-    const Vertices& P = fr.P;
-    const Topology& topo = fr.topo;
-    const double lc = fr.edge;
-    Out& o = out[i];
-    o.truth = true_sigma_edges(c);
-    const double sigma_true = o.truth * lc;
-    DenoiseParams req;
-    req.mode = ParamMode::Auto;
-    const InputMeasures m = measure_input(P, c.noisy.F, topo, req);
-    Executor ex(1);
-    const auto options = [&](const Variant& v) {
-      SelectionOptions so;
-      so.draws = v.draws;
-      so.refine = v.refine;
-      so.scale = v.scale;
-      so.sigma = v.oracle ? v.scale * sigma_true : 0;
-      so.rescore_below = v.rescore_below;
-      so.remove_at_most = v.remove_at_most;
-      so.guard_below = v.guard_below;
-      so.seed = seed;
-      return so;
-    };
-    const auto t0 = std::chrono::steady_clock::now();
-    const Selection sel = select_parameters(P, c.noisy.F, topo, req, m, ex, nullptr, options(variants[0]));
-    o.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    o.est = sel.noise.sigma / lc;
-    o.refined = sel.candidates[static_cast<std::size_t>(sel.chosen)].residual / lc;
-    for (int v = 0; v < kVariants; ++v)
-      o.pick[v] = (v == 0) ? sel.chosen : select_parameters(P, c.noisy.F, topo, req, m, ex, nullptr, options(variants[v])).chosen;
-    for (const auto& cand : sel.candidates) {
-      const auto t1 = std::chrono::steady_clock::now();
-      o.msae.push_back(msae(denoise(c.noisy, cand.params).mesh, c.truth));
-      if (&cand == &sel.candidates[static_cast<std::size_t>(sel.chosen)])
-        o.one_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
-      o.names.push_back(cand.name);
-    }
-  });
-  std::printf("%-10s %-22s %-9s %7s %6s %6s %6s | %6s %-12s %8s", "set", "mesh", "config", "faces",
-              "true", "est/t", "ref/t", "pap/b", "best", "msae e-2");
-  for (const char* n : names) std::printf(" | %-12s %6s", n, "/best");
-  std::printf(" | %7s %6s\n", "sel ms", "x run");
-  std::map<std::string, std::vector<double>> ratio[kVariants], rpap, est, ref, cost;
-  for (std::size_t i = 0; i < cases.size(); ++i) {
-    const Out& o = out[i];
-    const double best = *std::min_element(o.msae.begin(), o.msae.end());
-    const double pap = o.msae[1] / best;
-    const std::string& best_name = o.names[static_cast<std::size_t>(std::min_element(o.msae.begin(), o.msae.end()) - o.msae.begin())];
-    std::printf("%-10s %-22s %-9s %7lld %6.3f %6.3f %6.3f | %6.3f %-12s %8.4g", cases[i].set.c_str(), cases[i].mesh.c_str(),
-                cases[i].config.c_str(), static_cast<long long>(cases[i].truth.num_faces()), o.truth, o.est / o.truth,
-                o.refined / o.truth, pap, best_name.c_str(), best * 100);
-    for (const std::string& set : {cases[i].set, std::string("all")}) {
-      for (int v = 0; v < kVariants; ++v) ratio[v][set].push_back(o.msae[static_cast<std::size_t>(o.pick[v])] / best);
-      rpap[set].push_back(pap);
-      est[set].push_back(o.est / o.truth);
-      ref[set].push_back(o.refined / o.truth);
-      cost[set].push_back((o.ms + o.one_ms) / o.one_ms);
-    }
-    for (int v = 0; v < kVariants; ++v)
-      std::printf(" | %-12s %6.3f", o.names[static_cast<std::size_t>(o.pick[v])].c_str(), o.msae[static_cast<std::size_t>(o.pick[v])] / best);
-    std::printf(" | %7.0f %6.1f\n", o.ms, (o.ms + o.one_ms) / o.one_ms);
-  }
-  const auto within = [](const std::vector<double>& e) {
-    return 100.0 * std::count_if(e.begin(), e.end(), [](double x) { return x >= 0.85 && x <= 1.15; }) / e.size();
-  };
-  std::printf("\n%-10s %5s", "set", "cases");
-  for (const char* n : names) std::printf(" %12s %7s", (std::string("med ") + n).c_str(), "worst");
-  std::printf(" %8s %9s %8s %8s %9s %8s %8s %8s\n", "med pap", "est in15%", "est min", "est max", "ref in15%", "ref min", "ref max", "cost");
-  for (const auto& [set, v] : ratio[0]) {
-    std::printf("%-10s %5zu", set.c_str(), v.size());
-    for (int k = 0; k < kVariants; ++k)
-      std::printf(" %12.3f %7.2f", median(ratio[k][set]), *std::max_element(ratio[k][set].begin(), ratio[k][set].end()));
-    const auto& e = est[set];
-    const auto& r = ref[set];
-    std::printf(" %8.3f %8.0f%% %8.3f %8.3f %8.0f%% %8.3f %8.3f %8.1f\n", median(rpap[set]), within(e), *std::min_element(e.begin(), e.end()),
-                *std::max_element(e.begin(), e.end()), within(r), *std::min_element(r.begin(), r.end()),
-                *std::max_element(r.begin(), r.end()), median(cost[set]));
-  }
-  return 0;
-}
-
 // Every CGAL demo mesh of 500 to 30,000 vertices (training and validation alike) sent through
 // auto as it is, without noise: what a pipeline step does to a clean asset. Prints the pick,
 // the estimated noise and the largest vertex displacement over the bounding-box diagonal
@@ -635,15 +462,15 @@ int clean_command(const fs::path& data, int jobs, const std::string& only) {
     DenoiseParams p;
     p.mode = ParamMode::Auto;
     const DenoiseResult r = denoise(m, p);
-    const Selection& sel = *r.report.selection;
-    out[i] = {sel.candidates[static_cast<std::size_t>(sel.chosen)].name, sel.noise.sigma_edges,
+    const ParameterChoice& c = *r.report.choice;
+    out[i] = {c.chosen, c.noise.sigma_edges,
               (r.mesh.V - m.V).rowwise().norm().maxCoeff() / diagonal(m), msae(r.mesh, m)};
   });
   std::printf("%-10s %-26s %7s  %-12s %8s %10s %10s\n", "set", "mesh", "faces", "chose", "sigma", "moved %", "msae e-2");
   std::vector<double> moved;
   for (std::size_t i = 0; i < meshes.size(); ++i) {
     const auto& [name, m] = meshes[i];
-    std::printf("%-10s %-26s %7lld  %-12s %8.4f %10.4f %10.4g\n", kTrainingMeshes.count(name) ? "train" : "validation", name.c_str(),
+    std::printf("%-10s %-26s %7lld  %-12s %8.4f %10.4f %10.4g\n", train::is_training_cgal_mesh(name) ? "train" : "validation", name.c_str(),
                 static_cast<long long>(m.num_faces()), out[i].chosen.c_str(), out[i].sigma, 100 * out[i].moved, 100 * out[i].msae);
     moved.push_back(out[i].moved);
   }
@@ -658,9 +485,8 @@ int clean_command(const fs::path& data, int jobs, const std::string& only) {
 [[noreturn]] void usage(int code) {
   std::fprintf(code ? stderr : stdout,
                "usage: tune_bench search [--data DIR] [--jobs N] [--set train|validation|all] [--only MESH] OUT.tsv\n"
-               "       tune_bench fit [--data DIR] [--jobs N] [--matrix FILE] [--prototypes N | --extend K] ROWS.tsv\n"
-               "       tune_bench report [--data DIR] [--jobs N] [--set train|validation|all] [--search] [--only MESH] ROWS.tsv\n"
-               "       tune_bench noise|select [--data DIR] [--jobs N] [--set train|validation|all] [--only MESH] [--seed N]\n"
+               "       tune_bench report [--data DIR] [--jobs N] [--set train|validation|all] [--search] [--only MESH] [ROWS.tsv]\n"
+               "       tune_bench noise [--data DIR] [--jobs N] [--set train|validation|all]\n"
                "       tune_bench clean [--data DIR] [--jobs N] [--only MESH]\n");
   std::exit(code);
 }
@@ -673,10 +499,8 @@ int main(int argc, char** argv) {
   const std::string command = argv[1];
   fs::path data = bench::default_cgal_data(), file;
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  std::string which = "all", only, matrix;
+  std::string which = "all", only;
   bool with_search = false;
-  int prototypes = 10, extend = 0;
-  std::uint64_t seed = SelectionOptions{}.seed;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     const auto value = [&]() -> std::string {
@@ -687,22 +511,16 @@ int main(int argc, char** argv) {
     else if (a == "--jobs") jobs = std::max(1, std::stoi(value()));
     else if (a == "--set") which = value();
     else if (a == "--only") only = value();
-    else if (a == "--seed") seed = std::stoull(value());
-    else if (a == "--matrix") matrix = value();
     else if (a == "--search") with_search = true;
-    else if (a == "--prototypes") prototypes = std::max(1, std::stoi(value()));
-    else if (a == "--extend") extend = std::max(0, std::stoi(value()));
     else if (a == "--help" || a == "-h") usage(0);
     else if (!a.empty() && a[0] != '-' && file.empty()) file = a;
     else usage(2);
   }
-  if (file.empty() && command != "noise" && command != "select" && command != "clean") usage(2);
+  if (file.empty() && command != "noise" && command != "clean" && command != "report") usage(2);
   try {
-    if (command == "fit") return fit_command(data, jobs, file, matrix, prototypes, extend);
     if (command == "search") return search(data, jobs, which, only, file);
     if (command == "report") return report(data, jobs, which, file, with_search, only);
     if (command == "noise") return noise_command(data, jobs, which);
-    if (command == "select") return select_command(data, jobs, which, only, seed);
     if (command == "clean") return clean_command(data, jobs, only);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "tune_bench: %s\n", e.what());

@@ -1,4 +1,4 @@
-#include "core/noise_estimate.h"
+#include "core/auto/noise_estimate.h"
 
 #include <gtest/gtest.h>
 

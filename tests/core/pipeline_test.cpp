@@ -1,4 +1,4 @@
-#include "core/pipeline.h"
+#include "core/auto/denoise.h"
 
 #include <gtest/gtest.h>
 

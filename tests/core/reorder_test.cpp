@@ -9,7 +9,7 @@
 #include <random>
 
 #include "core/metrics.h"
-#include "core/pipeline.h"
+#include "core/auto/denoise.h"
 #include "core/topology.h"
 #include "support/noisy.h"
 #include "support/shapes.h"

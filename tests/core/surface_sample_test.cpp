@@ -1,4 +1,4 @@
-#include "core/surface_sample.h"
+#include "core/auto/surface_sample.h"
 
 #include <gtest/gtest.h>
 

@@ -1,11 +1,11 @@
-#include "core/tune.h"
+#include "core/auto/tune.h"
 
 #include <gtest/gtest.h>
 
 #include "core/errors.h"
 #include "core/metrics.h"
 #include "core/noise.h"
-#include "core/pipeline.h"
+#include "core/auto/denoise.h"
 #include "support/shapes.h"
 
 namespace mdn {

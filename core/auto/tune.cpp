@@ -1,4 +1,4 @@
-#include "core/tune.h"
+#include "core/auto/tune.h"
 
 #include <algorithm>
 #include <chrono>
@@ -12,6 +12,7 @@
 #include "core/metrics.h"
 #include "core/normal_filter.h"
 #include "core/parallel.h"
+#include "core/auto/denoise.h"
 #include "core/pipeline.h"
 #include "core/prefilter.h"
 #include "core/topology.h"

@@ -1,4 +1,4 @@
-#include "core/noise_estimate.h"
+#include "core/auto/noise_estimate.h"
 
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>

@@ -47,7 +47,7 @@ struct TuneResult {
 
 // What the descent scores: one or more inputs (unit-box positions with faces F) and a score of
 // a denoised output of input t (lower is better; summed over the inputs). The ground-truth
-// search scores MSAE; ParamMode::Search the recorrupted error (core/auto_select.h).
+// search scores MSAE; ParamMode::Search the recorrupted error (core/auto/recorrupted.h).
 struct TuneProblem {
   const Triangles& F;
   const Topology& topo;

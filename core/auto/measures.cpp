@@ -1,4 +1,4 @@
-#include "core/auto_params.h"
+#include "core/auto/measures.h"
 
 #include <algorithm>
 #include <array>
@@ -8,7 +8,7 @@
 #include <cmath>
 #include <vector>
 
-#include "core/noise_estimate.h"
+#include "core/auto/noise_estimate.h"
 #include "core/parallel.h"
 #include "core/prefilter.h"
 
@@ -81,31 +81,6 @@ InputMeasures measure_input(const Vertices& P, const Triangles& F, const Topolog
 
   m.measure_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return m;
-}
-
-namespace {
-
-// The prototypes: `tune_bench search OUT.tsv && tune_bench fit OUT.tsv > core/auto_rule.inc`.
-#include "core/auto_rule.inc"
-
-}  // namespace
-
-int rule_prototype_count() { return kRulePrototypes; }
-
-DenoiseParams prototype_parameters(int index, const InputMeasures& measures, const DenoiseParams& requested) {
-  if (index < 0 || index >= kRulePrototypes) throw std::out_of_range("prototype_parameters: no such prototype");
-  DenoiseParams p = requested;
-  p.mode = ParamMode::Manual;
-  const double* proto = kPrototype[index];
-  if (!requested.is_pinned(AutoField::Alpha)) p.alpha = proto[0];
-  if (!requested.is_pinned(AutoField::SigmaTheta)) p.sigma_theta = proto[1];
-  if (!requested.is_pinned(AutoField::NAniso)) p.n_aniso = static_cast<int>(proto[2]);
-  if (!requested.is_pinned(AutoField::SigmaGamma)) p.sigma_gamma = proto[3];
-  if (!requested.is_pinned(AutoField::NNormal)) p.n_normal = static_cast<int>(proto[4]);
-  if (!requested.is_pinned(AutoField::NVertex)) p.n_vertex = static_cast<int>(proto[5]);
-  if (!requested.is_pinned(AutoField::RegionMode))
-    p.region_mode = measures.cluster_area_ratio >= requested.irregular_area_ratio ? RegionMode::On : RegionMode::Off;
-  return p;
 }
 
 }  // namespace mdn

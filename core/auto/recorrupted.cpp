@@ -1,18 +1,17 @@
-#include "core/auto_select.h"
+#include "core/auto/recorrupted.h"
 
 #include <algorithm>
 #include <cmath>
 #include <memory>
 
-#include "core/auto_params.h"
 #include "core/errors.h"
 #include "core/noise.h"
 #include "core/parallel.h"
 #include "core/pipeline.h"
 #include "core/progress.h"
 #include "core/prefilter.h"
-#include "core/surface_sample.h"
-#include "core/tune.h"
+#include "core/auto/surface_sample.h"
+#include "core/auto/tune.h"
 
 namespace mdn {
 
@@ -90,32 +89,8 @@ double RecorruptedScorer::score(const DenoiseParams& params, double* residual, i
   return total / used;
 }
 
-std::vector<ScoredCandidate> auto_candidates(const InputMeasures& measures, const DenoiseParams& requested) {
-  std::vector<ScoredCandidate> out;
-  const auto add = [&](std::string name, DenoiseParams p) {
-    for (const ScoredCandidate& c : out)  // pinned fields can make two candidates the same
-      if (c.params.alpha == p.alpha && c.params.sigma_theta == p.sigma_theta && c.params.n_aniso == p.n_aniso &&
-          c.params.sigma_gamma == p.sigma_gamma && c.params.n_normal == p.n_normal && c.params.n_vertex == p.n_vertex &&
-          c.params.region_mode == p.region_mode)
-        return;
-    out.push_back({std::move(name), p, 0});
-  };
-  // Leave it alone: no pre-filter, no normal or vertex iterations (decision 20).
-  DenoiseParams identity = requested;
-  identity.mode = ParamMode::Manual;
-  if (!requested.is_pinned(AutoField::Alpha)) identity.alpha = 0;
-  if (!requested.is_pinned(AutoField::NAniso)) identity.n_aniso = 0;
-  if (!requested.is_pinned(AutoField::NNormal)) identity.n_normal = 0;
-  if (!requested.is_pinned(AutoField::NVertex)) identity.n_vertex = 0;
-  if (!requested.is_pinned(AutoField::RegionMode)) identity.region_mode = RegionMode::Off;
-  add("identity", identity);
-  for (int k = 0; k < rule_prototype_count(); ++k)
-    add(k == 0 ? "paper" : "prototype " + std::to_string(k), prototype_parameters(k, measures, requested));
-  return out;
-}
-
 Selection select_parameters(const Vertices& P, const Triangles& F, const Topology& topo, const DenoiseParams& requested,
-                            const InputMeasures& measures, Executor& executor, ProgressObserver* progress,
+                            std::vector<ScoredCandidate> candidates, Executor& executor, ProgressObserver* progress,
                             const SelectionOptions& options) {
   Selection sel;
   const SurfaceSample sample = sample_surface(P, F, topo, options.max_faces);
@@ -123,7 +98,7 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
   sel.scored_faces = std::count(sample.scored.begin(), sample.scored.end(), 1);
   const Vertices normals = smoothed_normals(sample.P, sample.F, sample.topo, &executor);
   sel.noise = estimate_noise(sample.P, sample.F, sample.topo, normals, sample.scored_vertices, &executor);
-  sel.candidates = auto_candidates(measures, requested);
+  sel.candidates = std::move(candidates);
   // Decision 24: a candidate that takes more off y1 than the noise can explain removes shape,
   // where the noise is low enough for the input to be a clean surface read as noisy.
   const auto removes_shape = [&](double residual, double noise) {
@@ -163,12 +138,12 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
       std::erase_if(order, [&](std::size_t k) { return !eligible(k); });
       std::stable_sort(order.begin(), order.end(), by_score);
     }
-    sel.chosen = order.empty() ? 0 : static_cast<int>(order.front());  // "identity" removes nothing
+    sel.chosen = order.empty() ? 0 : static_cast<int>(order.front());
   };
   // Decision 20: below 2% of an edge, noise tilts a face by ~1 degree at most (no more than the
   // flattest shape detail): such a surface is taken as clean and left alone, without scoring.
   if (options.sigma <= 0 && sel.noise.one_pass_edges < kCleanOnePassEdges) {
-    return sel;  // chosen = 0, "identity", unscored
+    return sel;  // chosen = 0, the first candidate (the model's pick), unscored
   }
   auto scoring = std::make_unique<RecorruptedScorer>(sample, normals, options.sigma > 0 ? options.sigma : options.scale * sel.noise.sigma,
                                                     options, executor, progress);
@@ -186,7 +161,7 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
   }
   RecorruptedScorer& scorer = *scoring;
   if (requested.mode == ParamMode::Search) {
-    // Decision 22: the ground-truth search's coordinate descent (core/tune.h), started from the
+    // Decision 22: the ground-truth search's coordinate descent (core/auto/tune.h), started from the
     // pick and driven by the recorrupted score of the same draws.
     TuneProblem problem{sample.F, sample.topo, {}, [&](int t, const Vertices& V) { return scorer.score_positions(t, V); },
                         fold_ratio(sample.P, sample.F, sample.topo, requested.fold_angle)};

@@ -1,7 +1,6 @@
-// Automatic parameters (ParamMode::Auto): what is measured on the noisy input (reported, and
-// the sampling irregularity decides the region mode), and the prototype parameter sets the
-// selection (core/auto_select.h) scores, fitted by tests/bench/tune_bench.cpp (see
-// core/README.md, "Automatic parameters").
+// What the parameter choice measures on the noisy input (reported, one part of the
+// descriptors of core/auto/descriptors.h, and the sampling irregularity decides the region
+// mode).
 #pragma once
 
 #include "core/mesh.h"
@@ -33,12 +32,5 @@ struct InputMeasures {
 // on at most 4000 faces (a fixed-stride sample: the area ratio does not need them all).
 InputMeasures measure_input(const Vertices& P, const Triangles& F, const Topology& topo, const DenoiseParams& params,
                             Executor* executor = nullptr);
-
-// The prototypes (core/auto_rule.inc; the paper's Table 1 row first).
-int rule_prototype_count();
-// `requested` with prototype p (0 <= p < rule_prototype_count()) filled in for every field not
-// pinned, mode Manual; region_mode On iff cluster_area_ratio >= requested.irregular_area_ratio
-// (unless pinned). Throws std::out_of_range for another p.
-DenoiseParams prototype_parameters(int p, const InputMeasures& measures, const DenoiseParams& requested);
 
 }  // namespace mdn

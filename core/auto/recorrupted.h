@@ -1,5 +1,5 @@
-// ParamMode::Auto and ParamMode::Search: parameters chosen per input by an estimated error,
-// without ground truth (core/README.md, "Automatic parameters", decisions 19-22).
+// ParamMode::Search: the model's pick refined by an error estimated without ground truth
+// (core/auto/README.md; decisions 19-22).
 //
 // Recorrupted-to-Recorrupted (Pang et al., CVPR 2021): with noise n ~ N(0, sigma^2) on y, draw
 // z with the same law and form y1 = y + a z, y2 = y - z / a. The noises of y1 and y2 are
@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "core/mesh.h"
-#include "core/noise_estimate.h"
+#include "core/auto/noise_estimate.h"
 #include "core/params.h"
 #include "core/topology.h"
 
@@ -21,7 +21,6 @@ namespace mdn {
 
 class Executor;
 class ProgressObserver;
-struct InputMeasures;
 struct SurfaceSample;
 
 struct SelectionOptions {
@@ -60,7 +59,7 @@ struct Selection {
 // normals) and runs the method on each y1. Deterministic for a seed, any thread count.
 class RecorruptedScorer {
  public:
-  // normals: smoothed_normals of the sample (core/noise_estimate.h), the recorruption's direction.
+  // normals: smoothed_normals of the sample (core/auto/noise_estimate.h), the recorruption's direction.
   RecorruptedScorer(const SurfaceSample& sample, const Vertices& normals, double sigma, const SelectionOptions& options,
                     Executor& executor,
                     ProgressObserver* progress = nullptr);
@@ -82,15 +81,13 @@ class RecorruptedScorer {
   std::unique_ptr<Impl> impl_;
 };
 
-// Auto's candidates: "identity" (no filtering: a clean input comes back unchanged), the
-// paper's Table 1 Fandisk row, and the prototypes; pinned fields of `requested` kept.
-std::vector<ScoredCandidate> auto_candidates(const InputMeasures& measures, const DenoiseParams& requested);
-
 // Estimates the noise on a sample of P (unit-box frame), scores every candidate on recorrupted
 // copies of the sample and returns them with the pick: the best score among the eligible
-// candidates (decision 24; ties keep the earlier candidate).
+// candidates (decision 24; ties keep the earlier candidate). A surface that reads clean
+// (decision 20) keeps the first candidate, unscored. ParamMode::Search then descends from
+// the pick (decision 22). Serves ParamMode::Search only (core/auto/choose.h).
 Selection select_parameters(const Vertices& P, const Triangles& F, const Topology& topo, const DenoiseParams& requested,
-                            const InputMeasures& measures, Executor& executor, ProgressObserver* progress = nullptr,
+                            std::vector<ScoredCandidate> candidates, Executor& executor, ProgressObserver* progress = nullptr,
                             const SelectionOptions& options = {});
 
 }  // namespace mdn

@@ -1,0 +1,83 @@
+#include "core/auto/model.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "core/auto/descriptors.h"
+
+#include <array>
+
+namespace mdn {
+
+namespace {
+#include "core/auto/model_data.inc"
+
+Eigen::MatrixXd matrix(const double* data, int rows, int cols) {
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(data, rows, cols);
+}
+Eigen::VectorXd vector(const double* data, int n) { return Eigen::Map<const Eigen::VectorXd>(data, n); }
+}  // namespace
+
+ParameterModel::ParameterModel() : version_(model_data::kVersion) {
+  using namespace model_data;
+  const std::vector<std::string>& expected = descriptor_names();
+  if (static_cast<int>(expected.size()) != kInputs ||
+      !std::equal(expected.begin(), expected.end(), std::begin(kDescriptorNames)))
+    throw std::logic_error("the compiled-in parameter model (" + version_ +
+                           ") was trained on other descriptors than core/auto/descriptors.cpp computes; retrain it "
+                           "(tools/train/README.md)");
+  for (int k = 0; k < kSetCount; ++k) {
+    names_.emplace_back(kSetNames[k]);
+    sets_.push_back({kSetValues[k][0], kSetValues[k][1], kSetValues[k][2], kSetValues[k][3], kSetValues[k][4], kSetValues[k][5]});
+    identity_.push_back(names_.back() == "identity");
+  }
+  mean_ = vector(kMean, kInputs);
+  scale_ = vector(kScale, kInputs);
+  weights_ = {matrix(kW0, kHidden, kInputs), matrix(kW1, kHidden, kHidden), matrix(kW2, kSetCount, kHidden)};
+  biases_ = {vector(kB0, kHidden), vector(kB1, kHidden), vector(kB2, kSetCount)};
+}
+
+const std::vector<ModelProbe>& model_probes() {
+  static const std::vector<ModelProbe> probes = [] {
+    using namespace model_data;
+    std::vector<ModelProbe> out;
+    for (int i = 0; i < kProbeCount; ++i)
+      out.push_back({kProbeNames[i], std::vector<double>(kProbeInputs[i], kProbeInputs[i] + kInputs),
+                     std::vector<double>(kProbeOutputs[i], kProbeOutputs[i] + kSetCount)});
+    return out;
+  }();
+  return probes;
+}
+
+const ParameterModel& ParameterModel::shipped() {
+  static const ParameterModel model;
+  return model;
+}
+
+DenoiseParams ParameterModel::set_params(int k, const DenoiseParams& requested) const {
+  const std::array<double, 6>& s = sets_.at(static_cast<std::size_t>(k));
+  DenoiseParams p = requested;
+  p.mode = ParamMode::Manual;
+  // identity: no pre-filter (alpha 0), no iterations; the angles keep their defaults.
+  const bool id = is_identity(k);
+  if (!requested.is_pinned(AutoField::Alpha)) p.alpha = s[0];
+  if (!requested.is_pinned(AutoField::SigmaTheta) && !id) p.sigma_theta = s[1];
+  if (!requested.is_pinned(AutoField::NAniso)) p.n_aniso = static_cast<int>(s[2]);
+  if (!requested.is_pinned(AutoField::SigmaGamma) && !id) p.sigma_gamma = s[3];
+  if (!requested.is_pinned(AutoField::NNormal)) p.n_normal = static_cast<int>(s[4]);
+  if (!requested.is_pinned(AutoField::NVertex)) p.n_vertex = static_cast<int>(s[5]);
+  return p;
+}
+
+Eigen::VectorXd ParameterModel::predict(const std::vector<double>& descriptors) const {
+  if (static_cast<Eigen::Index>(descriptors.size()) != mean_.size())
+    throw std::invalid_argument("ParameterModel::predict: expected " + std::to_string(mean_.size()) + " descriptors");
+  Eigen::VectorXd x = (Eigen::Map<const Eigen::VectorXd>(descriptors.data(), mean_.size()) - mean_).cwiseQuotient(scale_);
+  for (std::size_t l = 0; l < weights_.size(); ++l) {
+    x = weights_[l] * x + biases_[l];
+    if (l + 1 < weights_.size()) x = x.cwiseMax(0.0);  // ReLU on the hidden layers
+  }
+  return x;
+}
+
+}  // namespace mdn

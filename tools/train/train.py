@@ -1,0 +1,193 @@
+#!/usr/bin/python3
+"""Fits the trained parameter choice (issue 31) from the corpus tables and writes the model.
+
+    train.py LABELS.tsv DESCRIPTORS.tsv OUT.inc [--sets 48] [--hidden 64] [--seed 1] [--report R.json]
+
+LABELS.tsv:      `train_corpus label` (true MSAE of every set of the label grid, and identity)
+DESCRIPTORS.tsv: `train_corpus describe` (what core/auto/descriptors.cpp reads at run time)
+OUT.inc:         C++ data for core/auto/model.cpp: the shipped sets, the descriptor scaling,
+                 the network's weights and the provenance with the holdout figures.
+
+Method:
+1. regret[c, s] = log(MSAE_s + eps) - log(min over all labelled sets and identity + eps),
+   clipped at log(10): how far set s is from the best labelled set on case c.
+2. The shipped sets: identity and the paper's Table 1 row, then a greedy cover over the
+   training shapes (each step adds the set that lowers the mean over cases of the best regret
+   among the chosen sets the most), until --sets sets.
+3. A multilayer perceptron (scikit-learn, ReLU, standardised inputs) predicts the regret of
+   every shipped set from the descriptors; auto runs the set of lowest prediction.
+Splits are by shape (`split` column, corpus.cpp): the network sees only "train" shapes; the
+figures printed and recorded are those of the "holdout" shapes.
+"""
+import argparse
+import csv
+import datetime
+import json
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+from sklearn.neural_network import MLPRegressor
+
+EPS = 1e-6
+CLIP = math.log(10.0)
+PAPER = "a0.1_t30_k2_g30_n20_v10"
+
+
+def read_table(path):
+    with open(path) as f:
+        rows = list(csv.reader(f, delimiter="\t"))
+    return rows[0], {r[0]: r for r in rows[1:] if r}
+
+
+def load(labels_path, desc_path):
+    lh, labels = read_table(labels_path)
+    dh, descs = read_table(desc_path)
+    cases = sorted(set(labels) & set(descs))
+    set_names = lh[lh.index("identity"):]
+    dnames = dh[dh.index("faces") + 1:]
+    L = np.array([[float(x) for x in labels[c][lh.index("identity"):]] for c in cases])
+    X = np.array([[float(x) for x in descs[c][dh.index("faces") + 1:]] for c in cases])
+    meta = [{"case": c, "shape": labels[c][1], "family": labels[c][2], "split": labels[c][3], "noise": labels[c][4]}
+            for c in cases]
+    return cases, set_names, dnames, L, X, meta
+
+
+def regrets(L):
+    logs = np.log(L + EPS)
+    return np.minimum(logs - logs.min(axis=1, keepdims=True), CLIP)
+
+
+def greedy_cover(R, names, count):
+    chosen = [names.index("identity"), names.index(PAPER)]
+    best = R[:, chosen].min(axis=1)
+    while len(chosen) < count:
+        gains = np.maximum(best[:, None] - R, 0).mean(axis=0)
+        gains[chosen] = -1
+        k = int(np.argmax(gains))
+        chosen.append(k)
+        best = np.minimum(best, R[:, k])
+    return chosen
+
+
+def summary(ratio):
+    ratio = np.asarray(ratio)
+    return {"median": float(np.median(ratio)), "geomean": float(np.exp(np.mean(np.log(ratio)))),
+            "worst": float(ratio.max()), "over_1.5": int((ratio > 1.5).sum()), "cases": int(len(ratio))}
+
+
+def evaluate(model, X, L, chosen, names, mu, sd):
+    """MSAE(pick) / MSAE(best labelled), and against the paper's row, per case."""
+    pred = model.predict((X - mu) / sd)
+    pick = np.array(chosen)[pred.argmin(axis=1)]
+    rows = np.arange(len(L))
+    best = L.min(axis=1)
+    got = L[rows, pick]
+    paper = L[:, names.index(PAPER)]
+    oracle = L[:, chosen].min(axis=1)
+    return {
+        "pick_vs_best": summary((got + EPS) / (best + EPS)),
+        "paper_vs_best": summary((paper + EPS) / (best + EPS)),
+        "shipped_oracle_vs_best": summary((oracle + EPS) / (best + EPS)),
+        "pick_over_paper_1.10": int(((got + EPS) > 1.10 * (paper + EPS)).sum()),
+    }, pick
+
+
+def cpp_array(values, per_line=8):
+    out = []
+    for i in range(0, len(values), per_line):
+        out.append("    " + ", ".join(repr(float(v)) for v in values[i:i + per_line]) + ",")
+    return "\n".join(out)
+
+
+def params_of(name):
+    # a0.1_t30_k2_g30_n20_v10 -> alpha, sigma_theta, n_aniso, sigma_gamma, n_normal, n_vertex
+    parts = dict((p[0], p[1:]) for p in name.split("_"))
+    return [float(parts["a"]), float(parts["t"]), int(parts["k"]), float(parts["g"]), int(parts["n"]), int(parts["v"])]
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("labels")
+    ap.add_argument("descriptors")
+    ap.add_argument("out")
+    ap.add_argument("--sets", type=int, default=48)
+    ap.add_argument("--hidden", type=int, default=64)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--report")
+    a = ap.parse_args()
+
+    cases, names, dnames, L, X, meta = load(a.labels, a.descriptors)
+    train = np.array([m["split"] == "train" for m in meta])
+    hold = ~train
+    if train.sum() < 2 or hold.sum() < 1:
+        sys.exit("train.py: need cases of both splits (train: %d, holdout: %d)" % (train.sum(), hold.sum()))
+    R = regrets(L)
+    count = min(a.sets, len(names))
+    chosen = greedy_cover(R[train], names, count)
+    mu = X[train].mean(axis=0)
+    sd = X[train].std(axis=0)
+    sd[sd < 1e-12] = 1.0
+    model = MLPRegressor(hidden_layer_sizes=(a.hidden, a.hidden), activation="relu", alpha=1e-3, learning_rate_init=1e-3,
+                         max_iter=2000, early_stopping=True, validation_fraction=0.15, n_iter_no_change=40,
+                         random_state=a.seed)
+    model.fit((X[train] - mu) / sd, R[train][:, chosen])
+    figures = {"train": evaluate(model, X[train], L[train], chosen, names, mu, sd)[0]}
+    figures["holdout"], pick = evaluate(model, X[hold], L[hold], chosen, names, mu, sd)
+    # Per-family holdout figures, and the worst holdout cases.
+    hold_meta = [m for m, h in zip(meta, hold) if h]
+    Lh = L[hold]
+    ratios = (Lh[np.arange(len(Lh)), pick] + EPS) / (Lh.min(axis=1) + EPS)
+    worst = sorted(zip(ratios, [m["case"] for m in hold_meta], [names[k] for k in pick]), reverse=True)[:10]
+    figures["holdout_worst"] = [{"case": c, "ratio": float(r), "pick": p} for r, c, p in worst]
+    print(json.dumps(figures, indent=1))
+
+    try:
+        here = os.path.dirname(os.path.abspath(__file__))
+        commit = subprocess.run(["git", "-C", here, "rev-parse", "--short", "HEAD"], capture_output=True,
+                                text=True).stdout.strip() or "unknown"
+    except OSError:
+        commit = "unknown"
+    h = figures["holdout"]["pick_vs_best"]
+    version = "mlp-%s-%d" % (datetime.date.today().isoformat(), len(cases))
+    sets = [params_of(names[k]) if names[k] != "identity" else [0, 0, 0, 0, 0, 0] for k in chosen]
+    layers = [(w.T, b) for w, b in zip(model.coefs_, model.intercepts_)]  # each W: out x in
+    with open(a.out, "w") as f:
+        f.write("// Generated by tools/train/train.py; do not edit. Provenance:\n")
+        f.write("//   version %s, commit %s, %d corpus cases (%d train, %d holdout shapes' cases)\n"
+                % (version, commit, len(cases), int(train.sum()), int(hold.sum())))
+        f.write("//   command: %s\n" % " ".join(["tools/train/train.py"] + sys.argv[1:]))
+        f.write("//   holdout MSAE(pick)/MSAE(best labelled): median %.3f, geometric mean %.3f, worst %.2f\n"
+                % (h["median"], h["geomean"], h["worst"]))
+        f.write("namespace model_data {\n")
+        f.write('constexpr const char* kVersion = "%s";\n' % version)
+        f.write("constexpr int kInputs = %d, kHidden = %d, kSetCount = %d;\n" % (len(dnames), a.hidden, len(chosen)))
+        f.write("constexpr const char* kDescriptorNames[kInputs] = {%s};\n" % ", ".join('"%s"' % n for n in dnames))
+        f.write("constexpr double kMean[kInputs] = {\n%s\n};\n" % cpp_array(mu))
+        f.write("constexpr double kScale[kInputs] = {\n%s\n};\n" % cpp_array(sd))
+        f.write("// alpha, sigma_theta, n_aniso, sigma_gamma, n_normal, n_vertex; all zero: identity (no filtering)\n")
+        f.write("constexpr double kSetValues[kSetCount][6] = {\n%s\n};\n" % "\n".join("    {%s}," % ", ".join(str(v) for v in s) for s in sets))
+        f.write('constexpr const char* kSetNames[kSetCount] = {%s};\n' % ", ".join('"%s"' % names[k] for k in chosen))
+        for i, (W, b) in enumerate(layers):
+            f.write("constexpr double kW%d[%d * %d] = {\n%s\n};\n" % (i, W.shape[0], W.shape[1], cpp_array(W.ravel())))
+            f.write("constexpr double kB%d[%d] = {\n%s\n};\n" % (i, len(b), cpp_array(b)))
+        # A few holdout cases and the network's outputs on them: the C++ evaluation must match.
+        probe = [i for i, m in enumerate(meta) if m["split"] == "holdout"][:4]
+        out = model.predict((X[probe] - mu) / sd)
+        f.write("constexpr int kProbeCount = %d;\n" % len(probe))
+        f.write("constexpr const char* kProbeNames[kProbeCount] = {%s};\n" % ", ".join('"%s"' % meta[i]["case"] for i in probe))
+        f.write("constexpr double kProbeInputs[kProbeCount][kInputs] = {\n%s\n};\n"
+                % "\n".join("  {\n%s\n  }," % cpp_array(X[i]) for i in probe))
+        f.write("constexpr double kProbeOutputs[kProbeCount][kSetCount] = {\n%s\n};\n"
+                % "\n".join("  {\n%s\n  }," % cpp_array(o) for o in out))
+        f.write("}  // namespace model_data\n")
+    if a.report:
+        with open(a.report, "w") as f:
+            json.dump({"version": version, "commit": commit, "cases": len(cases), "sets": [names[k] for k in chosen],
+                       "figures": figures}, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()
