@@ -489,7 +489,7 @@ async function main() {
   $('download').addEventListener('click', download);
   $('copy-curl').addEventListener('click', () => showCommand('curl', true));
   $('copy-cli').addEventListener('click', () => showCommand('cli', true));
-  $('reset-view').addEventListener('click', () => viewer.frame());
+  $('reset-view').addEventListener('click', () => { viewer.frame(); viewer.clearPick(); $('pick-info').hidden = true; });
   for (const input of document.querySelectorAll('input[name=layout]')) {
     input.addEventListener('change', () => {
       const swipe = input.value === 'swipe';
