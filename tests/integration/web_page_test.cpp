@@ -325,6 +325,11 @@ TEST(WebPage, DenoisesAnUploadedMeshAndShowsBeforeAndAfter) {
   for (const char* id : {"file", "run", "canvas", "download", "copy-curl", "copy-cli"})
     EXPECT_NE(std::find(tabs.begin(), tabs.end(), id), tabs.end()) << id << " is not reachable with Tab: " << tabs;
   EXPECT_FALSE(report.value("narrow_overflow", true)) << "the page scrolls sideways at 420 px";
+  for (const char* id : {"file", "run"}) {
+    const json ring = report.at("focus_ring").value(id, json::object());
+    EXPECT_NE(ring.value("style", "none"), "none") << id << " has no visible focus: " << ring;
+    EXPECT_GE(ring.value("width", 0.0), 2.0) << id << ": " << ring;
+  }
 
   // The page closed while its job ran: the job ends within seconds (keepalive DELETE on pagehide).
   const json& closed = report.at("close");
@@ -389,6 +394,8 @@ TEST(WebPage, DenoisesAnUploadedMeshAndShowsBeforeAndAfter) {
   EXPECT_LE(heat.at("p95").get<int>(), 10) << heat;
   const json& zero = report.at("zero");
   EXPECT_EQ(zero.at("state"), "done") << zero;
+  EXPECT_TRUE(zero.at("stale_after_change").get<bool>()) << "a result of other parameters is not marked: " << zero;
+  EXPECT_FALSE(zero.at("stale_after_revert").get<bool>()) << zero;
   std::cout << "heat map of a run that moved nothing: " << zero.at("heat").dump() << "\n";
   EXPECT_GT(zero.at("heat").at("samples").get<int>(), 200) << zero;
   EXPECT_LE(zero.at("heat").at("p95").get<int>(), 3) << zero;

@@ -275,6 +275,15 @@ try {
       });
       if (id === report.tab_order[0]) break;
       report.tab_order.push(id);
+      // Keyboard focus is visible: on the file input (hidden behind its drop zone) the zone shows
+      // it, on the main action the button itself.
+      if (id === 'file' || id === 'run') {
+        report.focus_ring = report.focus_ring ?? {};
+        report.focus_ring[id] = await page.evaluate((which) => {
+          const style = getComputedStyle(which === 'file' ? document.getElementById('drop') : document.activeElement);
+          return { style: style.outlineStyle, width: parseFloat(style.outlineWidth) };
+        }, id);
+      }
     }
   }
 
@@ -430,6 +439,11 @@ try {
     await page.evaluate(() => { document.activeElement?.blur(); window.scrollTo(0, 0); });
     report.zero.heat = await heatColours(page);
     await page.click('input[name=colour][value=flat]');
+    // Another strength: the result on screen is marked out of date; back again, it is not.
+    await page.select('#strength', 'strong');
+    report.zero.stale_after_change = (await resultPanels(page)).stale;
+    await page.select('#strength', 'auto');
+    report.zero.stale_after_revert = (await resultPanels(page)).stale;
     step('zero');
   }
 
