@@ -151,7 +151,7 @@ async function chooseFile(file) {
       if (state.beforeLoad !== load) return;
       // The server is the judge of what it reads: it runs anyway, the result is shown alone.
       $('viewer-empty').hidden = false;
-      $('viewer-empty').textContent = `The browser could not draw ${file.name}: ${e.message}. The server reads it on its own; its answer follows.`;
+      $('viewer-empty').textContent = `The browser could not draw ${file.name}: ${e.message}. The server reads files on its own.`;
     }
   })();
   $('run').disabled = false;
@@ -176,7 +176,7 @@ async function run() {
     stopJob();
     setState('invalid');
     setStage('Not sent: a parameter needs fixing.', 0);
-    showError({ title: `Check ${invalid.field}`, detail: `${invalid.message[0].toUpperCase()}${invalid.message.slice(1)}. Fix it, then press Denoise.` });
+    showError({ title: `Check ${invalid.field}`, detail: `${invalid.message}. Fix it, then press Denoise.` });
     $('run').disabled = false;
     $('cancel').disabled = true;
     return;

@@ -142,7 +142,9 @@ export class ParamForm {
     }
     const p = Object.entries(preset).filter(([k]) => k !== 'mode').map(([k, v]) => `${k} ${v}`).join(', ');
     this.strength.title = p ? `Sends mode manual with ${p}` : 'The server measures the noise of each surface and chooses the parameters';
-    this.strengthHelp.textContent = p ? `Runs ${p} (manual mode).` : 'The server measures each surface\'s noise and chooses.';
+    this.strengthHelp.textContent = p
+      ? `Manual: ${preset.n_normal} normal and ${preset.n_vertex} vertex iterations, ${preset.sigma_gamma}° (Help lists all).`
+      : 'The server measures each surface\'s noise and chooses.';
   }
 
   // Checks one field against its schema; marks it and returns an error text or null.
@@ -193,8 +195,11 @@ export class ParamForm {
   focus(path) {
     const { row, control } = this.rows.get(path);
     for (let d = row.closest('details'); d; d = d.parentElement?.closest('details')) d.open = true;
-    control.focus();
-    row.scrollIntoView({ block: 'nearest' });
+    // Scrolled to just below the sticky action bar (which would otherwise cover it).
+    const bar = document.getElementById('actionbar');
+    document.documentElement.style.setProperty('--bar-height', `${bar ? bar.offsetHeight : 0}px`);
+    control.focus({ preventScroll: true });
+    row.scrollIntoView({ block: 'start' });
   }
 
   // The parameters as the JSON text the API takes: the strength's set, then the fields given
