@@ -170,7 +170,7 @@ function stopJob() {
 }
 
 async function run() {
-  if (!state.file) return;
+  if (!state.file || !form) return;  // no form: the page could not start (said in the action bar)
   const invalid = form.firstInvalid();
   if (invalid) {
     stopJob();
