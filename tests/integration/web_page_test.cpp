@@ -3,8 +3,8 @@
 // (pinned in tests/tools) through tests/tools/check_web_page.mjs: a noisy mesh uploaded through
 // the file input, the job awaited, the canvas and the legend read, the download compared byte for
 // byte with POST /v1/denoise, refused files' errors read, every other input format drawn, a long
-// job cancelled, every request and console message checked; then what the issue of people using
-// it asked for (#33): status, Cancel and errors in view at 1280x800 and 400x800, no stale panel,
+// job cancelled, every request and console message checked; then what people meet using it:
+// status, Cancel and errors in view at 1280x800 and 400x800, no stale panel,
 // an invalid field answered inline, heat-map colours equal to the legend's, a large OFF result
 // fetched fast, a job cancelled when its page is closed. Screenshots are written to
 // <build>/artifacts/web/ (not compared). Needs `npm install` in tests/tools and the Debian
