@@ -136,6 +136,7 @@ async function chooseFile(file) {
   clearInput();
   state.file = file;
   $('file-name').textContent = `${file.name} · ${bytesText(file.size)}`;
+  $('viewer-empty').textContent = `Reading ${file.name} in the browser…`;
   // Read and drawn in the worker while the upload goes: neither waits for the other.
   const load = state.beforeLoad = (async () => {
     const format = await formatOf(file.name, file);
