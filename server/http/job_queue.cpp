@@ -343,6 +343,13 @@ std::vector<JobSnapshot> JobQueue::unfinished() const {
   return out;
 }
 
+std::optional<int> JobQueue::jobs_ahead(const Job& job) const {
+  std::lock_guard lock(mutex_);
+  for (std::size_t i = 0; i < queue_.size(); ++i)
+    if (queue_[i].get() == &job) return int(i);
+  return std::nullopt;
+}
+
 int JobQueue::retry_after_s() const {
   // How long jobs now wait in the queue before a worker takes them (measured), at least 1 s,
   // at most 60: a client told to come back then finds a slot about as soon as one frees.

@@ -56,6 +56,7 @@ struct JobSnapshot {
   // `output` then has no reports of its own. Unset: render output->reports.
   std::optional<nlohmann::json> reports;
   int attempts = 0;  // runs started (Redis: more than 1 after a takeover); 0 while queued
+  std::optional<int> jobs_ahead;  // Queued, where the store knows it (memory): jobs to start first
 };
 
 class Job {
@@ -170,6 +171,9 @@ class JobQueue {
   // Jobs a drain that ends now would abandon: queued or running, and asynchronous results not
   // fetched yet (running synchronous jobs are not listed; their requests are answered 503).
   std::vector<JobSnapshot> unfinished() const;
+
+  // Jobs queued before this one (0: it starts next); nullopt when it is not in the queue.
+  std::optional<int> jobs_ahead(const Job& job) const;
 
   int queued() const;
   int running() const;

@@ -1,15 +1,32 @@
 #include "server/http/job_resource.h"
 
 #include <algorithm>
+#include <memory>
 #include <utility>
 #include <vector>
 
+#include "server/http/content_coding.h"
 #include "server/job_json.h"
 #include "server/params_json.h"
 
 namespace mdn::http {
 
 using nlohmann::json;
+
+namespace {
+
+// Results of at least this size in a text format are gzip-encoded for clients that accept it;
+// below it the header costs more than it saves.
+constexpr std::size_t kGzipMinBytes = 1024;
+
+// Text results shrink about threefold; glb, Draco, binary PLY and STL barely do. PLY keeps the
+// input's encoding, so an ascii one is text too.
+bool is_text(io::Format format, std::string_view bytes) {
+  if (format == io::Format::Ply) return bytes.substr(0, 64).find("\nformat ascii ") != std::string_view::npos;
+  return format == io::Format::Off || format == io::Format::Obj || format == io::Format::Gltf;
+}
+
+}  // namespace
 
 json reports_json(const JobSnapshot& s) {
   if (s.reports) return *s.reports;
@@ -47,7 +64,23 @@ void write_result(Context& ctx, const JobSnapshot& s) {
   } else {
     res.status = 200;
   }
-  res.set_content(out.bytes, out.media_type);
+  // The body goes out through a content provider of known length, never res.set_content():
+  // cpp-httplib 0.11.4 would Brotli-encode a text/plain (OFF) body at quality 11 on every
+  // request (11 s for a 4.4 MB OFF). Text formats are gzipped at the fastest level instead, when
+  // the client accepts gzip and the whole body is asked for (content_coding.h); binary ones
+  // (glb, Draco, binary PLY, STL) would not shrink and go as they are.
+  const auto output = s.output;  // keeps the bytes alive while they are written
+  std::shared_ptr<const std::string> body(output, &output->bytes);
+  if (res.status == 200 && is_text(out.format, *body) && body->size() >= kGzipMinBytes &&
+      accepts_gzip(ctx.req.get_header_value("Accept-Encoding"))) {
+    body = std::make_shared<const std::string>(gzip(*body, 1));
+    res.set_header("Content-Encoding", "gzip");
+  }
+  res.set_header("Vary", "Accept-Encoding");
+  res.set_content_provider(body->size(), out.media_type,
+                           [body](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
+                             return sink.write(body->data() + offset, length);
+                           });
   res.set_header("Content-Disposition", "attachment; filename=\"denoised." + std::string(io::to_string(out.format)) + "\"");
   res.set_header("X-Denoise-Params", service::to_json(out.effective).dump());
   res.set_header("X-Denoise-Input-Bytes", std::to_string(s.input_bytes));
@@ -76,6 +109,7 @@ json job_json(const JobSnapshot& s, const std::string& request_id) {
             {"timings_s", {{"queue_wait", s.queue_wait_s}, {"run", s.run_s}}},
             {"input_bytes", s.input_bytes},
             {"links", {{"self", self}, {"result", self + "/result"}}}};
+  if (s.jobs_ahead) j["progress"]["jobs_ahead"] = *s.jobs_ahead;
   if (s.output) j["result"] = output_summary(s);
   if (s.attempts > 1) j["attempts"] = s.attempts;
   if (s.error) j["error"] = s.error->to_json(self, request_id);

@@ -76,12 +76,12 @@ class MemoryJobStore final : public JobStore {
   Submitted submit(service::JobInput input, const std::optional<std::string>& idempotency_key,
                    const std::string& fingerprint) override {
     auto s = queue_.submit(std::move(input), true, idempotency_key, fingerprint);
-    return {s.job->snapshot(), s.replayed};
+    return {snapshot(*s.job), s.replayed};
   }
   std::optional<JobSnapshot> find(const std::string& id, bool) override {
     auto job = queue_.find(id);
     if (!job) return std::nullopt;
-    return job->snapshot();
+    return snapshot(*job);
   }
   std::optional<JobSnapshot> wait_finished(const std::string& id, Clock::time_point deadline) override {
     auto job = queue_.find(id);
@@ -91,7 +91,7 @@ class MemoryJobStore final : public JobStore {
       if (job->wait_for(std::min<std::chrono::milliseconds>(
               std::chrono::ceil<std::chrono::milliseconds>(deadline - now), std::chrono::milliseconds(250))))
         break;
-    return job->snapshot();
+    return snapshot(*job);
   }
   void result_fetched(const std::string& id) override {
     if (auto job = queue_.find(id)) job->mark_result_fetched();
@@ -111,6 +111,12 @@ class MemoryJobStore final : public JobStore {
   std::string_view kind() const override { return "memory"; }
 
  private:
+  JobSnapshot snapshot(const Job& job) const {
+    JobSnapshot s = job.snapshot();
+    if (s.state == JobState::Queued) s.jobs_ahead = queue_.jobs_ahead(job);
+    return s;
+  }
+
   JobQueue& queue_;
 };
 

@@ -1,7 +1,5 @@
 #include "server/http/web_routes.h"
 
-#include <zlib.h>
-
 #include <cctype>
 #include <cstdint>
 #include <cstdlib>
@@ -11,28 +9,12 @@
 #include <stdexcept>
 #include <string>
 
+#include "server/http/content_coding.h"
 #include "server/http/embedded.h"
 #include "server/http/problem.h"
 
 namespace mdn::http {
 namespace {
-
-// gzip (RFC 1952) of the bytes, zlib's best compression.
-std::string gzip(std::string_view bytes) {
-  z_stream z{};
-  if (deflateInit2(&z, Z_BEST_COMPRESSION, Z_DEFLATED, 15 + 16, 9, Z_DEFAULT_STRATEGY) != Z_OK)
-    throw std::runtime_error("zlib: deflateInit2 failed");
-  std::string out(deflateBound(&z, uLong(bytes.size())), '\0');
-  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(bytes.data()));
-  z.avail_in = uInt(bytes.size());
-  z.next_out = reinterpret_cast<Bytef*>(out.data());
-  z.avail_out = uInt(out.size());
-  const int rc = deflate(&z, Z_FINISH);
-  out.resize(z.total_out);
-  deflateEnd(&z);
-  if (rc != Z_STREAM_END) throw std::runtime_error("zlib: deflate did not finish");
-  return out;
-}
 
 struct WebFile {
   WebFile(std::string_view b, const char* type, std::string tag) : bytes(b), media_type(type), etag(std::move(tag)) {}
@@ -41,7 +23,7 @@ struct WebFile {
   std::string etag;  // hash of the bytes
   // Compressed once, on the first request that accepts gzip (most servers never serve the page).
   std::string_view gzipped() const {
-    std::call_once(gzip_once, [this] { gzip_bytes = gzip(bytes); });
+    std::call_once(gzip_once, [this] { gzip_bytes = gzip(bytes, 9); });  // zlib's best: once per file
     return gzip_bytes;
   }
 
@@ -49,26 +31,6 @@ struct WebFile {
   mutable std::once_flag gzip_once;
   mutable std::string gzip_bytes;
 };
-
-// Accept-Encoding (RFC 9110 12.5.3): a list of codings with optional weights; gzip is accepted
-// when it (or "*") is listed with a weight other than 0.
-bool accepts_gzip(const std::string& header) {
-  std::size_t pos = 0;
-  while (pos < header.size()) {
-    std::size_t end = header.find(',', pos);
-    if (end == std::string::npos) end = header.size();
-    std::string entry;
-    for (char c : header.substr(pos, end - pos))
-      if (c != ' ' && c != '\t') entry += char(std::tolower(static_cast<unsigned char>(c)));
-    pos = end + 1;
-    const std::size_t semi = entry.find(';');
-    const std::string coding = entry.substr(0, semi);
-    if (coding != "gzip" && coding != "*") continue;
-    const std::size_t q = entry.find("q=", semi == std::string::npos ? entry.size() : semi);
-    if (q == std::string::npos || std::strtod(entry.c_str() + q + 2, nullptr) > 0) return true;
-  }
-  return false;
-}
 
 const char* media_type_of(std::string_view path) {
   static constexpr std::pair<std::string_view, const char*> kTypes[] = {

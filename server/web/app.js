@@ -1,42 +1,68 @@
-// The page: choose or drop a mesh, it is denoised as an asynchronous job (POST /v1/jobs, long
-// polls for progress, DELETE to cancel), and the input and the result are shown in 3D with the
-// job's report. document.body.dataset.state is empty | loading | running | done | failed |
-// cancelled (styling, and what the page's tests wait for).
-import { ApiError, cancelJob, getJson, jobResult, onTokenNeeded, pollJob, submitJob, token } from './api.js';
+// The page: choose or drop a mesh, it is denoised as an asynchronous job (POST /v1/jobs with
+// upload progress, long polls for the stage, DELETE to cancel, a keepalive DELETE when the page
+// goes away), and the input and the result are shown in 3D with the job's report.
+//
+// document.body.dataset.state is what the page is doing (styling, and what its tests wait for):
+//   empty      nothing chosen yet
+//   invalid    a field is wrong: named in the action bar, marked, focused; nothing was sent
+//   loading    the file is being sent (upload progress)
+//   running    the job is queued or running, or its result is being fetched and drawn
+//   done | failed | cancelled
+// Everything shown belongs to the current file and parameters: a new file clears the input's
+// view and information and the result; a new run clears the result; a changed parameter marks
+// a shown result as out of date (#stale).
+import { ApiError, cancelJob, cancelOnLeave, getJson, jobResult, onTokenNeeded, pollJob, submitJob, token } from './api.js';
 import { ParamForm } from './form.js';
-import { displacements, formatOf, loadMesh, meanEdgeLength } from './meshes.js';
+import { displacements, formatName, formatOf, loadMesh } from './meshes.js';
 import { scaleColour, Viewer } from './viewer.js';
 
 const $ = (id) => document.getElementById(id);
 const POLL_S = 0.5;  // long-poll window: progress is redrawn at least this often
 
-const state = { file: null, bytes: null, before: null, job: null, result: null, resultName: '', abort: null, started: 0 };
+const state = {
+  file: null, before: null, beforeLoad: null, job: null, result: null, resultName: '', abort: null,
+  started: 0, cancelling: false, moved: null, legend: null,
+};
 let form, viewer;
 
 function setState(name) { document.body.dataset.state = name; }
 
+// Errors go to the action bar (always in view). A problem naming a field marks it too.
 function showError(problem) {
   $('error').hidden = !problem;
   if (!problem) return;
-  $('error-title').textContent = problem.title ?? 'Error';
+  $('error-title').textContent = problem.title ?? 'Something went wrong';
   $('error-detail').textContent = problem.detail ?? '';
   form?.showProblemField(problem);
 }
 
 function problemOf(e) {
   if (e instanceof ApiError) return e.problem;
-  return { title: 'Error', detail: e?.message ?? String(e) };
+  return { title: 'Something went wrong in the page', detail: 'Reload the page and try again.' };
 }
 
+// fraction undefined: an indeterminate bar (work of unknown length).
 function setStage(text, fraction) {
   $('stage').textContent = text;
   if (fraction === undefined) $('progress').removeAttribute('value');
   else $('progress').value = fraction;
 }
 
-const bytesText = (n) => n >= 1 << 20 ? `${(n / (1 << 20)).toFixed(2)} MiB` : n >= 1024 ? `${(n / 1024).toFixed(1)} KiB` : `${n} B`;
-const seconds = (s) => `${s.toFixed(s < 10 ? 2 : 1)} s`;
+const bytesText = (n) => n >= 1 << 20 ? `${(n / (1 << 20)).toFixed(1)} MiB` : n >= 1024 ? `${(n / 1024).toFixed(0)} KiB` : `${n} B`;
+const seconds = (s) => `${s.toFixed(s < 10 ? 1 : 0)} s`;
 const num = (x) => (Math.abs(x) >= 1000 || Math.abs(x) < 0.01) && x !== 0 ? x.toExponential(2) : String(+x.toPrecision(3));
+const count = (n) => n.toLocaleString('en');
+const elapsed = () => seconds((performance.now() - state.started) / 1000);
+const percent = (f) => `${Math.floor(100 * f)} %`;
+
+// The server's stage identifiers, as people say them.
+const STAGE_NAMES = {
+  queued: 'Waiting for a worker', decode: 'Reading the mesh on the server', select_parameters: 'Choosing parameters',
+  initial_prefilter: 'Pre-filtering vertices', region_prefilter: 'Region pre-filter', anisotropic_prefilter: 'Anisotropic pre-filter',
+  normal_filter: 'Filtering normals', vertex_update: 'Moving vertices', encode: 'Writing the result', done: 'Writing the result',
+  setup: 'Setting up', measure: 'Measuring the surface',
+};
+const stageName = (id) => STAGE_NAMES[id] ?? (id ? id.replaceAll('_', ' ') : 'Working');
 
 // ---------------------------------------------------------------- token (auth on)
 onTokenNeeded((wrong) => new Promise((resolve) => {
@@ -49,117 +75,218 @@ onTokenNeeded((wrong) => new Promise((resolve) => {
   dialog.showModal();
 }));
 
-// ---------------------------------------------------------------- input
-async function chooseFile(file) {
-  if (!file) return;
-  setState('loading');
-  setStage(`Reading ${file.name}…`, undefined);
-  showError(null);
-  state.file = file;
-  state.bytes = await file.arrayBuffer();
-  $('file-name').textContent = `${file.name} · ${bytesText(file.size)}`;
-  state.before = null;
-  viewer.setMesh('before', null);
+// ---------------------------------------------------------------- what is shown
+function clearResult() {
+  state.result = null;
+  state.moved = null;
+  state.legend = null;
   viewer.setMesh('after', null);
   $('results').hidden = true;
   $('legend').hidden = true;
-  try {
-    state.before = await loadMesh(state.bytes, formatOf(file.name, state.bytes));
-    viewer.setMesh('before', state.before);
-    viewer.frame();
-    $('viewer-empty').hidden = true;
-  } catch (e) {
-    // The server is the judge of what it reads: denoise anyway, show the result alone.
-    $('viewer-empty').hidden = false;
-    $('viewer-empty').textContent = `This browser cannot draw ${file.name} (${e.message}); the server may still read it.`;
+  $('stale').hidden = true;
+  $('pick-info').hidden = true;
+  $('results').classList.remove('out-of-date');
+  $('legend').classList.remove('out-of-date');
+}
+
+function clearInput() {
+  state.before = null;
+  viewer.setMesh('before', null);
+  $('mesh-info').hidden = true;
+  $('viewer-empty').hidden = false;
+  $('viewer-empty').textContent = 'The noisy input and the denoised result appear here, side by side, with one camera.';
+}
+
+// A parameter changed: a result on screen no longer shows what Denoise would make.
+function paramsChanged() {
+  if (!state.file) return;
+  $('run').disabled = document.body.dataset.state === 'loading' || document.body.dataset.state === 'running';
+  if (document.body.dataset.state === 'invalid' && !form.anyInvalid()) {
+    showError(null);
+    setState(state.result ? 'done' : 'empty');
+    setStage('Ready: press Denoise.', 0);
   }
+  if (state.result && state.job && form.paramsText() !== state.job.paramsText) {
+    $('stale').hidden = false;
+    $('results').classList.add('out-of-date');
+    $('legend').classList.add('out-of-date');
+  } else {
+    $('stale').hidden = true;
+    $('results').classList.remove('out-of-date');
+    $('legend').classList.remove('out-of-date');
+  }
+}
+
+function showMeshInfo(info, name) {
+  const size = info.max.map((m, k) => m - info.min[k]);
+  $('mesh-info').textContent = `${name}: ${count(info.vertices)} vertices · ${count(info.faces)} faces · ` +
+    `size ${size.map(num).join(' × ')} · ${info.open_edges === 0 ? 'closed (no open edges)' : `${count(info.open_edges)} open edges`}` +
+    (info.non_manifold_edges ? ` · ${count(info.non_manifold_edges)} non-manifold edges` : '');
+  $('mesh-info').hidden = false;
+}
+
+// ---------------------------------------------------------------- input
+async function chooseFile(file) {
+  if (!file) return;
+  // A job still running for the previous file is not wanted any more (run() cancels it too,
+  // but the file may never run: a field may be wrong).
+  stopJob();
+  showError(null);
+  clearResult();
+  clearInput();
+  state.file = file;
+  $('file-name').textContent = `${file.name} · ${bytesText(file.size)}`;
+  $('viewer-empty').textContent = `Reading ${file.name} in the browser…`;
+  // Read and drawn in the worker while the upload goes: neither waits for the other.
+  const load = state.beforeLoad = (async () => {
+    const format = await formatOf(file.name, file);
+    try {
+      const { geometry, info } = await loadMesh(file, format);
+      if (state.beforeLoad !== load) return;  // another file was chosen meanwhile
+      state.before = geometry;
+      viewer.setMesh('before', geometry);
+      viewer.frame();
+      $('viewer-empty').hidden = true;
+      showMeshInfo(info, file.name);
+    } catch (e) {
+      if (state.beforeLoad !== load) return;
+      // The server is the judge of what it reads: it runs anyway, the result is shown alone.
+      $('viewer-empty').hidden = false;
+      $('viewer-empty').textContent = `The browser could not draw ${file.name}: ${e.message}. The server reads files on its own.`;
+    }
+  })();
   $('run').disabled = false;
   await run();
 }
 
 // ---------------------------------------------------------------- the job
-async function run() {
-  if (!state.file || !form.valid()) return;
-  showError(null);
-  // A job still running for an earlier file or earlier parameters is not wanted any more.
-  const previous = state.job;
+// Drops the current run: the upload or poll is aborted, a job on the server is cancelled.
+function stopJob() {
   state.abort?.abort();
-  if (previous?.running) cancelJob(previous.id).catch(() => {});
+  state.abort = null;
+  if (state.job?.running) {
+    state.job.running = false;
+    cancelJob(state.job.id).catch(() => {});
+  }
+}
+
+async function run() {
+  if (!state.file || !form) return;  // no form: the page could not start (said in the action bar)
+  const invalid = form.firstInvalid();
+  if (invalid) {
+    stopJob();
+    setState('invalid');
+    setStage('Not sent: a parameter needs fixing.', 0);
+    showError({ title: `Check ${invalid.field}`, detail: `${invalid.message}. Fix it, then press Denoise.` });
+    $('run').disabled = false;
+    $('cancel').disabled = true;
+    return;
+  }
+  showError(null);
+  stopJob();
   const abort = state.abort = new AbortController();
   const paramsText = form.paramsText();
   state.job = null;
-  state.result = null;
-  viewer.setMesh('after', null);
-  $('results').hidden = true;
-  $('legend').hidden = true;
+  state.cancelling = false;
+  clearResult();
   state.started = performance.now();
-  setState('running');
+  setState('loading');
   $('run').disabled = true;
   $('cancel').disabled = false;
-  setStage('Uploading…', undefined);
-  let job;
+  const file = state.file;
+  setStage(`Sending ${file.name} · 0 %`, 0);
   try {
-    job = await submitJob(state.file, paramsText, abort.signal);
-    state.job = { id: job.id, paramsText, name: state.file.name, running: true };
+    let job = await submitJob(file, paramsText, {
+      signal: abort.signal,
+      onUpload: (sent, total) => setStage(`Sending ${file.name} · ${percent(sent / (total || 1))} of ${bytesText(total)}`, sent / (total || 1)),
+    });
+    state.job = { id: job.id, paramsText, name: file.name, running: true };
+    setState('running');
     while (job.state === 'queued' || job.state === 'running') {
-      const stage = job.state === 'queued' ? 'Queued' : `${job.progress.stage || 'running'}`;
-      setStage(`${stage} · ${(100 * job.progress.fraction).toFixed(0)} % · ${seconds((performance.now() - state.started) / 1000)}`, job.progress.fraction);
+      if (!state.cancelling) {
+        const p = job.progress;
+        if (job.state === 'queued') {
+          const ahead = p.jobs_ahead;
+          setStage(`${stageName('queued')}${ahead === undefined ? '' : ahead === 0 ? ' · next in line' : ` · ${ahead} ${ahead === 1 ? 'job' : 'jobs'} ahead`} · ${elapsed()}`, undefined);
+        } else if (p.stage === 'decode' && !(p.fraction > 0)) {
+          setStage(`${stageName('decode')} · ${elapsed()}`, undefined);
+        } else {
+          setStage(`${stageName(p.stage)} · ${percent(p.fraction)} · ${elapsed()}`, p.fraction);
+        }
+      }
       job = await pollJob(job.id, POLL_S, abort.signal);
     }
     state.job.running = false;
-    if (job.state !== 'succeeded') {
-      setState(job.state === 'cancelled' ? 'cancelled' : 'failed');
-      setStage(job.state === 'cancelled' ? 'Cancelled.' : 'The job failed.', 0);
-      if (job.error) showError(job.error);
+    if (job.state === 'cancelled') {
+      setState('cancelled');
+      setStage(`Cancelled after ${elapsed()}.`, 0);
       return;
     }
-    const bytes = await jobResult(job.id);
-    if (state.abort === abort) await showResult(job, bytes);  // unless another run took over
+    if (job.state !== 'succeeded') {
+      setState('failed');
+      setStage('The job failed.', 0);
+      showError(job.error ?? { title: 'The job failed', detail: 'The server gave no reason.' });
+      return;
+    }
+    setStage('Fetching the result · 0 %', 0);
+    const bytes = await jobResult(job.id, {
+      signal: abort.signal,
+      onProgress: (got, total) => setStage(`Fetching the result · ${total ? `${percent(got / total)} of ${bytesText(total)}` : bytesText(got)}`, total ? got / total : undefined),
+    });
+    setStage('Drawing the result…', undefined);
+    await showResult(job, bytes, abort);
   } catch (e) {
-    if (e.name === 'AbortError') {
-      if (state.abort === abort) {  // Cancel before the job existed: the upload was dropped
+    if (e?.name === 'AbortError') {
+      if (state.abort === abort || state.cancelling) {  // Cancel pressed before the job existed
         setState('cancelled');
         setStage('Cancelled.', 0);
       }
       return;
     }
+    if (state.abort !== abort) return;  // another run took over
+    if (state.job) state.job.running = false;
     setState('failed');
-    setStage('Refused.', 0);
+    setStage(state.job ? 'The job could not be followed.' : 'Not accepted.', 0);
     showError(problemOf(e));
   } finally {
     if (state.abort === abort) {
       $('run').disabled = !state.file;
       $('cancel').disabled = true;
+      state.cancelling = false;
     }
   }
 }
 
+// The user's own Cancel: said as it happens, never as an error.
 async function cancel() {
-  if (!state.job) {
-    state.abort?.abort();  // still uploading
+  state.cancelling = true;
+  $('cancel').disabled = true;
+  if (!state.job?.running) {
+    state.abort?.abort();  // still sending (the upload is dropped) or fetching the result
     return;
   }
-  $('cancel').disabled = true;
   setStage('Cancelling…', undefined);
   try {
     await cancelJob(state.job.id);
   } catch (e) {
+    state.cancelling = false;
     showError(problemOf(e));
   }
 }
 
 // ---------------------------------------------------------------- the result
-async function showResult(job, bytes) {
+async function showResult(job, bytes, abort) {
   const result = job.result;
-  const wall = (performance.now() - state.started) / 1000;
   state.result = new Blob([bytes], { type: result.media_type });
   state.resultName = `${state.file.name.replace(/\.[^.]*$/, '')}-denoised.${result.format}`;
   let after = null;
   try {
-    after = await loadMesh(bytes, result.format);
+    after = (await loadMesh(state.result, result.format)).geometry;
   } catch (e) {
-    showError({ title: 'Cannot draw the result', detail: e.message });
+    showError({ title: 'The result cannot be drawn', detail: `The browser could not draw it: ${e.message}. Download it to see it elsewhere.` });
   }
+  await state.beforeLoad;  // the input drawn (or given up) first: the heat map needs it
+  if (state.abort !== abort) return;  // another run took over
   viewer.setMesh('after', after);
   if (!state.before) viewer.frame();
   $('viewer-empty').hidden = Boolean(state.before || after);
@@ -168,39 +295,42 @@ async function showResult(job, bytes) {
   // noise measures) and in model units. The scale ends at the 99th percentile (outliers aside).
   let legend = null;
   if (state.before && after) {
-    const edge = meanEdgeLength(state.before);
-    const moved = displacements(state.before, after, edge);
+    const { moved, edge } = await displacements(state.before, after);
+    if (state.abort !== abort) return;
     const sorted = Float32Array.from(moved).sort();
     const top = sorted[Math.min(sorted.length - 1, Math.floor(0.99 * sorted.length))] || sorted[sorted.length - 1] || 0;
-    viewer.setHeat(moved.map((d) => (top > 0 ? d / top : 0)));
-    legend = { edge, top, max: sorted[sorted.length - 1] ?? 0, mean: moved.reduce((a, b) => a + b, 0) / (moved.length || 1) };
+    viewer.setHeat(Array.from(moved, (d) => (top > 0 ? d / top : 0)));
+    state.moved = moved;
+    legend = state.legend = { edge, top, max: sorted[sorted.length - 1] ?? 0, mean: moved.reduce((a, b) => a + b, 0) / (moved.length || 1) };
   }
-  showLegend(legend);
+  showLegend(legend, state.moved);
 
+  const wall = (performance.now() - state.started) / 1000;
   $('summary').replaceChildren(...[
     ['Time', `${seconds(wall)} in all · queue ${seconds(job.timings_s.queue_wait)} · run ${seconds(job.timings_s.run)}`],
     ['Input', `${state.file.name} · ${bytesText(job.input_bytes)}`],
-    ['Output', `${result.format}${result.compression === 'draco' ? ' (Draco)' : result.compression === 'meshopt' ? ' (meshopt)' : ''} · ${bytesText(result.bytes)}`],
-    ['Mesh', `${result.vertices.toLocaleString('en')} vertices · ${result.faces.toLocaleString('en')} faces`],
+    ['Output', `${formatName(result.format)}${result.compression === 'draco' ? ' (Draco)' : result.compression === 'meshopt' ? ' (meshopt)' : ''} · ${bytesText(result.bytes)}`],
+    ['Mesh', `${count(result.vertices)} vertices · ${count(result.faces)} faces`],
     ...(legend ? [['Moved', `mean ${num(legend.mean / legend.edge)} · max ${num(legend.max / legend.edge)} edge lengths`]] : []),
     ...result.notes.map((n) => ['Note', n]),
   ].flatMap(([k, v]) => [Object.assign(document.createElement('dt'), { textContent: k }), Object.assign(document.createElement('dd'), { textContent: v })]));
-  showReports(result.reports, result.params);
+  showReports(result.reports, state.job.paramsText);
   showTimings(result.timings_ms);
   $('download').textContent = `Download ${state.resultName}`;
   showCommand('curl');
   $('results').hidden = false;
   setStage(`Done in ${seconds(wall)}.`, 1);
   setState('done');
+  paramsChanged();
 }
 
-function showLegend(legend) {
+function showLegend(legend, moved) {
   $('legend').hidden = !legend;
   if (!legend) return;
   const bar = $('legend-bar'), ctx = bar.getContext('2d');
   for (let x = 0; x < bar.width; ++x) {
     const [r, g, b] = scaleColour(x / (bar.width - 1));
-    ctx.fillStyle = `rgb(${255 * r}, ${255 * g}, ${255 * b})`;
+    ctx.fillStyle = `rgb(${Math.round(255 * r)}, ${Math.round(255 * g)}, ${Math.round(255 * b)})`;
     ctx.fillRect(x, 0, 1, bar.height);
   }
   const edges = legend.edge > 0 ? legend.top / legend.edge : 0;
@@ -208,7 +338,47 @@ function showLegend(legend) {
   $('legend-min').textContent = '0';
   $('legend-max').dataset.edgeLengths = String(edges);
   $('legend-max').dataset.modelUnits = String(legend.top);
-  $('legend-note').textContent = `Distance from each result vertex to the nearest input vertex; mean input edge length ${num(legend.edge)} model units. The scale ends at the 99th percentile.`;
+  $('legend-note').textContent = `Distance from each result vertex to the nearest input vertex; mean input edge length ${num(legend.edge)} model units. The scale ends at the 99th percentile. Click the result to read one vertex.`;
+  drawHistogram(moved, legend.top);
+}
+
+// Vertices by distance moved: 32 bins over the legend's range (the last one also holds what lies
+// beyond it), each bar in the colour of its bin's middle, heights relative to the fullest bin.
+function drawHistogram(moved, top) {
+  const canvas = $('histogram'), ctx = canvas.getContext('2d');
+  const bins = new Uint32Array(32);
+  for (const d of moved) bins[Math.min(31, top > 0 ? Math.floor((d / top) * 32) : 0)]++;
+  const most = Math.max(1, ...bins);
+  ctx.clearRect(0, 0, canvas.width, canvas.height);
+  const w = canvas.width / 32;
+  bins.forEach((n, i) => {
+    const [r, g, b] = scaleColour((i + 0.5) / 32);
+    ctx.fillStyle = `rgb(${Math.round(255 * r)}, ${Math.round(255 * g)}, ${Math.round(255 * b)})`;
+    const h = n === 0 ? 0 : Math.max(1, Math.round((n / most) * canvas.height));
+    ctx.fillRect(i * w + 0.5, canvas.height - h, w - 1, h);
+  });
+  canvas.dataset.bins = Array.from(bins).join(',');
+  canvas.setAttribute('aria-label', `Histogram of the distances moved: ${count(moved.length)} vertices in 32 bins from 0 to ${num(top)} model units`);
+}
+
+// A click (not a drag) on the result: the nearest vertex of the face under the pointer and how
+// far it moved.
+function pickAt(x, y) {
+  const hit = viewer.pick(x, y);
+  const info = $('pick-info');
+  if (!hit) {
+    info.hidden = true;
+    viewer.clearPick();
+    return;
+  }
+  const d = state.moved?.[hit.index];
+  const position = hit.position.toArray().map(num).join(', ');
+  info.textContent = d === undefined
+    ? `Vertex ${count(hit.index)} at (${position})`
+    : `Vertex ${count(hit.index)} moved ${num(d / state.legend.edge)} edge lengths (${num(d)} model units)`;
+  info.dataset.vertex = String(hit.index);
+  info.dataset.moved = d === undefined ? '' : String(d);
+  info.hidden = false;
 }
 
 function table(rows, head) {
@@ -219,24 +389,25 @@ function table(rows, head) {
   return t;
 }
 
-// Per surface: what auto measured and what ran (chosen or pinned).
-function showReports(reports, pinned) {
+// Per surface: what auto measured and what ran, each parameter with where its value came from
+// (given in this run's request, chosen by auto, or the default).
+function showReports(reports, paramsText) {
+  const given = Object.keys(JSON.parse(paramsText));
   const box = $('reports');
   box.replaceChildren();
   reports.forEach((r, i) => {
     const title = document.createElement('h3');
-    title.textContent = `${reports.length > 1 ? `Surface ${i + 1} · ` : ''}mode ${r.mode}${r.region_prefilter_applied ? ` · region pre-filter on ${r.region_vertices} vertices` : ''}`;
-    // report.params is what ran, in the shape of a manual-mode request; the run's own echo
-    // (result.params) holds the fields that were pinned.
+    title.textContent = `${reports.length > 1 ? `Surface ${i + 1} · ` : ''}mode ${r.mode}${r.region_prefilter_applied ? ` · region pre-filter on ${count(r.region_vertices)} vertices` : ''}`;
     const rows = Object.entries(r.params).filter(([k]) => k !== 'mode')
-      .map(([k, v]) => [k, typeof v === 'number' ? num(v) : String(v), r.mode === 'auto' && !(k in pinned) ? 'auto' : 'given']);
+      .map(([k, v]) => [k, typeof v === 'number' ? num(v) : String(v),
+                        given.includes(k) ? 'given' : r.mode === 'auto' || r.mode === 'search' ? 'auto' : 'default']);
     box.append(title, table(rows, ['Parameter', 'Ran with', 'Set by']));
-    if (r.measures) box.append(table(Object.entries(r.measures).map(([k, v]) => [k, num(v)]), ['Measured', 'Value']));
+    if (r.measures) box.append(table(Object.entries(r.measures).map(([k, v]) => [k.replaceAll('_', ' '), num(v)]), ['Measured', 'Value']));
   });
 }
 
 // The stages in the order they run; any stage the server adds later follows them.
-const STAGE_ORDER = ['decode', 'setup', 'measure', 'initial_prefilter', 'region_prefilter', 'anisotropic_prefilter',
+const STAGE_ORDER = ['decode', 'setup', 'measure', 'select_parameters', 'initial_prefilter', 'region_prefilter', 'anisotropic_prefilter',
                      'normal_filter', 'vertex_update', 'encode'];
 
 function showTimings(ms) {
@@ -250,7 +421,7 @@ function showTimings(ms) {
     const bar = document.createElement('span');
     bar.className = 'bar';
     bar.style.width = `${(100 * value / total).toFixed(1)}%`;
-    row.append(Object.assign(document.createElement('th'), { textContent: name.replaceAll('_', ' ') }),
+    row.append(Object.assign(document.createElement('th'), { textContent: STAGE_NAMES[name] && name !== 'done' ? `${STAGE_NAMES[name]}` : name.replaceAll('_', ' ') }),
                Object.assign(document.createElement('td'), { textContent: `${value.toFixed(1)} ms` }));
     row.insertCell().append(bar);
   }
@@ -319,7 +490,7 @@ async function main() {
   $('download').addEventListener('click', download);
   $('copy-curl').addEventListener('click', () => showCommand('curl', true));
   $('copy-cli').addEventListener('click', () => showCommand('cli', true));
-  $('reset-view').addEventListener('click', () => viewer.frame());
+  $('reset-view').addEventListener('click', () => { viewer.frame(); viewer.clearPick(); $('pick-info').hidden = true; });
   for (const input of document.querySelectorAll('input[name=layout]')) {
     input.addEventListener('change', () => {
       const swipe = input.value === 'swipe';
@@ -331,17 +502,39 @@ async function main() {
   for (const input of document.querySelectorAll('input[name=colour]')) {
     input.addEventListener('change', () => viewer.setHeatVisible(input.value === 'heat'));
   }
+  for (const input of document.querySelectorAll('input[name=shading]')) {
+    input.addEventListener('change', () => viewer.setSmooth(input.value === 'smooth'));
+  }
+  $('wireframe').addEventListener('change', () => viewer.setWireframe($('wireframe').checked));
   $('split').addEventListener('input', () => {
     $('split-line').style.left = `${100 * $('split').value}%`;
     viewer.setSplit(Number($('split').value));
+  });
+  // A click is a press and release within a few pixels (a drag turns the view).
+  let down = null;
+  $('canvas').addEventListener('pointerdown', (e) => { down = { x: e.clientX, y: e.clientY }; });
+  $('canvas').addEventListener('pointerup', (e) => {
+    if (down && Math.hypot(e.clientX - down.x, e.clientY - down.y) < 4) pickAt(e.clientX, e.clientY);
+    down = null;
+  });
+  // Leaving the page (closing the tab, reloading, going elsewhere): the job it started is of no
+  // use to anyone; a keepalive DELETE reaches the server after the page is gone.
+  addEventListener('pagehide', () => {
+    if (state.job?.running) cancelOnLeave(state.job.id);
   });
 
   try {
     const params = await getJson('/v1/params');
     const schema = await getJson('/v1/params/schema');
-    form = new ParamForm(params, schema, { main: $('fields-main'), more: $('fields-more'), output: $('fields-output') });
+    form = new ParamForm(params, schema, {
+      strength: $('strength'), strengthHelp: $('strength-help'), format: $('fields-format'),
+      main: $('fields-main'), more: $('fields-more'), output: $('fields-output'),
+    });
+    form.onChange = paramsChanged;
     document.body.dataset.form = 'ready';
   } catch (e) {
+    setState('failed');
+    setStage('The page could not start.', 0);
     showError(problemOf(e));
   }
 }

@@ -1,27 +1,63 @@
-// Mesh bytes to triangles for display, and how far the result's vertices moved.
-// Every format the service reads is drawn: glb / gltf (GLTFLoader, Draco through DRACOLoader),
-// drc (DRACOLoader), obj (OBJLoader), ply (PLYLoader), off (read here: three.js has no OFF
-// reader). The result is one indexed BufferGeometry in world coordinates.
+// Mesh files to triangles for display, mesh information and how far the result's vertices
+// moved. Every format the service reads is drawn: OFF, OBJ, PLY and STL are read in the page's
+// worker (mesh_worker.js), off the main thread; glb / gltf (GLTFLoader, Draco through
+// DRACOLoader, which has its own workers) and drc (DRACOLoader) here. A mesh is one indexed
+// BufferGeometry in world coordinates.
 import * as THREE from './vendor/three/build/three.module.js';
 import { GLTFLoader } from './vendor/three/examples/jsm/loaders/GLTFLoader.js';
 import { DRACOLoader } from './vendor/three/examples/jsm/loaders/DRACOLoader.js';
-import { OBJLoader } from './vendor/three/examples/jsm/loaders/OBJLoader.js';
-import { PLYLoader } from './vendor/three/examples/jsm/loaders/PLYLoader.js';
 
 const draco = new DRACOLoader().setDecoderPath('/web/vendor/three/examples/jsm/libs/draco/');
 
+// The formats the service reads, by extension (what the file input accepts).
+export const FORMATS = ['glb', 'gltf', 'drc', 'off', 'obj', 'ply', 'stl'];
+const NAMES = { glb: 'glTF binary', gltf: 'glTF', drc: 'Draco', off: 'OFF', obj: 'OBJ', ply: 'PLY', stl: 'STL' };
+export const formatName = (format) => NAMES[format] ?? 'mesh';
+
+// ---------------------------------------------------------------- the worker
+const worker = new Worker(new URL('./mesh_worker.js', import.meta.url), { type: 'module' });
+const pending = new Map();
+let nextId = 0;
+worker.onmessage = ({ data }) => {
+  const p = pending.get(data.id);
+  pending.delete(data.id);
+  if (data.error !== undefined) p?.reject(new Error(data.error));
+  else p?.resolve(data.result);
+};
+worker.onerror = (e) => {
+  e.preventDefault();
+  for (const p of pending.values()) p.reject(new Error('the browser stopped reading it'));
+  pending.clear();
+};
+function call(message, transfer = []) {
+  return new Promise((resolve, reject) => {
+    const id = ++nextId;
+    pending.set(id, { resolve, reject });
+    worker.postMessage({ ...message, id }, transfer);
+  });
+}
+
 // The container of a file: its extension, else its first bytes (as the server sniffs).
-export function formatOf(name, bytes) {
+export async function formatOf(name, blob) {
   const ext = /\.([a-z0-9]+)$/i.exec(name ?? '')?.[1]?.toLowerCase();
-  if (['glb', 'gltf', 'drc', 'off', 'obj', 'ply'].includes(ext)) return ext;
-  const head = new TextDecoder().decode(new Uint8Array(bytes, 0, Math.min(64, bytes.byteLength)));
+  if (FORMATS.includes(ext)) return ext;
+  const head = new TextDecoder().decode(await blob.slice(0, 84).arrayBuffer());
   if (head.startsWith('glTF')) return 'glb';
   if (head.startsWith('DRACO')) return 'drc';
   if (/^\s*\{/.test(head)) return 'gltf';
   if (/^ply\s/.test(head)) return 'ply';
   if (/^\s*[CN]*OFF/.test(head)) return 'off';
+  if (/^solid\s/.test(head)) return 'stl';
   if (/^\s*(#|v |o |g |mtllib)/m.test(head)) return 'obj';
   return null;
+}
+
+function geometryOf(positions, indices) {
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.BufferAttribute(positions, 3));
+  g.setIndex(new THREE.BufferAttribute(indices, 1));
+  g.computeBoundingSphere();
+  return g;
 }
 
 // Flattens every triangle mesh of an object tree into one indexed geometry (world frame).
@@ -43,113 +79,44 @@ function merge(root) {
     else for (let i = 0; i < p.count; ++i) indices.push(i + offset);
     offset += p.count;
   });
-  return geometryOf(new Float32Array(positions), indices);
+  return { positions: new Float32Array(positions), indices: Uint32Array.from(indices) };
 }
 
-function geometryOf(positions, indices) {
-  const g = new THREE.BufferGeometry();
-  g.setAttribute('position', new THREE.BufferAttribute(positions, 3));
-  g.setIndex(new THREE.BufferAttribute(positions.length / 3 > 65535 ? new Uint32Array(indices) : new Uint16Array(indices), 1));
-  return g;
+async function parseHere(blob, format) {
+  const bytes = await blob.arrayBuffer();
+  if (format === 'drc') {
+    const g = await new Promise((resolve, reject) => draco.parse(bytes, resolve, reject));
+    const p = g.getAttribute('position');
+    return { positions: Float32Array.from(p.array), indices: g.index ? Uint32Array.from(g.index.array) : Uint32Array.from({ length: p.count }, (_, i) => i) };
+  }
+  const loader = new GLTFLoader().setDRACOLoader(draco);
+  const gltf = await new Promise((resolve, reject) => loader.parse(format === 'glb' ? bytes : new TextDecoder().decode(bytes), '', resolve, reject));
+  return merge(gltf.scene);
 }
 
-// OFF, COFF, NOFF, CNOFF (ASCII), line by line: a vertex line's first three numbers are its
-// position (colours and normals follow), a face line is a count and that many indices (a colour
-// may follow); polygons are fanned into triangles.
-function parseOff(text) {
-  const lines = text.split('\n').map((l) => l.replace(/#.*/, '').trim()).filter((l) => l !== '');
-  const first = lines.shift()?.split(/\s+/) ?? [];
-  if (!/^[CN]*OFF$/.test(first[0] ?? '')) throw new Error('not an OFF file');
-  const counts = (first.length > 1 ? first.slice(1) : lines.shift()?.split(/\s+/) ?? []).map(Number);
-  const [nv, nf] = counts;
-  if (!(nv >= 0 && nf >= 0) || lines.length < nv + nf) throw new Error('OFF counts do not match the file');
-  const positions = new Float32Array(nv * 3);
-  for (let i = 0; i < nv; ++i) {
-    const xyz = lines[i].split(/\s+/, 3).map(Number);
-    positions.set(xyz, 3 * i);
+// A file (Blob) -> { geometry, info }. Throws an Error whose message completes "The browser could
+// not draw this file: ..." (the server is the judge of what it reads; the page then shows the
+// result alone).
+export async function loadMesh(blob, format) {
+  if (!FORMATS.includes(format)) throw new Error('its format was not recognised');
+  let mesh;
+  if (['glb', 'gltf', 'drc'].includes(format)) {
+    try {
+      mesh = await parseHere(blob, format);
+    } catch {
+      throw new Error(`it is not a ${formatName(format)} file the browser can read`);
+    }
+    if (mesh.indices.length === 0) throw new Error('it holds no triangles');
+    mesh.info = await call({ op: 'info', positions: mesh.positions, indices: mesh.indices });
+  } else {
+    mesh = await call({ op: 'parse', blob, format });
   }
-  const indices = [];
-  for (let f = 0; f < nf; ++f) {
-    const t = lines[nv + f].split(/\s+/).map(Number);
-    for (let k = 2; k < t[0]; ++k) indices.push(t[1], t[k], t[k + 1]);
-  }
-  if (!indices.every((i) => Number.isInteger(i) && i >= 0 && i < nv)) throw new Error('OFF face index out of range');
-  return geometryOf(positions, indices);
+  return { geometry: geometryOf(mesh.positions, mesh.indices), info: mesh.info };
 }
 
-// Bytes -> { geometry, format }. Throws when the browser cannot draw them (the server decides
-// what it accepts; the page then shows the result alone).
-export async function loadMesh(bytes, format) {
-  switch (format) {
-    case 'glb': case 'gltf': {
-      const loader = new GLTFLoader().setDRACOLoader(draco);
-      const gltf = await new Promise((resolve, reject) => loader.parse(format === 'glb' ? bytes : new TextDecoder().decode(bytes), '', resolve, reject));
-      return merge(gltf.scene);
-    }
-    case 'drc': {
-      const g = await new Promise((resolve, reject) => draco.parse(bytes, resolve, reject));
-      return geometryOf(g.getAttribute('position').array.slice(), g.index ? Array.from(g.index.array) : [...Array(g.getAttribute('position').count).keys()]);
-    }
-    case 'obj':
-      return merge(new OBJLoader().parse(new TextDecoder().decode(bytes)));
-    case 'ply': {
-      const g = new PLYLoader().parse(bytes);
-      const p = g.getAttribute('position');
-      return geometryOf(p.array.slice(), g.index ? Array.from(g.index.array) : [...Array(p.count).keys()]);
-    }
-    case 'off':
-      return parseOff(new TextDecoder().decode(bytes));
-    default:
-      throw new Error(`no reader for ${format ?? 'this file'}`);
-  }
-}
-
-// Mean length of the triangle edges (each edge once per triangle side).
-export function meanEdgeLength(geometry) {
-  const p = geometry.getAttribute('position').array, idx = geometry.index.array;
-  let sum = 0, n = 0;
-  for (let f = 0; f + 2 < idx.length; f += 3) {
-    for (let k = 0; k < 3; ++k) {
-      const a = 3 * idx[f + k], b = 3 * idx[f + (k + 1) % 3];
-      sum += Math.hypot(p[a] - p[b], p[a + 1] - p[b + 1], p[a + 2] - p[b + 2]);
-      ++n;
-    }
-  }
-  return n ? sum / n : 0;
-}
-
-// For every vertex of `after`, its distance to the nearest vertex of `before`: how far it moved,
-// whatever order the two files store their vertices in (Draco reorders them). Equal to the true
-// displacement while a vertex moves less than half the distance to its neighbours, which holds
-// for denoising; a uniform grid of cell `cell` keeps it linear in the vertex count.
-export function displacements(before, after, cell) {
-  const P = before.getAttribute('position').array, Q = after.getAttribute('position').array;
-  const size = cell > 0 ? cell : 1;
-  const grid = new Map();
-  const key = (x, y, z) => `${x},${y},${z}`;
-  for (let i = 0; i < P.length; i += 3) {
-    const k = key(Math.floor(P[i] / size), Math.floor(P[i + 1] / size), Math.floor(P[i + 2] / size));
-    let list = grid.get(k);
-    if (!list) grid.set(k, list = []);
-    list.push(i);
-  }
-  const out = new Float32Array(Q.length / 3);
-  for (let j = 0; j < Q.length; j += 3) {
-    const cx = Math.floor(Q[j] / size), cy = Math.floor(Q[j + 1] / size), cz = Math.floor(Q[j + 2] / size);
-    let best = Infinity;
-    // Rings of cells around the point, until no unvisited cell can hold a closer vertex.
-    for (let r = 0; r < 64 && !(best <= (r - 1) * size); ++r) {
-      for (let dx = -r; dx <= r; ++dx) for (let dy = -r; dy <= r; ++dy) for (let dz = -r; dz <= r; ++dz) {
-        if (Math.max(Math.abs(dx), Math.abs(dy), Math.abs(dz)) !== r) continue;
-        const list = grid.get(key(cx + dx, cy + dy, cz + dz));
-        if (!list) continue;
-        for (const i of list) {
-          const d = (P[i] - Q[j]) ** 2 + (P[i + 1] - Q[j + 1]) ** 2 + (P[i + 2] - Q[j + 2]) ** 2;
-          if (d < best * best) best = Math.sqrt(d);
-        }
-      }
-    }
-    out[j / 3] = best;
-  }
-  return out;
+// How far each vertex of `after` moved (distance to the nearest vertex of `before`, in model
+// units) and the mean edge length of `before`. Computed in the worker.
+export function displacements(before, after) {
+  return call({ op: 'moved', before: before.getAttribute('position').array, beforeIndices: before.index.array,
+                after: after.getAttribute('position').array });
 }

@@ -1,13 +1,15 @@
 // Before and after in one WebGL canvas with one camera: side by side (two viewports) or swipe
-// (one viewport, the result drawn right of a movable split). Flat shading, so that noise and
-// creases show; the result can be coloured by how far each vertex moved. Draws on demand only.
+// (one viewport, the result drawn right of a movable split). Lit surfaces, flat (facets show
+// noise and creases) or smooth; a wireframe overlay; the result can be coloured by how far each
+// vertex moved, unlit, so that the colours on screen are the legend's. Draws on demand only.
 import * as THREE from './vendor/three/build/three.module.js';
 import { OrbitControls } from './vendor/three/examples/jsm/controls/OrbitControls.js';
 
 export const BACKGROUND = 0x1d232c;
 const SURFACE = 0xd9dde3;
 
-// A perceptually ordered colour scale (viridis, 7 stops): dark blue (did not move) to yellow.
+// A perceptually ordered colour scale (viridis, 7 stops, sRGB): dark blue (did not move) to
+// yellow. The legend draws these values; the heat map renders the same ones (see setHeat).
 const SCALE = [[68, 1, 84], [68, 57, 131], [49, 104, 142], [33, 145, 140], [53, 183, 121], [144, 215, 67], [253, 231, 37]];
 export function scaleColour(t) {
   const x = Math.min(1, Math.max(0, t)) * (SCALE.length - 1);
@@ -31,8 +33,13 @@ export class Viewer {
     this.layout = 'side';
     this.split = 0.5;
     this.heat = false;
+    this.smooth = false;
+    this.wireframe = false;
     this.scenes = { before: this.makeScene(), after: this.makeScene() };
     this.meshes = { before: null, after: null };
+    this.marker = new THREE.Mesh(new THREE.SphereGeometry(1, 16, 12), new THREE.MeshBasicMaterial({ color: 0xff4f9a }));
+    this.marker.visible = false;
+    this.scenes.after.add(this.marker);
     new ResizeObserver(() => this.resize()).observe(canvas);
     this.resize();
   }
@@ -47,20 +54,28 @@ export class Viewer {
     return scene;
   }
 
-  // geometry: indexed BufferGeometry; which: 'before' | 'after'. Flat shading needs no normals.
+  // geometry: indexed BufferGeometry; which: 'before' | 'after'.
   setMesh(which, geometry) {
     const scene = this.scenes[which];
-    if (this.meshes[which]) {
-      scene.remove(this.meshes[which]);
-      this.meshes[which].geometry.dispose();
-      this.meshes[which].material.dispose();
+    const old = this.meshes[which];
+    if (old) {
+      scene.remove(old.surface, old.wire);
+      old.surface.geometry.dispose();
+      for (const m of [old.lit, old.heat, old.wire.material]) m.dispose();
     }
     this.meshes[which] = null;
+    if (which === 'after') this.marker.visible = false;
     if (geometry) {
-      const material = new THREE.MeshLambertMaterial({ color: SURFACE, flatShading: true, side: THREE.DoubleSide });
-      this.meshes[which] = new THREE.Mesh(geometry, material);
-      scene.add(this.meshes[which]);
-      this.applyColours();
+      // Lit: Lambert, flat or smooth. Heat: unlit vertex colours (MeshBasicMaterial), so light
+      // does not change them. Both push their depth back a little for the wireframe on top.
+      const offset = { polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1, side: THREE.DoubleSide };
+      const lit = new THREE.MeshLambertMaterial({ color: SURFACE, ...offset });
+      const heat = new THREE.MeshBasicMaterial({ color: 0xffffff, vertexColors: true, ...offset });
+      const surface = new THREE.Mesh(geometry, lit);
+      const wire = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({ color: 0x10141a, wireframe: true, transparent: true, opacity: 0.45 }));
+      this.meshes[which] = { surface, wire, lit, heat };
+      scene.add(surface, wire);
+      this.applyStyle();
     }
     this.draw();
   }
@@ -69,41 +84,90 @@ export class Viewer {
   setHeat(values) {
     const mesh = this.meshes.after;
     if (!mesh) return;
+    const g = mesh.surface.geometry;
     if (values) {
-      const colours = new Float32Array(values.length * 3);
-      for (let i = 0; i < values.length; ++i) colours.set(scaleColour(values[i]), 3 * i);
-      mesh.geometry.setAttribute('color', new THREE.BufferAttribute(colours, 3));
+      // The scale is in sRGB (as the legend's canvas draws it); three.js takes vertex colours as
+      // linear and encodes its output to sRGB, so they are converted here and come out as given.
+      const colours = new Float32Array(values.length * 3), c = new THREE.Color();
+      for (let i = 0; i < values.length; ++i) {
+        const [r, gr, b] = scaleColour(values[i]);
+        c.setRGB(r, gr, b, THREE.SRGBColorSpace);
+        colours[3 * i] = c.r;
+        colours[3 * i + 1] = c.g;
+        colours[3 * i + 2] = c.b;
+      }
+      g.setAttribute('color', new THREE.BufferAttribute(colours, 3));
     } else {
-      mesh.geometry.deleteAttribute('color');
+      g.deleteAttribute('color');
     }
-    this.applyColours();
+    this.applyStyle();
     this.draw();
   }
 
-  setHeatVisible(on) {
-    this.heat = on;
-    this.applyColours();
-    this.draw();
-  }
+  setHeatVisible(on) { this.heat = on; this.applyStyle(); this.draw(); }
+  setSmooth(on) { this.smooth = on; this.applyStyle(); this.draw(); }
+  setWireframe(on) { this.wireframe = on; this.applyStyle(); this.draw(); }
 
-  applyColours() {
-    const mesh = this.meshes.after;
-    if (!mesh) return;
-    const on = this.heat && mesh.geometry.getAttribute('color') !== undefined;
-    mesh.material.vertexColors = on;
-    mesh.material.color.set(on ? 0xffffff : SURFACE);
-    mesh.material.needsUpdate = true;
+  applyStyle() {
+    for (const [which, mesh] of Object.entries(this.meshes)) {
+      if (!mesh) continue;
+      const g = mesh.surface.geometry;
+      if (this.smooth && !g.getAttribute('normal')) g.computeVertexNormals();
+      mesh.lit.flatShading = !this.smooth;
+      mesh.lit.needsUpdate = true;
+      const heat = which === 'after' && this.heat && g.getAttribute('color') !== undefined;
+      mesh.surface.material = heat ? mesh.heat : mesh.lit;
+      mesh.wire.visible = this.wireframe;
+    }
   }
 
   setLayout(layout) { this.layout = layout; this.resize(); }
   setSplit(fraction) { this.split = fraction; this.draw(); }
 
+  // The result's vertex under a point of the canvas (client pixels), or null: the viewport the
+  // point is in must show the result. Returns {index, position}.
+  pick(clientX, clientY) {
+    const mesh = this.meshes.after;
+    if (!mesh) return null;
+    const rect = this.canvas.getBoundingClientRect();
+    const x = clientX - rect.left, y = clientY - rect.top;
+    let left = 0, width = rect.width;
+    if (this.layout === 'side') {
+      if (x < rect.width / 2) return null;
+      left = Math.floor(rect.width / 2);
+      width = rect.width - left;
+    } else if (x < rect.width * this.split) {
+      return null;
+    }
+    const ndc = new THREE.Vector2(((x - left) / width) * 2 - 1, -(y / rect.height) * 2 + 1);
+    const ray = new THREE.Raycaster();
+    ray.setFromCamera(ndc, this.camera);
+    const hit = ray.intersectObject(mesh.surface, false)[0];
+    if (!hit) return null;
+    // The nearest of the hit triangle's three corners.
+    const p = mesh.surface.geometry.getAttribute('position');
+    let best = null;
+    for (const i of [hit.face.a, hit.face.b, hit.face.c]) {
+      const v = new THREE.Vector3().fromBufferAttribute(p, i);
+      const d = v.distanceTo(hit.point);
+      if (!best || d < best.d) best = { d, index: i, position: v };
+    }
+    this.marker.position.copy(best.position);
+    this.marker.scale.setScalar(mesh.surface.geometry.boundingSphere.radius / 70);
+    this.marker.visible = true;
+    this.draw();
+    return { index: best.index, position: best.position };
+  }
+
+  clearPick() { this.marker.visible = false; this.draw(); }
+
   // Frames the input (or the result alone) in the camera.
   frame() {
     const mesh = this.meshes.before ?? this.meshes.after;
     if (!mesh) return;
-    mesh.geometry.computeBoundingSphere();
-    const { center, radius } = mesh.geometry.boundingSphere;
+    const g = mesh.surface.geometry;
+    g.computeBoundingSphere();
+    const { center, radius } = g.boundingSphere;
     const r = radius > 0 ? radius : 1;
     // The sphere fits the narrower of the two fields of view (a tall viewport is narrow).
     const half = THREE.MathUtils.degToRad(this.camera.fov / 2);

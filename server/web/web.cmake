@@ -36,6 +36,7 @@ set(MDN_THREE_FILES
   examples/jsm/loaders/DRACOLoader.js
   examples/jsm/loaders/OBJLoader.js
   examples/jsm/loaders/PLYLoader.js
+  examples/jsm/loaders/STLLoader.js
   examples/jsm/utils/BufferGeometryUtils.js
   examples/jsm/utils/SkeletonUtils.js
   examples/jsm/libs/draco/draco_decoder.wasm

@@ -3,11 +3,16 @@
 // (pinned in tests/tools) through tests/tools/check_web_page.mjs: a noisy mesh uploaded through
 // the file input, the job awaited, the canvas and the legend read, the download compared byte for
 // byte with POST /v1/denoise, refused files' errors read, every other input format drawn, a long
-// job cancelled, every request and console message checked. Screenshots are written to
+// job cancelled, every request and console message checked; then what people meet using it:
+// status, Cancel and errors in view at 1280x800 and 400x800, no stale panel,
+// an invalid field answered inline, heat-map colours equal to the legend's, a large OFF result
+// fetched fast, a job cancelled when its page is closed. Screenshots are written to
 // <build>/artifacts/web/ (not compared). Needs `npm install` in tests/tools and the Debian
 // package `chromium` (scripts/install-deps.sh build test).
 #include <algorithm>
+#include <chrono>
 #include <iostream>
+#include <thread>
 #include <map>
 #include <regex>
 #include <set>
@@ -29,13 +34,15 @@ std::string noisy_cube_off() {
   return off_text(mesh);
 }
 
-// Every field of GET /v1/params' schema, output fields as "output.<name>": what the form must list.
+// Every field of GET /v1/params' schema but the deprecated ones, output fields as
+// "output.<name>": what the form must list.
 std::vector<std::string> schema_fields(const json& params) {
   std::vector<std::string> out;
   for (const auto& [name, prop] : params.at("schema").at("properties").items()) {
     if (name == "output" && prop.value("type", "") == "object") {
-      for (const auto& [sub, p] : prop.at("properties").items()) out.push_back("output." + sub);
-    } else {
+      for (const auto& [sub, p] : prop.at("properties").items())
+        if (!p.value("deprecated", false)) out.push_back("output." + sub);
+    } else if (!prop.value("deprecated", false)) {
       out.push_back(name);
     }
   }
@@ -201,7 +208,8 @@ TEST(WebPage, DenoisesAnUploadedMeshAndShowsBeforeAndAfter) {
   // page to draw as inputs.
   json formats = json::array();
   for (const std::string format_params : {R"({"format":"glb"})", R"({"format":"gltf","draco":false})",
-                                          R"({"format":"drc"})", R"({"format":"obj"})", R"({"format":"ply"})"}) {
+                                          R"({"format":"drc"})", R"({"format":"obj"})", R"({"format":"ply"})",
+                                          R"({"format":"stl"})"}) {
     const json p = {{"mode", "manual"}, {"n_normal", 0}, {"n_vertex", 0}, {"output", json::parse(format_params)}};
     auto r = c->Post("/v1/denoise", {{"X-Denoise-Params", p.dump()}}, mesh, "model/x-off");
     ASSERT_TRUE(r && r->status == 200) << format_params;
@@ -214,6 +222,8 @@ TEST(WebPage, DenoisesAnUploadedMeshAndShowsBeforeAndAfter) {
   const json heavy_params = json::parse(kHeavyParams);
   json heavy = json::object();
   for (const auto& [k, v] : heavy_params.items()) heavy[k] = std::to_string(v.get<int>());
+  // A 4 MB OFF, converted only (mode none): its result is a 4 MB OFF too.
+  write_file(dir + "/large.off", off_text(cube(100)));
 
   // Pinned in the form: one method parameter, the output container and Draco (the page
   // must read it back through DRACOLoader's worker).
@@ -225,6 +235,11 @@ TEST(WebPage, DenoisesAnUploadedMeshAndShowsBeforeAndAfter) {
                      {"formats", formats},
                      {"drop", formats[0]},
                      {"cancel", {{"mesh", dir + "/big.off"}, {"set", heavy}, {"then", dir + "/noisy-cube.off"}}},
+                     {"view", {{"slow", dir + "/big.off"}, {"set", heavy}, {"refused", dir + "/broken.off"}}},
+                     {"invalid", {{"field", "n_normal"}, {"value", "5000"}}},
+                     {"zero", dir + "/noisy-cube.off"},
+                     {"large", dir + "/large.off"},
+                     {"close", {{"mesh", dir + "/big.off"}, {"set", heavy}}},
                      {"full", true}};
   const json report = run_page(plan, dir);
   ASSERT_TRUE(report.contains("state")) << report.dump(1);
@@ -310,6 +325,100 @@ TEST(WebPage, DenoisesAnUploadedMeshAndShowsBeforeAndAfter) {
   for (const char* id : {"file", "run", "canvas", "download", "copy-curl", "copy-cli"})
     EXPECT_NE(std::find(tabs.begin(), tabs.end(), id), tabs.end()) << id << " is not reachable with Tab: " << tabs;
   EXPECT_FALSE(report.value("narrow_overflow", true)) << "the page scrolls sideways at 420 px";
+  for (const char* id : {"file", "run"}) {
+    const json ring = report.at("focus_ring").value(id, json::object());
+    EXPECT_NE(ring.value("style", "none"), "none") << id << " has no visible focus: " << ring;
+    EXPECT_GE(ring.value("width", 0.0), 2.0) << id << ": " << ring;
+  }
+
+  // The page closed while its job ran: the job ends within seconds (keepalive DELETE on pagehide).
+  const json& closed = report.at("close");
+  ASSERT_EQ(closed.at("state"), "running") << closed;
+  const std::string closed_job = closed.at("job");
+  json after_close;
+  const auto poll_end = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (std::chrono::steady_clock::now() < poll_end) {
+    after_close = parse_json(c->Get("/v1/jobs/" + closed_job)->body);
+    if (after_close.value("state", "") != "queued" && after_close.value("state", "") != "running") break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  const double close_to_end_s =
+      (std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch()).count() -
+       closed.at("closed_at_ms").get<double>()) / 1000;
+  EXPECT_EQ(after_close.value("state", ""), "cancelled") << after_close.dump();
+  std::cout << "job ended " << close_to_end_s << " s after its page was closed (at most: the poll's own step)\n";
+  EXPECT_LT(close_to_end_s, 10.0);
+
+  // In view at both sizes, with no scrolling: a running job's status, progress and Cancel; a
+  // refused file's error. The user's own Cancel is no error. No panel of the earlier result
+  // while another file runs, nor after a failure.
+  ASSERT_EQ(report.at("view").size(), 2u) << report.at("view");
+  for (const json& v : report.at("view")) {
+    for (const char* what : {"stage", "cancel", "progress"})
+      EXPECT_TRUE(v.at("running").at(what).at("inside").get<bool>()) << v.at("width") << " " << what << ": " << v.at("running");
+    EXPECT_EQ(v.at("cancelled").at("state"), "cancelled") << v;
+    EXPECT_FALSE(v.at("cancelled").at("error_shown").get<bool>()) << "a user's own Cancel shown as an error: " << v;
+    EXPECT_EQ(v.at("refused_state"), "failed") << v;
+    EXPECT_TRUE(v.at("refused").at("error").at("inside").get<bool>()) << v.at("width") << ": " << v.at("refused");
+    EXPECT_TRUE(v.at("refused").at("stage").at("inside").get<bool>()) << v.at("width") << ": " << v.at("refused");
+    for (const char* panel : {"panels_while_second_runs", "panels_after_failure"})
+      for (const auto& [id, shown] : v.at(panel).items()) EXPECT_FALSE(shown.get<bool>()) << v.at("width") << " " << panel << ": #" << id;
+    if (v.contains("panels_after_first")) {
+      EXPECT_TRUE(v.at("panels_after_first").at("results").get<bool>()) << v;
+      EXPECT_TRUE(v.at("panels_after_first").at("legend").get<bool>()) << v;
+    }
+  }
+
+  // A wrong field: answered within a second, in view, naming the field, focused; nothing sent.
+  const json& invalid = report.at("invalid");
+  EXPECT_LT(invalid.at("on_run_ms").get<double>(), 1000) << invalid;
+  EXPECT_LT(invalid.at("on_choose_ms").get<double>(), 1000) << invalid;
+  EXPECT_NE(invalid.at("title").get<std::string>().find("n_normal"), std::string::npos) << invalid;
+  EXPECT_NE(invalid.at("detail").get<std::string>().find("0 to 1000"), std::string::npos) << invalid;
+  EXPECT_TRUE(invalid.at("error").at("inside").get<bool>()) << invalid;
+  EXPECT_EQ(invalid.at("focused"), "n_normal") << invalid;
+  EXPECT_FALSE(invalid.at("field_error").get<std::string>().empty()) << invalid;
+  EXPECT_EQ(invalid.at("jobs_sent"), 0) << invalid;
+  EXPECT_FALSE(invalid.at("error_after_fix").get<bool>()) << invalid;
+  EXPECT_EQ(invalid.at("state_after_fix"), "done") << invalid;
+
+  // The heat map's colours on screen are the legend's: a denoised cube (every flat-coloured
+  // pixel of the result near some colour of the scale), and a run that moved nothing (every
+  // pixel the scale's zero). Lit or colour-space-confused rendering is tens of levels off.
+  const json& heat = report.at("heat");
+  std::cout << "heat map vs legend (max channel difference): " << heat.dump() << "\n";
+  EXPECT_GT(heat.at("samples").get<int>(), 200) << heat;
+  // (Measured: median 2, 95th percentile 7 levels; blends inside a triangle are linear in linear
+  // RGB, so they sit a few levels off the scale's sRGB curve.)
+  EXPECT_LE(heat.at("median").get<int>(), 4) << heat;
+  EXPECT_LE(heat.at("p95").get<int>(), 10) << heat;
+  const json& zero = report.at("zero");
+  EXPECT_EQ(zero.at("state"), "done") << zero;
+  EXPECT_TRUE(zero.at("stale_after_change").get<bool>()) << "a result of other parameters is not marked: " << zero;
+  EXPECT_FALSE(zero.at("stale_after_revert").get<bool>()) << zero;
+  std::cout << "heat map of a run that moved nothing: " << zero.at("heat").dump() << "\n";
+  EXPECT_GT(zero.at("heat").at("samples").get<int>(), 200) << zero;
+  EXPECT_LE(zero.at("heat").at("p95").get<int>(), 3) << zero;
+  for (int k = 0; k < 3; ++k)
+    EXPECT_NEAR(zero.at("heat").at("median_colour")[k].get<int>(), zero.at("heat").at("legend_zero")[k].get<int>(), 3) << zero;
+  // The histogram counts every result vertex (the cube's 6 x 16 x 16 + 2, or more where the
+  // Draco result splits some); a click on the result reads one.
+  int binned = 0;
+  for (const auto& n : report.at("histogram")) binned += n.get<int>();
+  EXPECT_GE(binned, 6 * 16 * 16 + 2) << report.at("histogram");
+  EXPECT_LE(binned, 6 * (6 * 16 * 16 + 2)) << report.at("histogram");
+  EXPECT_FALSE(report.at("pick").at("hidden").get<bool>()) << report.at("pick");
+  EXPECT_FALSE(report.at("pick").at("moved").get<std::string>().empty()) << report.at("pick");
+
+  // A 4 MB OFF result: gzip-encoded on the wire, fetched in well under a second on a quiet
+  // machine (the bound is loose for a busy CI one; Brotli at quality 11 took 8-13 s).
+  const json& large = report.at("large");
+  ASSERT_EQ(large.at("state"), "done") << large;
+  const json& timing = large.at("timing");
+  std::cout << "4 MB OFF result in the page: " << timing.dump() << "\n";
+  EXPECT_GT(timing.at("decoded_bytes").get<double>(), 3.5e6) << timing;
+  EXPECT_LT(timing.at("encoded_bytes").get<double>() * 2, timing.at("decoded_bytes").get<double>()) << timing;
+  EXPECT_LT(timing.at("duration_ms").get<double>(), 3000) << timing;
 
   expect_loopback_only(report, server.port());
   expect_no_console_errors(report, {{"refused:photo.png", 415}});
