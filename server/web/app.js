@@ -402,6 +402,15 @@ function showReports(reports, paramsText) {
       .map(([k, v]) => [k, typeof v === 'number' ? num(v) : String(v),
                         given.includes(k) ? 'given' : r.mode === 'auto' || r.mode === 'search' ? 'auto' : 'default']);
     box.append(title, table(rows, ['Parameter', 'Ran with', 'Set by']));
+    if (r.choice) {
+      const c = r.choice;
+      const rows = [['How', c.method === 'fallback' ? "the paper's Table 1 row (outside the model's range)" : c.method === 'search' ? 'model, refined by search' : 'trained model'],
+                    ['Set', c.chosen], ['Estimated noise', `${num(c.noise.sigma_edges)} edge lengths`]];
+      if (c.predicted_ratio > 0) rows.push(['Predicted error', `${num(c.predicted_ratio)} x the best set's`]);
+      rows.push(['Model', c.model_version]);
+      for (const note of c.notes) rows.push(['Note', note]);
+      box.append(table(rows, ['Parameter choice', '']));
+    }
     if (r.measures) box.append(table(Object.entries(r.measures).map(([k, v]) => [k.replaceAll('_', ' '), num(v)]), ['Measured', 'Value']));
   });
 }

@@ -32,7 +32,7 @@ const NEVER_WORKS = { 'output.compression': ['meshopt'] };
 
 // What the mode values mean, in a line each (the schema's description is written for the API).
 const MODE_LABELS = { auto: 'auto: chosen per surface', search: 'search: auto, then refined (slow)', manual: 'manual: the values given', none: 'none: convert only' };
-const MODE_HELP = 'How the method parameters are chosen. Auto measures the noise of each surface and picks among tested settings; manual uses the fields below (defaults for empty ones).';
+const MODE_HELP = 'How the method parameters are chosen. Auto reads each surface and a model trained offline picks the settings; manual uses the fields below (defaults for empty ones).';
 
 // The description's first clause, for a one-line help text (ranges and units are shown apart).
 function shortHelp(text = '') {
