@@ -11,7 +11,6 @@
 #include <ctime>
 #include <functional>
 #include <map>
-#include <random>
 #include <regex>
 #include <thread>
 #include <utility>
@@ -22,6 +21,7 @@
 #include "server/http/job_routes.h"
 #include "server/http/problem.h"
 #include "server/http/request_body.h"
+#include "server/http/secure_random.h"
 #include "server/http/service_parts.h"
 #include "server/http/web_routes.h"
 #include "server/job_json.h"
@@ -65,10 +65,7 @@ struct HttpService::Impl : JobRoutes {
         metrics(*parts.metrics),
         queue(*parts.queue),
         store(parts.store.get()) {
-    std::random_device rd;
-    char buf[16];
-    std::snprintf(buf, sizeof buf, "%08x", unsigned(rd()));
-    id_prefix = buf;
+    id_prefix = random_hex(4);
     routes = make_routes();
     for (Route& r : routes) r.regex = std::regex(r.pattern);
     install();
