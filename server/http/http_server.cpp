@@ -398,7 +398,26 @@ struct HttpService::Impl : JobRoutes {
     std::string text = metrics.render({queue.queued(), queue.capacity(), queue.running(), queue.workers(),
                                        queue.draining(), std::max(0, waiting())});
     store->render_metrics(text);
+    render_connection_metrics(text);
     ctx.res.set_content(text, "text/plain; version=0.0.4; charset=utf-8");
+  }
+
+  // The connection gate's state and the connections it closed to protect the service.
+  void render_connection_metrics(std::string& out) {
+    const ConnectionGate::Counts c = svr.gate().counts();
+    out += "# HELP mdn_http_connections Client connections: open, waiting for a request (no thread), queued for a thread.\n"
+           "# TYPE mdn_http_connections gauge\n";
+    out += "mdn_http_connections{state=\"open\"} " + std::to_string(c.open) + "\n";
+    out += "mdn_http_connections{state=\"waiting\"} " + std::to_string(c.parked) + "\n";
+    out += "mdn_http_connections{state=\"queued\"} " + std::to_string(c.queued) + "\n";
+    out += "# HELP mdn_http_connections_closed_total Connections closed by the gate: refused at a per-client or total cap, "
+           "evicted while waiting, head not complete in time, no thread in time.\n"
+           "# TYPE mdn_http_connections_closed_total counter\n";
+    const std::pair<const char*, std::int64_t> reasons[] = {{"client_limit", c.refused_client}, {"total_limit", c.refused_total},
+                                                            {"evicted", c.evicted},           {"head_timeout", c.head_timeouts},
+                                                            {"queue_timeout", c.queue_timeouts}};
+    for (const auto& [reason, n] : reasons)
+      out += std::string("mdn_http_connections_closed_total{reason=\"") + reason + "\"} " + std::to_string(n) + "\n";
   }
 
   void openapi(Context& ctx) {

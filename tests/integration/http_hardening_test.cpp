@@ -245,6 +245,8 @@ TEST(HttpConnections, FiftySlowlorisConnectionsDoNotTakeTheServiceDown) {
   std::printf("[ figures  ] 50 slowloris connections: worst /healthz %.4f s, %d answered 408\n", worst, timed_out);
   EXPECT_LT(worst, 1.0);
   EXPECT_EQ(timed_out, int(slow.size()));
+  const std::string metrics = server.client()->Get("/metrics")->body;
+  EXPECT_NE(metrics.find("mdn_http_connections_closed_total{reason=\"head_timeout\"} 50\n"), std::string::npos) << metrics;
 }
 
 TEST(HttpConnections, SynchronousJobsThatFindNoWorkerAreAnswered503Promptly) {
@@ -300,7 +302,7 @@ TEST(HttpApiKeys, EachClientSeesOnlyItsOwnJobs) {
   EXPECT_EQ(parse_json(done->body).value("id", ""), id);
 
   // The other client: every route answers 404, as for a job that does not exist.
-  for (const std::string path : {"/v1/jobs/" + id, "/v1/jobs/" + id + "/result"}) expect_problem(b->Get(path.c_str()), 404);
+  for (const std::string& path : {"/v1/jobs/" + id, "/v1/jobs/" + id + "/result"}) expect_problem(b->Get(path.c_str()), 404);
   expect_problem(b->Delete(("/v1/jobs/" + id).c_str()), 404);
   // Its same Idempotency-Key is its own job.
   auto other = b->Post("/v1/jobs", {{"Idempotency-Key", "scan-1"}}, noisy_sphere_off(1), "model/x-off");
