@@ -111,6 +111,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     try {
       again = io::decode(out, target, io::Limits{});
     } catch (const std::exception& e) {
+      std::fprintf(stderr, "to %s, compression %s, bits position %d normal %d texcoord %d color %d generic %d, level %d\n",
+                   std::string(io::to_string(target)).c_str(),
+                   options.compression ? std::string(io::to_string(*options.compression)).c_str() : options.draco ? "(draco)" : "(none)",
+                   options.position_bits, options.normal_bits, options.texcoord_bits, options.color_bits, options.generic_bits,
+                   options.compression_level);
       finding("our output does not decode", e.what());
     }
     check_surfaces(*again, "re-decode");

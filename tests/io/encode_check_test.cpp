@@ -66,6 +66,19 @@ TEST(EncodeCheck, EveryResultDecodesAgainOrIsRefused) {
   EXPECT_GT(refused, 0);
 }
 
+// Draco's sequential encoding (compression_level 0) wrote a payload its own decoder refuses
+// when a point is used by no face (found by fuzz_off with fuzzed output settings).
+TEST(EncodeCheck, DracoAtEveryLevelReadsBackWithAnUnusedPoint) {
+  auto doc = decode("OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0\n5 5 5\n3 0 1 2\n", Format::Off);
+  for (const Format out : {Format::Drc, Format::Glb})
+    for (int level = 0; level <= 10; ++level) {
+      EncodeOptions options;
+      options.format = out;
+      options.compression_level = level;
+      EXPECT_NO_THROW(decode(doc->encode(options), out)) << to_string(out) << " level " << level;
+    }
+}
+
 // PLY in, PLY out kept the file's float32 properties and wrote "inf" for a coordinate past
 // the float range (answered 200; issue 32): refused now, for ascii and binary.
 TEST(EncodeCheck, PlyRefusesACoordinateItsPropertyCannotHold) {
