@@ -209,6 +209,8 @@ void read_body(Reader& reader, std::vector<Element>& elements, std::size_t min_r
 // ---- writing ----
 
 void write_binary(std::string& out, Type type, double value, bool swap) {
+  // Integer properties (a position in an integer PLY after denoising) take the nearest integer.
+  if (is_integer(type)) value = std::nearbyint(value);
   unsigned char raw[8];
   const std::size_t size = type_size(type);
   switch (type) {
@@ -229,7 +231,7 @@ void write_binary(std::string& out, Type type, double value, bool swap) {
 void write_ascii(std::string& out, Type type, double value) {
   if (type == Type::Float32) append_number(out, static_cast<float>(value));
   else if (type == Type::Float64) append_number(out, value);
-  else out += std::to_string(static_cast<std::int64_t>(value));
+  else out += std::to_string(static_cast<std::int64_t>(std::nearbyint(value)));
 }
 
 std::string PlyDocument::encode(const EncodeOptions& options) const {
