@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <condition_variable>
 #include <cstring>
 #include <deque>
@@ -152,7 +153,7 @@ class GateStream final : public httplib::Stream {
   bool is_writable() const override { return wait(POLLOUT, seconds(o_.write_timeout_s)); }
 
   ssize_t read(char* ptr, size_t size) override {
-    if (c_.available() == 0) {
+    while (c_.available() == 0) {
       c_.buf.clear();
       c_.off = 0;
       const Clock::time_point deadline = c_.body_deadline.value_or(head_deadline_);
@@ -166,7 +167,11 @@ class GateStream final : public httplib::Stream {
       }
       char chunk[kReadChunk];
       const ssize_t n = ::recv(c_.fd, chunk, sizeof chunk, MSG_DONTWAIT);
-      if (n <= 0) return n == 0 ? 0 : -1;
+      if (n == 0) return 0;
+      if (n < 0) {
+        if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) continue;  // a spurious wake-up
+        return -1;
+      }
       c_.buf.assign(chunk, std::size_t(n));
     }
     const std::size_t n = std::min(size, c_.available());
@@ -175,9 +180,16 @@ class GateStream final : public httplib::Stream {
     return ssize_t(n);
   }
 
+  // Writes what the socket takes now (cpp-httplib calls again for the rest); waits for room up
+  // to the write timeout.
   ssize_t write(const char* ptr, size_t size) override {
-    if (!is_writable()) return -1;
-    return ::send(c_.fd, ptr, size, MSG_NOSIGNAL | MSG_DONTWAIT);
+    const Clock::time_point deadline = Clock::now() + seconds(o_.write_timeout_s);
+    for (;;) {
+      if (!wait(POLLOUT, std::max(deadline - Clock::now(), Clock::duration::zero()))) return -1;
+      const ssize_t n = ::send(c_.fd, ptr, size, MSG_NOSIGNAL | MSG_DONTWAIT);
+      if (n >= 0) return n;
+      if ((errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) || Clock::now() >= deadline) return -1;
+    }
   }
 
   void get_remote_ip_and_port(std::string& ip, int& port) const override {
