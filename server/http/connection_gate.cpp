@@ -265,6 +265,7 @@ struct ConnectionGate::Impl {
   Lane main_lane, probe_lane;
   bool stopping = false;
   std::thread gate_thread;
+  std::once_flag stopped;
 
   Impl(GateOptions o, ServeRequest s) : options(std::move(o)), serve(std::move(s)) {
     epoll_fd = epoll_create1(EPOLL_CLOEXEC);
@@ -293,10 +294,12 @@ struct ConnectionGate::Impl {
     ::close(wake_fd);
   }
 
-  void stop() {
+  // Idempotent; a second caller waits until the first has stopped everything.
+  void stop() { std::call_once(stopped, [this] { stop_once(); }); }
+
+  void stop_once() {
     {
       std::lock_guard lock(mutex);
-      if (stopping) return;
       stopping = true;
     }
     const std::uint64_t one = 1;
