@@ -261,6 +261,7 @@ struct ConnectionGate::Impl {
   mutable std::mutex mutex;  // everything below
   std::unordered_map<int, std::unique_ptr<Conn>> parked;
   std::map<std::string, int> per_client;
+  std::map<std::string, int> busy;  // main-lane threads serving each address now
   Counts counts;
   Lane main_lane, probe_lane;
   bool stopping = false;
@@ -480,17 +481,36 @@ struct ConnectionGate::Impl {
   }
 
   // ---- the lanes: serve requests while whole heads are buffered, then park or close
+  // The first ready connection this lane may serve now: on the main lane, one whose address
+  // holds fewer than threads_per_client threads (others wait, and past kMaxQueueWait get 503).
+  std::deque<std::unique_ptr<Conn>>::iterator next_locked(Lane& lane) {
+    if (&lane == &probe_lane) return lane.ready.begin();
+    return std::find_if(lane.ready.begin(), lane.ready.end(), [&](const std::unique_ptr<Conn>& c) {
+      const auto it = busy.find(c->ip);
+      return it == busy.end() || it->second < options.threads_per_client;
+    });
+  }
+
   void lane_loop(Lane& lane) {
+    const bool main = &lane == &main_lane;
     for (;;) {
       std::unique_ptr<Conn> c;
       {
         std::unique_lock lock(mutex);
-        lane.cv.wait(lock, [&] { return stopping || !lane.ready.empty(); });
+        lane.cv.wait(lock, [&] { return stopping || next_locked(lane) != lane.ready.end(); });
         if (stopping) return;
-        c = std::move(lane.ready.front());
-        lane.ready.pop_front();
+        const auto it = next_locked(lane);
+        c = std::move(*it);
+        lane.ready.erase(it);
+        if (main) ++busy[c->ip];
       }
+      const std::string ip = c->ip;
       serve_connection(std::move(c));
+      if (main) {
+        std::lock_guard lock(mutex);
+        if (auto it = busy.find(ip); it != busy.end() && --it->second <= 0) busy.erase(it);
+        lane.cv.notify_all();  // a connection of this address may be served now
+      }
     }
   }
 

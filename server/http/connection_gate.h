@@ -11,7 +11,8 @@
 //             the connection started (or after its previous response) -> 408 and close. Parked
 //             connections cost a descriptor and a buffer, no thread.
 //          -> ready: queued for a thread of its lane (probes GET /healthz, /readyz, /metrics
-//             have a lane of their own, so they answer while every HTTP thread is busy); a
+//             have a lane of their own, so they answer while every HTTP thread is busy; one
+//             address holds at most threads_per_client threads of the main lane); a
 //             connection that waits in the queue longer than kMaxQueueWait -> 503 and close.
 //          -> a thread serves the request (cpp-httplib's own parser and routes, through
 //             process_request over GateStream); pipelined requests already buffered are served
@@ -49,6 +50,10 @@ struct GateOptions {
   double write_timeout_s = 30;
   int max_connections_per_client = 64;
   int max_connections = 2048;
+  // Main-lane threads one address may hold at once; its other ready requests wait (and past
+  // kMaxQueueWait are answered 503), so one client's slow bodies or long synchronous jobs
+  // cannot take every thread. io_threads: no cap (behind a proxy, every client is one address).
+  int threads_per_client = 4;
 };
 
 // The longest a request whose head has arrived waits for a thread before it is answered 503.

@@ -94,7 +94,11 @@ struct HttpService::Impl : JobRoutes {
   // ---------------------------------------------------------------- wiring
   void install() {
     // Connections wait for their request heads in the gate, not on a thread (connection_gate.h).
-    svr.set_gate_options(GateOptions{.io_threads = config.effective_io_threads(),
+    // With a per-client connection cap (not behind a proxy that makes every client one
+    // address) one address may also hold at most half the HTTP threads.
+    const int io_threads = config.effective_io_threads();
+    const bool per_client = config.max_connections_per_client < config.max_connections;
+    svr.set_gate_options(GateOptions{.io_threads = io_threads,
                                      .probe_threads = 2,
                                      .header_timeout_s = config.header_timeout_s,
                                      .keep_alive_timeout_s = config.keep_alive_timeout_s,
@@ -103,7 +107,8 @@ struct HttpService::Impl : JobRoutes {
                                      .body_timeout_s = config.body_timeout_s,
                                      .write_timeout_s = config.write_timeout_s,
                                      .max_connections_per_client = config.max_connections_per_client,
-                                     .max_connections = config.max_connections});
+                                     .max_connections = config.max_connections,
+                                     .threads_per_client = per_client ? std::max(1, io_threads / 2) : io_threads});
     auto secs = [](double s) { return std::pair<time_t, time_t>(time_t(s), time_t((s - double(time_t(s))) * 1e6)); };
     svr.set_keep_alive_timeout(std::max<time_t>(1, time_t(config.keep_alive_timeout_s + 0.5)));
     svr.set_keep_alive_max_count(std::size_t(config.keep_alive_max));

@@ -3,6 +3,7 @@
 // --api-keys, connections one client cannot exhaust (1,000 idle, 50 slowloris), HTTP/1.1
 // framing (pipelining, conflicting Content-Length, the body deadline), 415 for a binary body
 // labelled text/plain, and a prompt 503 for synchronous jobs that find no worker.
+#include <arpa/inet.h>
 #include <poll.h>
 #include <sys/resource.h>
 
@@ -247,6 +248,50 @@ TEST(HttpConnections, FiftySlowlorisConnectionsDoNotTakeTheServiceDown) {
   EXPECT_EQ(timed_out, int(slow.size()));
   const std::string metrics = server.client()->Get("/metrics")->body;
   EXPECT_NE(metrics.find("mdn_http_connections_closed_total{reason=\"head_timeout\"} 50\n"), std::string::npos) << metrics;
+}
+
+// A TCP connection to 127.0.0.1:port from another loopback address (another client), or -1.
+int connect_from(const char* source, int port) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in from{};
+  from.sin_family = AF_INET;
+  inet_pton(AF_INET, source, &from.sin_addr);
+  if (bind(fd, reinterpret_cast<sockaddr*>(&from), sizeof from) != 0) return close(fd), -1;
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(std::uint16_t(port));
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (connect(fd, reinterpret_cast<sockaddr*>(&to), sizeof to) != 0) return close(fd), -1;
+  return fd;
+}
+
+TEST(HttpConnections, OneClientsSlowBodiesLeaveThreadsForOthers) {
+  ServerProcess server({"--io-threads", "4", "--body-timeout", "30"});
+  ASSERT_TRUE(server.started()) << server.log();
+  // Client A (127.0.0.1) sends 6 request heads whose bodies trickle: it holds its share of
+  // the HTTP threads (half of 4), the rest wait.
+  std::vector<int> slow;
+  const std::string head = "POST /v1/denoise HTTP/1.1\r\nHost: x\r\nContent-Type: model/x-off\r\nContent-Length: 100000\r\n\r\nOFF\n";
+  for (int i = 0; i < 6; ++i) {
+    const int fd = connect_loopback(server.port());
+    ASSERT_GE(fd, 0);
+    send(fd, head.data(), head.size(), MSG_NOSIGNAL);
+    slow.push_back(fd);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  // Client B (127.0.0.2) is served at once.
+  const int fd = connect_from("127.0.0.2", server.port());
+  ASSERT_GE(fd, 0) << "cannot bind 127.0.0.2";
+  const std::string get = "GET /v1/params/schema HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n";
+  const auto start = Clock::now();
+  send(fd, get.data(), get.size(), MSG_NOSIGNAL);
+  const std::string response = read_until_close(fd, 5);
+  const double took = seconds_since(start);
+  close(fd);
+  for (int s : slow) close(s);
+  std::printf("[ figures  ] 6 trickling bodies from one address on 4 HTTP threads: another address served in %.4f s\n", took);
+  EXPECT_EQ(response.rfind("HTTP/1.1 200", 0), 0u) << response.substr(0, 200);
+  EXPECT_LT(took, 1.0);
 }
 
 TEST(HttpConnections, SynchronousJobsThatFindNoWorkerAreAnswered503Promptly) {
