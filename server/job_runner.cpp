@@ -6,6 +6,8 @@
 #include <memory>
 #include <utility>
 
+#include "core/io/encode_check.h"
+
 namespace mdn::service {
 namespace {
 
@@ -44,6 +46,15 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
       io::decode(input.bytes, input.format, io::DecodeOptions{.limits = bounded, .resource_dir = input.resource_dir});
   out.timings.decode_ms = ms_since(start);
 
+  io::EncodeOptions encode = input.params.output;
+  encode.cancel = progress;
+  encode.max_memory_bytes = limits.max_decoded_bytes;  // the encoder is bounded like the decoder
+  if (!encode.format) encode.format = document->format();
+  // The validation step between decode and encode (core/io/encode_check.h): settings the
+  // encoder cannot take, or whose memory would exceed the limits, are refused before any
+  // denoising work.
+  io::check_encode(*document, encode, limits);
+
   const RunOptions options{.threads = input.threads < 1 ? 1 : input.threads, .progress = progress};
   start = Clock::now();
   std::vector<std::string> choice_notes;
@@ -60,9 +71,6 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
   }
   out.timings.denoise_ms = ms_since(start);
 
-  io::EncodeOptions encode = input.params.output;
-  encode.cancel = progress;
-  if (!encode.format) encode.format = document->format();
   out.format = *encode.format;
   out.media_type = std::string(io::media_type(out.format));
   out.effective.output.format = out.format;  // echo what was actually produced

@@ -87,6 +87,9 @@ struct EncodeOptions {
   // Not a parameter: the job's time limit and DELETE, polled like Limits::cancel by the
   // encoders' loops (the Draco encoder itself runs to its end). Null: never cancelled.
   ProgressObserver* cancel = nullptr;
+  // Not a parameter: the bound on the encoder's working memory (Draco's tables grow as 2^bits,
+  // core/io/encode_check.h), the same as decoding's: the service sets Limits::max_decoded_bytes.
+  std::int64_t max_memory_bytes = std::int64_t{1} << 30;
 };
 
 class MeshDocument {

@@ -13,6 +13,7 @@
 
 #include "core/errors.h"
 #include "core/io/detail.h"
+#include "core/io/encode_check.h"
 
 namespace mdn::io::detail {
 
@@ -165,33 +166,100 @@ std::unique_ptr<draco::Mesh> draco_decode(std::string_view bytes, const std::str
   return mesh;
 }
 
-void check_draco_encodable(const draco::Mesh& mesh) {
-  const auto* position = mesh.GetNamedAttribute(draco::GeometryAttribute::POSITION);
-  if (position == nullptr || position->num_components() != 3)
-    throw UnsupportedError("the mesh cannot be written as Draco: no 3-component POSITION");
-  // Draco quantises positions on a float grid over their bounding box: a coordinate or a span
-  // past the float range makes that grid infinite, and Draco's encoder then crashes.
-  double lo[3], hi[3];
-  std::fill(lo, lo + 3, std::numeric_limits<double>::infinity());
-  std::fill(hi, hi + 3, -std::numeric_limits<double>::infinity());
-  for (draco::AttributeValueIndex i(0); i < static_cast<std::uint32_t>(position->size()); ++i) {
-    float value[3] = {0, 0, 0};
-    if (!position->ConvertValue<float>(i, 3, value)) throw UnsupportedError("the mesh cannot be written as Draco: unreadable POSITION");
-    for (int k = 0; k < 3; ++k) {
-      if (!std::isfinite(value[k]))
-        throw UnsupportedError("the mesh cannot be written as Draco: a coordinate is outside the float range (|x| > 3.4e38)");
+namespace {
+
+// The bits Draco quantises an attribute of this type with (0: stored losslessly). Only float32
+// attributes are quantised; the others are packed as they are.
+int quantization_bits(const draco::PointAttribute& a, const EncodeOptions& options) {
+  if (a.data_type() != draco::DT_FLOAT32) return 0;
+  switch (a.attribute_type()) {
+    case draco::GeometryAttribute::POSITION: return options.position_bits;
+    case draco::GeometryAttribute::NORMAL: return options.normal_bits;
+    case draco::GeometryAttribute::TEX_COORD: return options.texcoord_bits;
+    case draco::GeometryAttribute::COLOR: return options.color_bits;
+    case draco::GeometryAttribute::GENERIC: return options.generic_bits;
+    default: return 0;
+  }
+}
+
+const char* attribute_name(const draco::PointAttribute& a) {
+  switch (a.attribute_type()) {
+    case draco::GeometryAttribute::POSITION: return "POSITION";
+    case draco::GeometryAttribute::NORMAL: return "NORMAL";
+    case draco::GeometryAttribute::TEX_COORD: return "TEXCOORD";
+    case draco::GeometryAttribute::COLOR: return "COLOR";
+    default: return "a generic attribute";
+  }
+}
+
+// Draco quantises an attribute on a float grid over the values' range (over all components):
+// a value or a range past the float range makes that grid infinite, and the encoder then
+// crashes (SIGSEGV; found for POSITION, TEXCOORD_0 and COLOR_0 at +-3e38). Normals go through
+// an octahedral map that sums the components' magnitudes first. So every quantised value must
+// be finite, positions may span at most kMaxDracoSpan, and other attributes' values lie within
+// +-kMaxDracoSpan / 4 (their sum over 4 components and their range stay finite).
+void check_quantized_values(const draco::PointAttribute& a) {
+  const bool position = a.attribute_type() == draco::GeometryAttribute::POSITION;
+  const int n = a.num_components();
+  if (n < 1 || n > 4)
+    throw UnsupportedError(std::string("the mesh cannot be written as Draco: ") + attribute_name(a) +
+                           " has " + std::to_string(n) + " components (Draco quantises 1 to 4)");
+  const double bound = position ? std::numeric_limits<float>::max() : kMaxDracoSpan / 4;
+  double lo[4], hi[4];
+  std::fill(lo, lo + 4, std::numeric_limits<double>::infinity());
+  std::fill(hi, hi + 4, -std::numeric_limits<double>::infinity());
+  for (draco::AttributeValueIndex i(0); i < static_cast<std::uint32_t>(a.size()); ++i) {
+    float value[4] = {0, 0, 0, 0};
+    if (!a.ConvertValue<float>(i, n, value))
+      throw UnsupportedError(std::string("the mesh cannot be written as Draco: unreadable ") + attribute_name(a));
+    for (int k = 0; k < n; ++k) {
+      if (!std::isfinite(value[k]) || std::abs(double(value[k])) > bound) {
+        if (position)
+          throw UnsupportedError("the mesh cannot be written as Draco: a coordinate is outside the float range (|x| > 3.4e38)");
+        char text[64];
+        std::snprintf(text, sizeof text, "%.3g, outside +-%.3g", double(value[k]), bound);
+        throw UnsupportedError(std::string("the mesh cannot be written as Draco: ") + attribute_name(a) + " has a value of " +
+                               text + " (Draco quantises it on a float grid; store it losslessly with 0 bits)");
+      }
       lo[k] = std::min(lo[k], double(value[k]));
       hi[k] = std::max(hi[k], double(value[k]));
     }
   }
-  for (int k = 0; k < 3; ++k)
-    if (hi[k] - lo[k] > kMaxDracoSpan)
-    {
+  for (int k = 0; k < n; ++k)
+    if (hi[k] - lo[k] > kMaxDracoSpan) {
       char text[96];
-      std::snprintf(text, sizeof text, "its bounding box spans %.3g, more than Draco's float grid can hold (%.3g)", hi[k] - lo[k],
+      std::snprintf(text, sizeof text, "its values span %.3g, more than Draco's float grid can hold (%.3g)", hi[k] - lo[k],
                     kMaxDracoSpan);
-      throw UnsupportedError(std::string("the mesh cannot be written as Draco: ") + text);
+      throw UnsupportedError(std::string("the mesh cannot be written as Draco: ") + attribute_name(a) + ": " + text);
     }
+}
+
+std::string encode_with_speed(draco::Encoder& encoder, const draco::Mesh& mesh, int speed) {
+  encoder.SetSpeedOptions(speed, speed);
+  draco::EncoderBuffer buffer;
+  const draco::Status status = encoder.EncodeMeshToBuffer(mesh, &buffer);
+  // Whatever else Draco's encoder refuses is a property of this mesh, not a fault of ours.
+  if (!status.ok()) throw UnsupportedError("the mesh cannot be written as Draco: " + status.error_msg_string());
+  return std::string(buffer.data(), buffer.size());
+}
+
+bool decodes(const std::string& payload) {
+  draco::DecoderBuffer buffer;
+  buffer.Init(payload.data(), payload.size());
+  draco::Decoder decoder;
+  return decoder.DecodeMeshFromBuffer(&buffer).ok();
+}
+
+}  // namespace
+
+void check_draco_encodable(const draco::Mesh& mesh, const EncodeOptions& options) {
+  const auto* position = mesh.GetNamedAttribute(draco::GeometryAttribute::POSITION);
+  if (position == nullptr || position->num_components() != 3)
+    throw UnsupportedError("the mesh cannot be written as Draco: no 3-component POSITION");
+  for (int i = 0; i < mesh.num_attributes(); ++i) {
+    const draco::PointAttribute* a = mesh.attribute(i);
+    if (a != nullptr && (a == position || quantization_bits(*a, options) > 0)) check_quantized_values(*a);
+  }
   // Draco drops faces that repeat a corner and fails on a mesh with none left.
   bool any = mesh.num_faces() == 0;
   for (draco::FaceIndex f(0); !any && f < mesh.num_faces(); ++f) {
@@ -205,19 +273,14 @@ void check_draco_encodable(const draco::Mesh& mesh) {
 }
 
 std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options, const std::optional<QuantizationBox>& box) {
-  auto check_bits = [](int bits, const char* name) {
-    if (bits < 0 || bits > 30) throw InvalidParamsError(name, std::string(name) + " must be 0 (lossless) or in [1, 30]");
-  };
-  if (options.position_bits < 8 || options.position_bits > 30)
-    throw InvalidParamsError("position_bits", "position_bits must be in [8, 30]");
-  check_bits(options.normal_bits, "normal_bits");
-  check_bits(options.texcoord_bits, "texcoord_bits");
-  check_bits(options.color_bits, "color_bits");
+  check_encode_options(options);
   CancelPoll(options.cancel).check();  // the encoder itself runs to its end
-  check_bits(options.generic_bits, "generic_bits");
-  if (options.compression_level < 0 || options.compression_level > 10)
-    throw InvalidParamsError("compression_level", "compression_level must be in [0, 10]");
-  check_draco_encodable(mesh);
+  check_draco_encodable(mesh, options);
+  // The tables of the largest setting in use (encode_check.h), against the same bound as decoding.
+  if (const std::int64_t need = draco_encode_bytes(options, mesh.num_faces()); need > options.max_memory_bytes)
+    throw UnsupportedError("the mesh cannot be written as Draco with these quantisation bits: about " + std::to_string(need) +
+                           " bytes of encoder memory, more than the limit of " + std::to_string(options.max_memory_bytes) +
+                           " (max_decoded_bytes)");
   draco::Encoder encoder;
   if (box) encoder.SetAttributeExplicitQuantization(draco::GeometryAttribute::POSITION, options.position_bits, 3, box->origin, box->range);
   else encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, options.position_bits);
@@ -231,12 +294,14 @@ std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options, 
     if (bits > 0) encoder.SetAttributeQuantization(type, bits);
   // Draco's speed is the inverse of the compression level (0 = best compression).
   const int speed = 10 - options.compression_level;
-  encoder.SetSpeedOptions(speed, speed);
-  draco::EncoderBuffer buffer;
-  const draco::Status status = encoder.EncodeMeshToBuffer(mesh, &buffer);
-  // Whatever else Draco's encoder refuses is a property of this mesh, not a fault of ours.
-  if (!status.ok()) throw UnsupportedError("the mesh cannot be written as Draco: " + status.error_msg_string());
-  return std::string(buffer.data(), buffer.size());
+  std::string out = encode_with_speed(encoder, mesh, speed);
+  // What is written must read back. Draco's speed 10 (sequential encoding) writes a payload
+  // its own decoder refuses when a point is not used by any face (found by fuzz_off with
+  // fuzzed output settings): every payload is decoded once here, and one that does not decode
+  // is written again with the edgebreaker (speed 9) before giving up with a 422.
+  if (!decodes(out) && speed == 10) out = encode_with_speed(encoder, mesh, 9);
+  if (!decodes(out)) throw UnsupportedError("the mesh cannot be written as Draco: Draco's encoder wrote a payload it cannot read back");
+  return out;
 }
 
 Vertices draco_positions(const draco::Mesh& mesh) {

@@ -30,12 +30,15 @@ struct QuantizationBox {
 // range, so that the grid's margins stay finite).
 inline constexpr double kMaxDracoSpan = 8.5e37;
 
-// Throws UnsupportedError (HTTP 422) for a mesh Draco's encoder cannot take: a coordinate or a
-// bounding box outside the float range, or only degenerate triangles. draco_encode calls it.
-void check_draco_encodable(const draco::Mesh& mesh);
+// Throws UnsupportedError (HTTP 422) for a mesh Draco's encoder cannot take with `options`: a
+// value of any attribute it quantises (POSITION always, the others when their bits are not 0)
+// that is not finite or lies outside the float grid Draco can build, or only degenerate
+// triangles. draco_encode calls it.
+void check_draco_encodable(const draco::Mesh& mesh, const EncodeOptions& options);
 
 // Encodes with the quantisation bits and speed of `options` (and `box` for positions when
-// given). Deterministic. Throws UnsupportedError for a mesh Draco cannot encode.
+// given). Deterministic. Throws InvalidParamsError for settings out of range, UnsupportedError
+// for a mesh Draco cannot encode or whose tables would exceed options.max_memory_bytes.
 std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options,
                          const std::optional<QuantizationBox>& box = std::nullopt);
 

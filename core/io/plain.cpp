@@ -42,12 +42,16 @@ void check_surface_sizes(const std::vector<TriMesh>& surfaces, const std::vector
     if (surfaces[i].V.rows() != counts[i] || surfaces[i].V.cols() != 3)
       throw InvalidMeshError("surface " + std::to_string(i) + " had " + std::to_string(counts[i]) +
                              " vertices; replaced positions must keep that count");
+  // A non-finite position would be written as "nan" / "inf" (text) or as a float no reader
+  // takes back (binary): every writer refuses it here, before writing anything.
+  for (const TriMesh& s : surfaces)
+    if (!s.V.allFinite()) throw UnsupportedError("the mesh cannot be written: a vertex position is not a finite number");
 }
 
 void check_float_coordinates(const std::vector<TriMesh>& surfaces, Format format) {
   constexpr double kFloatMax = std::numeric_limits<float>::max();
   for (const TriMesh& s : surfaces)
-    if (s.V.size() > 0 && s.V.cwiseAbs().maxCoeff() > kFloatMax)
+    if (s.V.size() > 0 && !(s.V.cwiseAbs().maxCoeff() <= kFloatMax))  // NaN fails too
       throw UnsupportedError("the mesh cannot be written as " + std::string(to_string(format)) +
                              ": a coordinate is outside the float range (|x| > 3.4e38)");
 }

@@ -32,7 +32,8 @@ std::string write_plain_gltf(const std::vector<TriMesh>& surfaces, Format format
 void check_float_coordinates(const std::vector<TriMesh>& surfaces, Format format);
 
 // Throws InvalidMeshError if a caller changed the number of vertices of a surface (the
-// document maps every welded vertex back to the file's copies and needs the same count).
+// document maps every welded vertex back to the file's copies and needs the same count), and
+// UnsupportedError if a position is not finite. Every document's encode() calls it first.
 void check_surface_sizes(const std::vector<TriMesh>& surfaces, const std::vector<std::int64_t>& counts);
 
 }  // namespace mdn::io::detail

@@ -44,6 +44,11 @@ std::size_t type_size(Type type) {
 
 bool is_integer(Type type) { return type != Type::Float32 && type != Type::Float64; }
 
+const char* type_name(Type type) {
+  constexpr const char* kNames[] = {"int8", "uint8", "int16", "uint16", "int32", "uint32", "float32", "float64"};
+  return kNames[static_cast<int>(type)];
+}
+
 // The range of an integer type, as doubles (exact: at most 32 bits).
 double type_min(Type type) {
   switch (type) {
@@ -204,6 +209,8 @@ void read_body(Reader& reader, std::vector<Element>& elements, std::size_t min_r
 // ---- writing ----
 
 void write_binary(std::string& out, Type type, double value, bool swap) {
+  // Integer properties (a position in an integer PLY after denoising) take the nearest integer.
+  if (is_integer(type)) value = std::nearbyint(value);
   unsigned char raw[8];
   const std::size_t size = type_size(type);
   switch (type) {
@@ -224,7 +231,7 @@ void write_binary(std::string& out, Type type, double value, bool swap) {
 void write_ascii(std::string& out, Type type, double value) {
   if (type == Type::Float32) append_number(out, static_cast<float>(value));
   else if (type == Type::Float64) append_number(out, value);
-  else out += std::to_string(static_cast<std::int64_t>(value));
+  else out += std::to_string(static_cast<std::int64_t>(std::nearbyint(value)));
 }
 
 std::string PlyDocument::encode(const EncodeOptions& options) const {
@@ -236,7 +243,18 @@ std::string PlyDocument::encode(const EncodeOptions& options) const {
   const char* axes[3] = {"x", "y", "z"};
   for (int k = 0; k < 3; ++k) {
     Property* p = vertex.find(axes[k]);
-    for (Eigen::Index i = 0; i < mesh.V.rows(); ++i) p->values[static_cast<std::size_t>(i)] = mesh.V(i, k);
+    for (Eigen::Index i = 0; i < mesh.V.rows(); ++i) {
+      // Written with the property's declared type: a value it cannot hold would be written as
+      // "inf" (float) or wrap (integers), a file no reader takes back. Refused instead.
+      const double value = mesh.V(i, k);
+      const bool fits = is_integer(p->type) ? value >= type_min(p->type) && value <= type_max(p->type)
+                                            : std::isfinite(value) && (p->type == Type::Float64 ||
+                                                                       std::abs(value) <= std::numeric_limits<float>::max());
+      if (!fits)
+        throw UnsupportedError("the mesh cannot be written as PLY: vertex " + std::to_string(i) + " coordinate " + axes[k] +
+                               " does not fit the file's " + type_name(p->type) + " property");
+      p->values[static_cast<std::size_t>(i)] = value;
+    }
   }
   if (has_normals_) {
     const Vertices N = vertex_normals(mesh.V, mesh.F);

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cctype>
 #include <cmath>
+#include <fstream>
 #include <sstream>
 #include <thread>
 
@@ -80,6 +82,10 @@ const std::vector<Setting>& settings() {
       {"job-time-limit", "MDN_JOB_TIME_LIMIT", "seconds of running time after which a job fails",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.job_time_limit_s = parse_seconds(n, v, 0, 1e6, true); },
        [](const ServerConfig& c) { return show_double(c.job_time_limit_s); }},
+      {"sync-start-timeout", "MDN_SYNC_START_TIMEOUT",
+       "seconds a synchronous POST /v1/denoise waits for a free worker; then 503 with Retry-After",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.sync_start_timeout_s = parse_seconds(n, v, 0, 3600, true); },
+       [](const ServerConfig& c) { return show_double(c.sync_start_timeout_s); }},
       {"result-ttl", "MDN_RESULT_TTL", "seconds a finished job and its result stay available",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.result_ttl_s = parse_seconds(n, v, 0, 1e7, true); },
        [](const ServerConfig& c) { return show_double(c.result_ttl_s); }},
@@ -139,6 +145,21 @@ const std::vector<Setting>& settings() {
          if (c.io_threads > 0 && c.io_threads < 4) throw ConfigError(n + ": " + v + " is below 4 (0 picks 4 per core)");
        },
        [](const ServerConfig& c) { return std::to_string(c.io_threads) + " (" + std::to_string(c.effective_io_threads()) + " here)"; }},
+      {"header-timeout", "MDN_HEADER_TIMEOUT",
+       "seconds for a request head to arrive (from the connection's start or its previous response); then 408 and close",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.header_timeout_s = parse_seconds(n, v, 0, 3600, true); },
+       [](const ServerConfig& c) { return show_double(c.header_timeout_s); }},
+      {"body-timeout", "MDN_BODY_TIMEOUT", "seconds a whole request body may take to arrive; then 408 and close",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.body_timeout_s = parse_seconds(n, v, 0, 1e5, true); },
+       [](const ServerConfig& c) { return show_double(c.body_timeout_s); }},
+      {"max-connections-per-client", "MDN_MAX_CONNECTIONS_PER_CLIENT",
+       "open connections from one source address; beyond, new ones are answered 503 and closed",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_connections_per_client = int(parse_int(n, v, 1, 1000000)); },
+       [](const ServerConfig& c) { return std::to_string(c.max_connections_per_client); }},
+      {"max-connections", "MDN_MAX_CONNECTIONS",
+       "open connections in all (also kept below half the process's file limit); beyond, new ones are answered 503 and closed",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_connections = int(parse_int(n, v, 1, 1000000)); },
+       [](const ServerConfig& c) { return std::to_string(c.max_connections); }},
       {"keep-alive-timeout", "MDN_KEEP_ALIVE_TIMEOUT", "seconds an idle keep-alive connection is kept",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.keep_alive_timeout_s = parse_seconds(n, v, 0, 3600, true); },
        [](const ServerConfig& c) { return show_double(c.keep_alive_timeout_s); }},
@@ -161,6 +182,22 @@ const std::vector<Setting>& settings() {
       {"auth-token", "MDN_AUTH_TOKEN", "require 'Authorization: Bearer <token>' on /v1 (prefer the variable: flags show in ps)",
        [](ServerConfig& c, const std::string&, const std::string& v) { c.auth_token = v; },
        [](const ServerConfig& c) { return c.auth_token.empty() ? std::string("(none)") : std::string("(set)"); }},
+      {"api-keys", "MDN_API_KEYS",
+       "file of per-client keys, one 'name:key' a line: /v1 then needs 'Authorization: Bearer <key>', and a client "
+       "sees only its own jobs",
+       [](ServerConfig& c, const std::string& n, const std::string& v) {
+         std::ifstream in(v, std::ios::binary);
+         std::ostringstream text;
+         text << in.rdbuf();
+         if (!in) throw ConfigError(n + ": cannot read '" + v + "'");
+         try {
+           c.api_keys = parse_api_keys(text.str());
+         } catch (const ConfigError& e) {
+           throw ConfigError(n + " " + v + ": " + e.what());
+         }
+         c.api_keys_file = v;
+       },
+       [](const ServerConfig& c) { return c.api_keys_file.empty() ? std::string("(none)") : c.api_keys_file; }},
       {"cors-origin", "MDN_CORS_ORIGIN", "Access-Control-Allow-Origin for browser clients; empty disables CORS",
        [](ServerConfig& c, const std::string&, const std::string& v) { c.cors_origin = v; },
        [](const ServerConfig& c) { return c.cors_origin.empty() ? std::string("(disabled)") : c.cors_origin; }},
@@ -191,6 +228,35 @@ const std::vector<Setting>& settings() {
 }
 
 }  // namespace
+
+std::vector<ApiKey> parse_api_keys(const std::string& text) {
+  std::vector<ApiKey> keys;
+  std::istringstream in(text);
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const auto first = line.find_first_not_of(" \t");
+    if (first == std::string::npos || line[first] == '#') continue;
+    const std::string where = "line " + std::to_string(number);
+    const auto colon = line.find(':');
+    if (colon == std::string::npos) throw ConfigError(where + ": expected name:key");
+    ApiKey k{line.substr(0, colon), line.substr(colon + 1)};
+    const bool name_ok = !k.name.empty() && k.name.size() <= 64 && std::all_of(k.name.begin(), k.name.end(), [](char ch) {
+      return std::isalnum(static_cast<unsigned char>(ch)) || ch == '.' || ch == '_' || ch == '-';
+    });
+    if (!name_ok) throw ConfigError(where + ": the name must be 1 to 64 of A-Z a-z 0-9 . _ -");
+    const bool key_ok = k.key.size() >= 16 && k.key.size() <= 256 &&
+                        std::all_of(k.key.begin(), k.key.end(), [](char ch) { return ch > 0x20 && ch < 0x7f; });
+    if (!key_ok) throw ConfigError(where + ": the key must be 16 to 256 visible ASCII characters");
+    for (const ApiKey& other : keys)
+      if (other.name == k.name || other.key == k.key)
+        throw ConfigError(where + ": " + (other.name == k.name ? "the name '" + k.name + "'" : std::string("the key")) +
+                          " repeats an earlier line");
+    keys.push_back(std::move(k));
+  }
+  if (keys.empty()) throw ConfigError("no keys (one 'name:key' a line)");
+  return keys;
+}
 
 RedisAddress parse_redis_url(const std::string& url) {
   const std::string scheme = "redis://";
@@ -289,6 +355,8 @@ ParsedCommandLine parse_command_line(const std::vector<std::string>& args,
     }
     found->set(out.config, "--" + name, value);
   }
+  if (!out.config.api_keys.empty() && !out.config.auth_token.empty())
+    throw ConfigError("--api-keys and --auth-token exclude each other: give the shared token's clients a key each");
   // Redis keeps a value of at most 512 MiB (proto-max-bulk-len): a request body is one.
   if (out.config.queue && out.config.max_body_bytes > (std::int64_t{512} << 20))
     throw ConfigError("--max-body: at most 536870912 (512M) with --queue redis://, got " +

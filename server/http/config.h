@@ -27,6 +27,16 @@ std::optional<RedisAddress> parse_queue_setting(const std::string& text);
 // As --help and the logs show it: "memory" or the URL, the password never printed.
 std::string show_queue_setting(const std::optional<RedisAddress>& queue);
 
+// One client of --api-keys: its name (logs, metrics) and its secret (Authorization: Bearer).
+struct ApiKey {
+  std::string name;
+  std::string key;
+};
+// The --api-keys file: one client per line, "name:key" (name: 1 to 64 of [A-Za-z0-9._-];
+// key: 16 to 256 visible ASCII characters, no spaces); blank lines and lines starting with
+// '#' are skipped. Names and keys must be unique. Throws ConfigError naming the line.
+std::vector<ApiKey> parse_api_keys(const std::string& text);
+
 struct ServerConfig {
   // --- Listening ---
   std::string host = "127.0.0.1";  // --host / MDN_HOST; 0.0.0.0 to listen on every interface
@@ -38,6 +48,7 @@ struct ServerConfig {
   int threads_per_job = 1;    // --threads-per-job; threads inside one pipeline run; [1, 64]
   int queue_capacity = 64;    // --queue-capacity; queued (not yet running) jobs; [1, 100000]
   double job_time_limit_s = 300;   // --job-time-limit; seconds of running time per job; (0, 1e6]
+  double sync_start_timeout_s = 30;  // --sync-start-timeout; POST /v1/denoise waits this long for a worker, then 503
   double result_ttl_s = 600;       // --result-ttl; seconds a finished job and its result are kept
   int max_stored_jobs = 1024;      // --max-stored-jobs; finished jobs kept at most (oldest evicted)
 
@@ -61,8 +72,17 @@ struct ServerConfig {
   std::int64_t max_nodes = 100'000;                         // --max-nodes; glTF "nodes" entries
   std::int64_t max_accessors = 1'000'000;                   // --max-accessors; glTF accessors + buffer views
 
-  // --- Connections (cpp-httplib holds one I/O thread per open connection) ---
+  // --- Connections (cpp-httplib holds one I/O thread per connection it serves; a connection
+  // reaches one only once its request head has arrived: see connection_gate.h) ---
   int io_threads = 0;               // --io-threads; HTTP threads, 0 = 4 per core, at least 8; [0, 4096], >= 4 if set
+  // --header-timeout: seconds from a connection's accept (or its previous response) to the end
+  // of its request head; then 408 and close (slowloris).
+  double header_timeout_s = 10;
+  // --body-timeout: seconds a whole request body may take, however steadily it trickles; then
+  // 408 and close.
+  double body_timeout_s = 300;
+  int max_connections_per_client = 64;  // --max-connections-per-client; open connections per source address, beyond: 503
+  int max_connections = 2048;           // --max-connections; open connections in all (and below the fd limit), beyond: 503
   double keep_alive_timeout_s = 2;  // --keep-alive-timeout; short, idle clients hold a thread
   int keep_alive_max = 100;         // --keep-alive-max; requests per connection
   double read_timeout_s = 30;       // --read-timeout
@@ -74,6 +94,11 @@ struct ServerConfig {
   // --- Operations ---
   double drain_grace_s = 30;     // --drain-grace; on SIGTERM, time for queued+running jobs
   std::string auth_token;        // --auth-token / MDN_AUTH_TOKEN; empty = no auth (prefer the env)
+  // --api-keys FILE / MDN_API_KEYS: per-client keys (parse_api_keys), read once at startup;
+  // with keys, each client sees, cancels and downloads only its own jobs (404 for others').
+  // Exclusive with --auth-token.
+  std::vector<ApiKey> api_keys;
+  std::string api_keys_file;
   std::string cors_origin = "*"; // --cors-origin; Access-Control-Allow-Origin; empty = no CORS
   bool web = true;               // --web / MDN_WEB on|off; the web page at / (off: API only)
   LogFormat log_format = LogFormat::Text;  // --log-format text|json

@@ -1,20 +1,17 @@
 #include "server/http/connection_probe.h"
 
-#include <fcntl.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <chrono>
-#include <cstdlib>
 
 namespace mdn::http {
 namespace {
 
-thread_local int t_connection_fd = -1;  // set by ConnectionTaskQueue for the task's duration
+thread_local int t_connection_fd = -1;  // set by ConnectionProbe::Scope for a request's duration
 
 int port_of(int fd, bool peer) {
   sockaddr_storage addr{};
@@ -29,57 +26,8 @@ int port_of(int fd, bool peer) {
 
 }  // namespace
 
-ConnectionTaskQueue::ConnectionTaskQueue(std::size_t threads, int listen_fd)
-    : pool_(threads), listen_fd_(listen_fd), listen_port_(listen_fd >= 0 ? port_of(listen_fd, false) : -1) {}
-
-// Whether fd is a connection on the listening port that no task serves yet; `open` tells
-// whether fd is a descriptor at all.
-bool ConnectionTaskQueue::unserved_connection(int fd, ino_t& inode, bool& open) const {
-  struct stat st {};
-  open = fstat(fd, &st) == 0;
-  if (!open || !S_ISSOCK(st.st_mode) || serving_.count(st.st_ino)) return false;
-  if (port_of(fd, false) != listen_port_ || port_of(fd, true) < 0) return false;
-  inode = st.st_ino;
-  return true;
-}
-
-int ConnectionTaskQueue::accepted_socket(ino_t& inode) const {
-  if (listen_port_ <= 0) return -1;
-  // accept() gave the lowest free descriptor, so the new socket lies just below the lowest one
-  // free now, or above it if another thread closed a lower one since: search outwards from it,
-  // down to 0 and up until 64 descriptors in a row are closed.
-  const int lowest_free = fcntl(listen_fd_, F_DUPFD_CLOEXEC, 0);
-  if (lowest_free < 0) return -1;
-  close(lowest_free);
-  bool open = false;
-  for (int d = 1, closed_above = 0; lowest_free - d >= 0 || closed_above < 64; ++d) {
-    if (lowest_free - d >= 0 && unserved_connection(lowest_free - d, inode, open)) return lowest_free - d;
-    if (closed_above < 64) {
-      if (unserved_connection(lowest_free + d, inode, open)) return lowest_free + d;
-      closed_above = open ? 0 : closed_above + 1;
-    }
-  }
-  return -1;
-}
-
-void ConnectionTaskQueue::enqueue(std::function<void()> fn) {
-  int fd = -1;
-  ino_t inode = 0;
-  {
-    std::lock_guard lock(mutex_);
-    fd = accepted_socket(inode);
-    if (fd >= 0) serving_.insert(inode);
-  }
-  pool_.enqueue([this, fn = std::move(fn), fd, inode] {
-    t_connection_fd = fd;
-    fn();  // cpp-httplib's process_and_close_socket: serves the connection, then closes it
-    t_connection_fd = -1;
-    if (fd >= 0) {
-      std::lock_guard lock(mutex_);
-      serving_.erase(inode);
-    }
-  });
-}
+ConnectionProbe::Scope::Scope(int fd) { t_connection_fd = fd; }
+ConnectionProbe::Scope::~Scope() { t_connection_fd = -1; }
 
 std::optional<ConnectionProbe> ConnectionProbe::current(int peer_port) {
   if (t_connection_fd < 0 || (peer_port > 0 && port_of(t_connection_fd, true) != peer_port)) return std::nullopt;

@@ -11,17 +11,17 @@
 #include <ctime>
 #include <functional>
 #include <map>
-#include <random>
 #include <regex>
 #include <thread>
 #include <utility>
 
 #include "core/params.h"
-#include "server/http/connection_probe.h"
+#include "server/http/connection_gate.h"
 #include "server/http/embedded.h"
 #include "server/http/job_routes.h"
 #include "server/http/problem.h"
 #include "server/http/request_body.h"
+#include "server/http/secure_random.h"
 #include "server/http/service_parts.h"
 #include "server/http/web_routes.h"
 #include "server/job_json.h"
@@ -65,10 +65,7 @@ struct HttpService::Impl : JobRoutes {
         metrics(*parts.metrics),
         queue(*parts.queue),
         store(parts.store.get()) {
-    std::random_device rd;
-    char buf[16];
-    std::snprintf(buf, sizeof buf, "%08x", unsigned(rd()));
-    id_prefix = buf;
+    id_prefix = random_hex(4);
     routes = make_routes();
     for (Route& r : routes) r.regex = std::regex(r.pattern);
     install();
@@ -96,13 +93,27 @@ struct HttpService::Impl : JobRoutes {
 
   // ---------------------------------------------------------------- wiring
   void install() {
+    // Connections wait for their request heads in the gate, not on a thread (connection_gate.h).
+    // With a per-client connection cap (not behind a proxy that makes every client one
+    // address) one address may also hold at most half the HTTP threads.
     const int io_threads = config.effective_io_threads();
-    svr.new_task_queue = [this, io_threads] { return new ConnectionTaskQueue(std::size_t(io_threads), listen_fd); };
+    const bool per_client = config.max_connections_per_client < config.max_connections;
+    svr.set_gate_options(GateOptions{.io_threads = io_threads,
+                                     .probe_threads = 2,
+                                     .header_timeout_s = config.header_timeout_s,
+                                     .keep_alive_timeout_s = config.keep_alive_timeout_s,
+                                     .keep_alive_max = config.keep_alive_max,
+                                     .read_timeout_s = std::min(config.read_timeout_s, config.body_stall_timeout_s),
+                                     .body_timeout_s = config.body_timeout_s,
+                                     .write_timeout_s = config.write_timeout_s,
+                                     .max_connections_per_client = config.max_connections_per_client,
+                                     .max_connections = config.max_connections,
+                                     .threads_per_client = per_client ? std::max(1, io_threads / 2) : io_threads});
     auto secs = [](double s) { return std::pair<time_t, time_t>(time_t(s), time_t((s - double(time_t(s))) * 1e6)); };
     svr.set_keep_alive_timeout(std::max<time_t>(1, time_t(config.keep_alive_timeout_s + 0.5)));
     svr.set_keep_alive_max_count(std::size_t(config.keep_alive_max));
-    // One socket read timeout for the request line, headers and body (cpp-httplib has no other):
-    // the smaller of the two settings. A body that stalls that long is answered 408 (BodyReader).
+    // The gate's stream applies the read, write, head and body timeouts; cpp-httplib's own are
+    // set alike for what it reads itself.
     const double read_s = std::min(config.read_timeout_s, config.body_stall_timeout_s);
     svr.set_read_timeout(secs(read_s).first, secs(read_s).second);
     svr.set_write_timeout(secs(config.write_timeout_s).first, secs(config.write_timeout_s).second);
@@ -198,6 +209,7 @@ struct HttpService::Impl : JobRoutes {
 
   httplib::Server::HandlerResponse pre_routing(const httplib::Request& req, httplib::Response& res) {
     take_bytes_left_unread();
+    ConnectionGate::request_head_parsed();  // the body's deadline starts now
     {
       std::lock_guard lock(start_mutex);
       request_start[std::this_thread::get_id()] = Clock::now();
@@ -220,6 +232,26 @@ struct HttpService::Impl : JobRoutes {
       close_after_response(req, res);
       return reject(make_problem(ProblemType::BadRequest, "the request has both Transfer-Encoding and Content-Length"));
     }
+    // Several Content-Length fields (or a list) that do not agree: which one frames the body is
+    // ambiguous, and a proxy may pick another (request smuggling). RFC 9112, 6.3: 400 and close.
+    if (req.get_header_value_count("Content-Length") > 1 || req.get_header_value("Content-Length").find(',') != std::string::npos) {
+      std::string first;
+      bool conflict = false;
+      for (auto [it, end] = req.headers.equal_range("Content-Length"); it != end; ++it) {
+        std::string rest = it->second;
+        for (std::size_t pos = 0; pos <= rest.size();) {
+          const std::size_t comma = std::min(rest.find(',', pos), rest.size());
+          const std::string value = trim(std::string_view(rest).substr(pos, comma - pos));
+          if (first.empty()) first = value;
+          conflict = conflict || value != first || value.empty();
+          pos = comma + 1;
+        }
+      }
+      if (conflict) {
+        close_after_response(req, res);
+        return reject(make_problem(ProblemType::BadRequest, "the request has conflicting Content-Length values"));
+      }
+    }
     if (req.headers.size() > kMaxRequestHeaders)
       return reject(make_problem(ProblemType::TooManyHeaders, "the request has " + std::to_string(req.headers.size()) + " header fields, more than the limit of " +
                                      std::to_string(kMaxRequestHeaders)));
@@ -230,22 +262,21 @@ struct HttpService::Impl : JobRoutes {
     static const std::regex result_path("/v1/jobs/[^/]+/result");
     if (!req.ranges.empty() && !(req.method == "GET" && std::regex_match(req.path, result_path)))
       const_cast<httplib::Request&>(req).ranges.clear();
-    if (!config.auth_token.empty() && req.method != "OPTIONS" && req.path.rfind("/v1/", 0) == 0) {
+    if ((!config.auth_token.empty() || client_keys().enabled()) && req.method != "OPTIONS" && req.path.rfind("/v1/", 0) == 0) {
       if (!authorized(req.get_header_value("Authorization")))
-        return reject(make_problem(ProblemType::Unauthorized, "this server requires 'Authorization: Bearer <token>' on /v1 routes"));
+        return reject(make_problem(ProblemType::Unauthorized, client_keys().enabled()
+                                                                  ? "this server requires 'Authorization: Bearer <your API key>' on /v1 routes"
+                                                                  : "this server requires 'Authorization: Bearer <token>' on /v1 routes"));
     }
     return httplib::Server::HandlerResponse::Unhandled;
   }
 
+  // --api-keys: one of the clients' keys; --auth-token: the shared token (constant-time
+  // comparisons: timing does not reveal how many leading bytes matched).
   bool authorized(const std::string& header) const {
-    const std::string prefix = "Bearer ";
-    if (header.size() < prefix.size() || lower(header.substr(0, prefix.size())) != lower(prefix)) return false;
-    const std::string token = trim(header.substr(prefix.size()));
-    // Constant-time comparison: timing does not reveal how many leading bytes matched.
-    unsigned char diff = token.size() == config.auth_token.size() ? 0 : 1;
-    for (std::size_t i = 0; i < config.auth_token.size(); ++i)
-      diff |= static_cast<unsigned char>(config.auth_token[i] ^ (i < token.size() ? token[i] : 0));
-    return diff == 0;
+    if (client_keys().enabled()) return client_keys().client(header) != nullptr;
+    const std::string token = bearer_token(header);
+    return !token.empty() && equal_secrets(token, config.auth_token);
   }
 
   httplib::Server::HandlerResponse on_error(const httplib::Request& req, httplib::Response& res) {
@@ -315,8 +346,8 @@ struct HttpService::Impl : JobRoutes {
     // when the client itself asked for "Connection: close": it may still be sending, and
     // cpp-httplib's plain close would then reset the connection under it (its next write fails
     // and it never reads the answer).
-    if (take_bytes_left_unread())
-      if (auto probe = ConnectionProbe::current(req.remote_port)) probe->linger_close(1000);
+    if (take_bytes_left_unread()) ConnectionGate::close_after_this_response(true);
+    else if (res.get_header_value("Connection") == "close") ConnectionGate::close_after_this_response(false);
     const std::string route = route_name(req);
     metrics.count_request(route, req.method, res.status);
     metrics.add_bytes_out(std::int64_t(res.body.size()));
@@ -372,7 +403,26 @@ struct HttpService::Impl : JobRoutes {
     std::string text = metrics.render({queue.queued(), queue.capacity(), queue.running(), queue.workers(),
                                        queue.draining(), std::max(0, waiting())});
     store->render_metrics(text);
+    render_connection_metrics(text);
     ctx.res.set_content(text, "text/plain; version=0.0.4; charset=utf-8");
+  }
+
+  // The connection gate's state and the connections it closed to protect the service.
+  void render_connection_metrics(std::string& out) {
+    const ConnectionGate::Counts c = svr.gate().counts();
+    out += "# HELP mdn_http_connections Client connections: open, waiting for a request (no thread), queued for a thread.\n"
+           "# TYPE mdn_http_connections gauge\n";
+    out += "mdn_http_connections{state=\"open\"} " + std::to_string(c.open) + "\n";
+    out += "mdn_http_connections{state=\"waiting\"} " + std::to_string(c.parked) + "\n";
+    out += "mdn_http_connections{state=\"queued\"} " + std::to_string(c.queued) + "\n";
+    out += "# HELP mdn_http_connections_closed_total Connections closed by the gate: refused at a per-client or total cap, "
+           "evicted while waiting, head not complete in time, no thread in time.\n"
+           "# TYPE mdn_http_connections_closed_total counter\n";
+    const std::pair<const char*, std::int64_t> reasons[] = {{"client_limit", c.refused_client}, {"total_limit", c.refused_total},
+                                                            {"evicted", c.evicted},           {"head_timeout", c.head_timeouts},
+                                                            {"queue_timeout", c.queue_timeouts}};
+    for (const auto& [reason, n] : reasons)
+      out += std::string("mdn_http_connections_closed_total{reason=\"") + reason + "\"} " + std::to_string(n) + "\n";
   }
 
   void openapi(Context& ctx) {
@@ -426,7 +476,7 @@ struct HttpService::Impl : JobRoutes {
   Metrics& metrics;
   JobQueue& queue;
   JobStore* store;
-  httplib::Server svr;
+  GatedServer svr;
   std::vector<Route> routes;
   std::string id_prefix;
   std::atomic<std::uint64_t> request_counter{0};

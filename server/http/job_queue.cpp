@@ -6,6 +6,7 @@
 
 #include "core/errors.h"
 #include "core/progress.h"
+#include "server/http/secure_random.h"
 
 namespace mdn::http {
 
@@ -100,7 +101,7 @@ bool Job::result_fetched() const {
 }
 
 JobQueue::JobQueue(JobQueueOptions options, JobFinishedHook on_finished)
-    : options_(std::move(options)), on_finished_(std::move(on_finished)), rng_(std::random_device{}()) {
+    : options_(std::move(options)), on_finished_(std::move(on_finished)) {
   const int n = std::max(1, options_.workers);
   workers_.reserve(std::size_t(n));
   for (int i = 0; i < n; ++i) workers_.emplace_back([this] { worker_loop(); });
@@ -127,11 +128,8 @@ JobQueue::~JobQueue() {
 }
 
 std::string JobQueue::new_id_locked() {
-  // 128 random bits: ids are unguessable, so a job's result is only reachable by its owner.
-  char buf[33];
-  std::snprintf(buf, sizeof buf, "%016llx%016llx", static_cast<unsigned long long>(rng_()),
-                static_cast<unsigned long long>(rng_()));
-  return buf;
+  // 128 bits from the kernel's CSPRNG: ids are unguessable, even from many of one's own.
+  return new_job_id();
 }
 
 JobQueue::Submitted JobQueue::submit(service::JobInput input, bool asynchronous,

@@ -18,7 +18,6 @@
 #include <memory>
 #include <mutex>
 #include <optional>
-#include <random>
 #include <string>
 #include <thread>
 #include <vector>
@@ -210,7 +209,6 @@ class JobQueue {
   bool stop_ = false;
   bool abandoned_ = false;  // cancel_all() was called: drain waits no longer
   std::atomic<double> queue_wait_s_{-1};  // moving average of measured queue waits; -1: none yet
-  std::mt19937_64 rng_;
   std::vector<std::thread> workers_;
 };
 

@@ -31,12 +31,39 @@ JobRoutes::JobRoutes(const ServerConfig& config, std::shared_ptr<const EventLog>
     : log_(std::move(log)),
       queue_(queue),
       store_(store),
-      bodies_(config.max_body_bytes, std::min(config.read_timeout_s, config.body_stall_timeout_s), metrics),
+      keys_(config.api_keys),
+      sync_start_timeout_s_(config.sync_start_timeout_s),
+      bodies_(config.max_body_bytes, std::min(config.read_timeout_s, config.body_stall_timeout_s), config.body_timeout_s, metrics),
       max_waiting_(std::max(1, config.effective_io_threads() / 2)) {}
 
-JobSnapshot JobRoutes::find_job(Context& ctx, bool with_result) {
+const ApiKey* JobRoutes::client_of(const Context& ctx) const {
+  if (!keys_.enabled()) return nullptr;
+  const ApiKey* client = keys_.client(ctx.req.get_header_value("Authorization"));
+  // The pre-routing check let only known keys through to /v1.
+  if (client == nullptr) throw HttpError(make_problem(ProblemType::Unauthorized, "this server requires an API key"));
+  return client;
+}
+
+std::string JobRoutes::store_id_of(const Context& ctx) const {
   const std::string id = ctx.req.matches[1];
-  return found(id, store_.find(id, with_result));
+  const ApiKey* client = client_of(ctx);
+  if (client == nullptr) return id;
+  // Another client's job, or no job: the same 404.
+  const auto own = keys_.store_id(*client, id);
+  if (!own) throw HttpError(job_not_found(id));
+  return *own;
+}
+
+std::string JobRoutes::public_id(const Context& ctx, const std::string& store_id) const {
+  const ApiKey* client = client_of(ctx);
+  return client == nullptr ? store_id : keys_.public_id(*client, store_id);
+}
+
+JobSnapshot JobRoutes::find_job(Context& ctx, bool with_result) {
+  const std::string id = store_id_of(ctx);
+  JobSnapshot s = found(ctx.req.matches[1].str(), store_.find(id, with_result));
+  s.id = public_id(ctx, s.id);
+  return s;
 }
 
 // GET /v1/jobs/{id}?wait=S (long poll): answers when the job has finished, or after S seconds
@@ -61,16 +88,28 @@ JobSnapshot JobRoutes::wait_job(Context& ctx) {
     ~Leave() { --n; }
   } leave{waiting_};
   if (waiting >= max_waiting_) return find_job(ctx, false);
-  const std::string id = ctx.req.matches[1];
-  return found(id, store_.wait_finished(
-                       id, Clock::now() + std::chrono::microseconds(std::int64_t(std::llround(seconds * 1e6)))));
+  const std::string id = store_id_of(ctx);
+  JobSnapshot s = found(ctx.req.matches[1].str(), store_.wait_finished(id, Clock::now() + std::chrono::microseconds(std::int64_t(
+                                                                                    std::llround(seconds * 1e6)))));
+  s.id = public_id(ctx, s.id);
+  return s;
 }
 
 void JobRoutes::denoise(Context& ctx) {
   service::JobInput input = bodies_.read_job_input(ctx);
   std::shared_ptr<Job> job = queue_.submit(std::move(input), false).job;
   const auto probe = ConnectionProbe::current(ctx.req.remote_port);
+  const auto start_by = Clock::now() + std::chrono::milliseconds(std::int64_t(sync_start_timeout_s_ * 1000));
   while (!job->wait_for(std::chrono::milliseconds(50))) {
+    // A synchronous request whose job found no worker in time is answered 503 (never left
+    // hanging behind a queue that does not move); the job is withdrawn.
+    if (Clock::now() >= start_by && job->snapshot().state == JobState::Queued) {
+      queue_.cancel(job);
+      Problem p = make_problem(ProblemType::QueueFull, "no worker was free to start this job within " +
+                                                           std::to_string(int(sync_start_timeout_s_)) + " s");
+      p.retry_after_s = queue_.retry_after_s();
+      throw HttpError(std::move(p));
+    }
     if (probe && probe->peer_gone()) {
       queue_.cancel(job);
       if (log_) log_->info("client_gone", {{"request_id", ctx.request_id}, {"job_id", job->id()}});
@@ -108,8 +147,12 @@ void JobRoutes::create_job(Context& ctx) {
                   std::to_string(input.bytes.size()) + "|" +
                   std::to_string(std::hash<std::string_view>{}(input.bytes));
   }
+  // Idempotency keys are the client's own: another client's same key is another job.
+  if (key)
+    if (const ApiKey* client = client_of(ctx)) key = client->name + ":" + *key;
   auto submitted = store_.submit(std::move(input), key, fingerprint);
-  const JobSnapshot& s = submitted.job;
+  JobSnapshot& s = submitted.job;
+  s.id = public_id(ctx, s.id);
   if (submitted.replayed) ctx.res.set_header("Idempotent-Replayed", "true");
   ctx.res.set_header("Location", "/v1/jobs/" + s.id);
   ctx.res.set_header("Retry-After", "1");
@@ -126,7 +169,7 @@ void JobRoutes::get_result(Context& ctx) {
   const JobSnapshot s = find_job(ctx, true);
   if (s.state == JobState::Succeeded) {
     write_result(ctx, s);
-    store_.result_fetched(s.id);
+    store_.result_fetched(store_id_of(ctx));
     return;
   }
   Problem p;
@@ -143,11 +186,11 @@ void JobRoutes::get_result(Context& ctx) {
 }
 
 void JobRoutes::delete_job(Context& ctx) {
-  const std::string id = ctx.req.matches[1];
-  const JobStore::CancelResult r = store_.cancel(id);
+  JobStore::CancelResult r = store_.cancel(store_id_of(ctx));
+  r.job.id = public_id(ctx, r.job.id);
   switch (r.outcome) {
     case JobQueue::CancelOutcome::NotFound:
-      throw HttpError(job_not_found(id));
+      throw HttpError(job_not_found(ctx.req.matches[1].str()));
     case JobQueue::CancelOutcome::CancelledQueued:
       return set_json(ctx.res, job_json(r.job, ctx.request_id), 200);
     case JobQueue::CancelOutcome::CancelRequested:

@@ -13,6 +13,7 @@
 
 // job_queue.h (Eigen, through the core) before httplib.h: see request_body.h.
 #include "server/http/job_store.h"
+#include "server/http/api_keys.h"
 #include "server/http/config.h"
 #include "server/http/log.h"
 #include "server/http/metrics.h"
@@ -33,14 +34,22 @@ class JobRoutes {
   void delete_job(Context& ctx);
 
   int waiting() const { return waiting_; }  // long polls waiting now
+  const ClientKeys& client_keys() const { return keys_; }
 
  private:
   JobSnapshot find_job(Context& ctx, bool with_result);
   JobSnapshot wait_job(Context& ctx);
+  // --api-keys: the store's id behind the path's job id if the job is the caller's (else 404),
+  // and the id the caller sees for a store id. Without keys both are the identity.
+  std::string store_id_of(const Context& ctx) const;
+  std::string public_id(const Context& ctx, const std::string& store_id) const;
+  const ApiKey* client_of(const Context& ctx) const;
 
   const std::shared_ptr<const EventLog> log_;
   JobQueue& queue_;
   JobStore& store_;
+  const ClientKeys keys_;
+  const double sync_start_timeout_s_;  // POST /v1/denoise: longest wait for a worker, then 503
   BodyReader bodies_;
   const int max_waiting_;  // long polls at once: half the HTTP threads
   std::atomic<int> waiting_{0};

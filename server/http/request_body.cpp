@@ -1,10 +1,12 @@
 #include "server/http/request_body.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cstdio>
 #include <optional>
 #include <utility>
 
+#include "server/http/connection_gate.h"
 #include "server/params_json.h"
 
 namespace mdn::http {
@@ -63,6 +65,16 @@ io::Format resolve_format(const std::string& content_type, std::string_view byte
     }
     throw HttpError(unsupported_media_type("media type '" + type + "' is not a mesh format this service reads"));
   }
+  // An explicit text/plain says the body is text (OFF, OBJ, ASCII PLY or STL, glTF JSON): a
+  // binary body under it is mislabelled, and refused rather than guessed (issue 32).
+  if (type == "text/plain" &&
+      std::any_of(bytes.begin(), bytes.begin() + std::ptrdiff_t(std::min<std::size_t>(bytes.size(), 65536)),
+                  [](char c) { return static_cast<unsigned char>(c) < 0x09; })) {
+    const auto sniffed = io::sniff_format(bytes);
+    throw HttpError(unsupported_media_type("the body is binary" +
+                                           (sniffed ? " (it looks like " + std::string(io::to_string(*sniffed)) + ")" : std::string()) +
+                                           ", not text/plain; declare its media type or send application/octet-stream"));
+  }
   if (!filename.empty())
     if (auto f = io::format_from_extension(filename)) return *f;
   if (auto f = io::sniff_format(bytes)) return *f;
@@ -95,10 +107,19 @@ std::string BodyReader::read_body(Context& ctx, const httplib::ContentReader& re
 }
 
 void BodyReader::check_stall(Context& ctx, std::chrono::steady_clock::time_point last_byte) {
-  // cpp-httplib's read gives up after the socket read timeout without saying why; a failure
-  // that long after the last byte is the stall (a little less: select() may wake early).
+  // The gate's stream says why a read gave up: the body's total deadline, or a gap longer than
+  // the read timeout (or, outside the gate, a failure that long after the last byte).
+  const ConnectionGate::ReadTimeout why = ConnectionGate::last_read_timeout();
+  if (why == ConnectionGate::ReadTimeout::BodyDeadline) {
+    close_after_response(ctx.req, ctx.res);  // the rest of the body may still come: never read it
+    char seconds[32];
+    std::snprintf(seconds, sizeof seconds, "%g", body_timeout_s_);
+    Problem p = make_problem(ProblemType::RequestTimeout, std::string("the request body did not arrive within ") + seconds + " s");
+    p.extensions["body_timeout_s"] = body_timeout_s_;
+    throw HttpError(std::move(p));
+  }
   const double idle_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_byte).count();
-  if (idle_s < 0.9 * stall_timeout_s_) return;
+  if (why != ConnectionGate::ReadTimeout::Stall && idle_s < 0.9 * stall_timeout_s_) return;
   close_after_response(ctx.req, ctx.res);  // the rest of the body may still come: never read it
   char seconds[32];
   std::snprintf(seconds, sizeof seconds, "%g", stall_timeout_s_);

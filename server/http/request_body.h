@@ -31,9 +31,10 @@ io::Format resolve_format(const std::string& content_type, std::string_view byte
 class BodyReader {
  public:
   // `stall_timeout_s`: the socket read timeout in effect; a body read that fails after sending
-  // nothing for (about) that long is answered 408 and the connection closed.
-  BodyReader(std::int64_t max_body_bytes, double stall_timeout_s, Metrics& metrics)
-      : max_body_bytes_(max_body_bytes), stall_timeout_s_(stall_timeout_s), metrics_(metrics) {}
+  // nothing for (about) that long, or that is not complete `body_timeout_s` after its head,
+  // is answered 408 and the connection closed.
+  BodyReader(std::int64_t max_body_bytes, double stall_timeout_s, double body_timeout_s, Metrics& metrics)
+      : max_body_bytes_(max_body_bytes), stall_timeout_s_(stall_timeout_s), body_timeout_s_(body_timeout_s), metrics_(metrics) {}
   // Body, container and parameters of a job, from a raw body or a multipart form. Throws
   // HttpError (400, 408, 411, 413, 415) and what job_params_from_text throws.
   service::JobInput read_job_input(Context& ctx);
@@ -42,11 +43,13 @@ class BodyReader {
   std::string read_body(Context& ctx, const httplib::ContentReader& reader);
   [[noreturn]] void throw_too_large(Context& ctx);
   void check_declared_length(Context& ctx);
-  // After a failed read: 408 (and close) if no byte came for the stall timeout.
+  // After a failed read: 408 (and close) if no byte came for the stall timeout, or the body's
+  // deadline passed.
   void check_stall(Context& ctx, std::chrono::steady_clock::time_point last_byte);
 
   const std::int64_t max_body_bytes_;
   const double stall_timeout_s_;
+  const double body_timeout_s_;
   Metrics& metrics_;
 };
 

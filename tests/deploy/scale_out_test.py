@@ -347,6 +347,28 @@ def main():
               "a 400 from a replica was retried on another: %s" % entries["bad-mesh"])
         log("balancer: 300 MiB body 413 problem, /metrics 404, a replica's 400 passed through once")
 
+        # Per-client connections (limit_conn 64): 64 requests whose bodies have not come yet hold
+        # their slots; the 65th request from the same address gets nginx's 503 problem.
+        held = []
+        try:
+            for _ in range(64):
+                sock = socket.create_connection(("127.0.0.1", lb), timeout=10)
+                sock.sendall(b"POST /v1/denoise HTTP/1.1\r\nHost: x\r\nContent-Type: model/x-off\r\nContent-Length: 1000\r\n\r\n")
+                held.append(sock)
+            time.sleep(0.3)  # nginx has read every head
+            over = request(lb, "GET", "/healthz")
+            check(over.status == 503 and over.json().get("type") == "urn:meshdenoise:problem:queue-full"
+                  and over.header("Retry-After") == "1",
+                  "the 65th request from one address: %d %r" % (over.status, over.body[:300]))
+        finally:
+            for sock in held:
+                sock.close()
+        end = time.monotonic() + 10
+        while request(lb, "GET", "/healthz").status != 200:
+            check(time.monotonic() < end, "the per-client slots were not freed")
+            time.sleep(0.1)
+        log("balancer: limit_conn 64 per address answers the 65th request 503 (problem, Retry-After)")
+
         nginx.send_signal(signal.SIGQUIT)  # graceful stop; errors in its log would show below
         nginx.wait(30)
         errors = [l for l in tail(access_log, 2000).splitlines() if "[emerg]" in l or "[alert]" in l or "[crit]" in l]

@@ -671,5 +671,40 @@ TEST_F(RedisQueue, MalformedQueueUrlStopsAtStartup) {
   EXPECT_NE(text.find("MDN_QUEUE"), std::string::npos) << text;
 }
 
+// --api-keys with the shared store: a job's id carries its owner's tag, so any replica with
+// the same key file serves it to its owner and answers 404 to every other client (issue 32).
+TEST_F(RedisQueue, ApiKeysScopeJobsAcrossReplicas) {
+  RedisServer redis;
+  const std::string dir = temp_dir("keys");
+  write_file(dir + "/keys", "station-a:key-aaaaaaaaaaaaaaaa\nstation-b:key-bbbbbbbbbbbbbbbb\n");
+  auto a = replica(redis, {"--api-keys", dir + "/keys"});
+  auto b = replica(redis, {"--api-keys", dir + "/keys"});
+  auto as = [](ServerProcess& s, const char* key) {
+    auto c = s.client();
+    c->set_bearer_token_auth(key);
+    return c;
+  };
+  auto created = as(*a, "key-aaaaaaaaaaaaaaaa")->Post("/v1/jobs", {{"X-Denoise-Params", kSmallParams}}, noisy_sphere_off(2, 5),
+                                                     "model/x-off");
+  ASSERT_TRUE(created);
+  ASSERT_EQ(created->status, 202) << created->body;
+  const std::string id = parse_json(created->body).value("id", "");
+  ASSERT_EQ(id.size(), 64u);
+  auto owner_on_b = as(*b, "key-aaaaaaaaaaaaaaaa");
+  auto done = owner_on_b->Get("/v1/jobs/" + id + "?wait=30");
+  ASSERT_TRUE(done);
+  EXPECT_EQ(done->status, 200) << done->body;
+  EXPECT_EQ(parse_json(done->body).value("id", ""), id);
+  for (ServerProcess* s : {a.get(), b.get()}) {
+    auto other = as(*s, "key-bbbbbbbbbbbbbbbb");
+    expect_problem(other->Get("/v1/jobs/" + id), 404);
+    expect_problem(other->Get("/v1/jobs/" + id + "/result"), 404);
+    expect_problem(other->Delete("/v1/jobs/" + id), 404);
+  }
+  auto result = owner_on_b->Get("/v1/jobs/" + id + "/result");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+}
+
 }  // namespace
 }  // namespace mdn::test

@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <map>
 #include <mutex>
-#include <random>
 #include <thread>
 #include <vector>
 
@@ -19,6 +18,7 @@
 #include "server/http/redis/script_args.h"
 #include "server/http/redis/shared.h"
 #include "server/http/redis/worker_slots.h"
+#include "server/http/secure_random.h"
 #include "server/params_json.h"
 
 namespace mdn::http {
@@ -28,26 +28,11 @@ using namespace redis;
 
 using namespace std::chrono_literals;
 
-std::string random_hex(std::mt19937_64& rng, int words) {
-  std::string out;
-  char buf[17];
-  for (int i = 0; i < words; ++i) {
-    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(rng()));
-    out += buf;
-  }
-  return out;
-}
-
-std::mt19937_64 seeded_rng() {
-  std::random_device rd;
-  return std::mt19937_64((std::uint64_t(rd()) << 32) ^ rd());
-}
-
 // This replica's consumer name in the group: <host>-<pid>-<6 hex digits>.
-std::string consumer_name(std::mt19937_64& rng) {
+std::string consumer_name() {
   char host[256] = "host";
   gethostname(host, sizeof host - 1);
-  return std::string(host) + "-" + std::to_string(getpid()) + "-" + random_hex(rng, 1).substr(0, 6);
+  return std::string(host) + "-" + std::to_string(getpid()) + "-" + random_hex(3);
 }
 
 // ------------------------------------------------------------------ the store
@@ -55,7 +40,7 @@ std::string consumer_name(std::mt19937_64& rng) {
 // thread is the subscriber. Its parts keep their own locks: Monitor (whether Redis answers),
 // WorkerSlots (the slots and the finisher), FinishWaiters (the long polls), RecentResults. The
 // drain and stop flags are the store's, set by begin_drain() and stop(), read by every part;
-// rng_mutex_ guards rng_, stop_mutex_ stopped_.
+// stop_mutex_ guards stopped_.
 class RedisJobStore final : public JobStore {
  public:
   RedisJobStore(const ServerConfig& c, JobQueue& queue, std::shared_ptr<const EventLog> log)
@@ -63,8 +48,7 @@ class RedisJobStore final : public JobStore {
         queue_(queue),
         log_(std::move(log)),
         pool_(c.queue.value(), 10s),
-        rng_(seeded_rng()),
-        keys_{c.queue_prefix, c.queue_prefix + "queue", consumer_name(rng_)},
+        keys_{c.queue_prefix, c.queue_prefix + "queue", consumer_name()},
         ttl_ms_(std::to_string(std::max<std::int64_t>(1, std::int64_t(std::llround(c.result_ttl_s * 1000))))),
         monitor_(pool_, keys_, log_, stopping_),
         slots_(config_, queue_, log_, pool_, monitor_, keys_, ttl_ms_, draining_, stopping_, recent_) {
@@ -101,11 +85,7 @@ class RedisJobStore final : public JobStore {
       p.retry_after_s = 5;
       throw HttpError(std::move(p));
     }
-    std::string id;
-    {
-      std::lock_guard lock(rng_mutex_);
-      id = random_hex(rng_, 2);
-    }
+    const std::string id = new_job_id();
     const std::string created = std::to_string(now_ms());
     const std::string format(io::to_string(input.format));
     const std::string params = service::to_json(input.params).dump();
@@ -389,8 +369,6 @@ class RedisJobStore final : public JobStore {
   const std::shared_ptr<const EventLog> log_;
   Pool pool_;
 
-  std::mutex rng_mutex_;  // guards rng_ (job ids) after construction
-  std::mt19937_64 rng_;
 
   const Keys keys_;
   const std::string ttl_ms_;

@@ -130,12 +130,54 @@ TEST(Config, IoThreadsDefaultToTheMachine) {
   EXPECT_NE(help_text().find("0 = 4 per core, at least 8; default: 0 ("), std::string::npos) << help_text();
 }
 
+TEST(Config, ConnectionSettingsHaveTheirDefaultsAndRanges) {
+  const ServerConfig c = parse({});
+  EXPECT_EQ(c.header_timeout_s, 10);
+  EXPECT_EQ(c.body_timeout_s, 300);
+  EXPECT_EQ(c.max_connections_per_client, 64);
+  EXPECT_EQ(c.max_connections, 2048);
+  EXPECT_EQ(c.sync_start_timeout_s, 30);
+  const ServerConfig set = parse({"--header-timeout", "2", "--body-timeout", "60", "--max-connections-per-client", "8",
+                                  "--max-connections", "100", "--sync-start-timeout", "5"});
+  EXPECT_EQ(set.header_timeout_s, 2);
+  EXPECT_EQ(set.body_timeout_s, 60);
+  EXPECT_EQ(set.max_connections_per_client, 8);
+  EXPECT_EQ(set.max_connections, 100);
+  EXPECT_EQ(set.sync_start_timeout_s, 5);
+  EXPECT_NE(error_of({"--header-timeout", "0"}).find("--header-timeout"), std::string::npos);
+  EXPECT_NE(error_of({"--max-connections-per-client", "0"}).find("--max-connections-per-client"), std::string::npos);
+}
+
+TEST(Config, ApiKeysAreNameKeyLines) {
+  const auto keys = parse_api_keys("# stations\n\nstation-a:0123456789abcdef\r\nb.2_x:key-without-spaces!\n");
+  ASSERT_EQ(keys.size(), 2u);
+  EXPECT_EQ(keys[0].name, "station-a");
+  EXPECT_EQ(keys[0].key, "0123456789abcdef");  // CR stripped
+  auto error = [](const std::string& text) {
+    try {
+      parse_api_keys(text);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error("a:0123456789abcdef\nnocolon\n").find("line 2"), std::string::npos);
+  EXPECT_NE(error("a:short\n").find("16 to 256"), std::string::npos);
+  EXPECT_NE(error("bad name:0123456789abcdef\n").find("name"), std::string::npos);
+  EXPECT_NE(error("a:0123456789abcdef\na:fedcba9876543210\n").find("repeats"), std::string::npos);
+  EXPECT_NE(error("a:0123456789abcdef\nb:0123456789abcdef\n").find("repeats"), std::string::npos);
+  EXPECT_NE(error("# nothing\n").find("no keys"), std::string::npos);
+  EXPECT_NE(error_of({"--api-keys", "/nonexistent/keys"}).find("cannot read"), std::string::npos);
+}
+
 TEST(Config, HelpNamesEveryFlagWithItsVariable) {
   const std::string help = help_text();
   for (const char* s : {"--port (MDN_PORT)", "--queue (MDN_QUEUE)", "--auth-token (MDN_AUTH_TOKEN)",
                         "--max-decoded-bytes (MDN_MAX_DECODED_BYTES)", "--max-json-depth (MDN_MAX_JSON_DEPTH)",
                         "--max-nodes (MDN_MAX_NODES)", "--max-accessors (MDN_MAX_ACCESSORS)",
-                        "--body-stall-timeout (MDN_BODY_STALL_TIMEOUT)"})
+                        "--body-stall-timeout (MDN_BODY_STALL_TIMEOUT)", "--api-keys (MDN_API_KEYS)",
+                        "--header-timeout (MDN_HEADER_TIMEOUT)", "--body-timeout (MDN_BODY_TIMEOUT)",
+                        "--max-connections-per-client (MDN_MAX_CONNECTIONS_PER_CLIENT)", "--sync-start-timeout (MDN_SYNC_START_TIMEOUT)"})
     EXPECT_NE(help.find(s), std::string::npos) << s;
 }
 
