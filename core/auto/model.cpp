@@ -33,8 +33,11 @@ ParameterModel::ParameterModel() : version_(model_data::kVersion) {
   }
   mean_ = vector(kMean, kInputs);
   scale_ = vector(kScale, kInputs);
-  weights_ = {matrix(kW0, kHidden, kInputs), matrix(kW1, kHidden, kHidden), matrix(kW2, kSetCount, kHidden)};
-  biases_ = {vector(kB0, kHidden), vector(kB1, kHidden), vector(kB2, kSetCount)};
+  for (int m = 0; m < kMembers; ++m) {
+    members_.push_back({{matrix(kW0 + m * kHidden * kInputs, kHidden, kInputs), matrix(kW1 + m * kHidden * kHidden, kHidden, kHidden),
+                         matrix(kW2 + m * kSetCount * kHidden, kSetCount, kHidden)},
+                        {vector(kB0 + m * kHidden, kHidden), vector(kB1 + m * kHidden, kHidden), vector(kB2 + m * kSetCount, kSetCount)}});
+  }
 }
 
 const std::vector<ModelProbe>& model_probes() {
@@ -72,12 +75,17 @@ DenoiseParams ParameterModel::set_params(int k, const DenoiseParams& requested) 
 Eigen::VectorXd ParameterModel::predict(const std::vector<double>& descriptors) const {
   if (static_cast<Eigen::Index>(descriptors.size()) != mean_.size())
     throw std::invalid_argument("ParameterModel::predict: expected " + std::to_string(mean_.size()) + " descriptors");
-  Eigen::VectorXd x = (Eigen::Map<const Eigen::VectorXd>(descriptors.data(), mean_.size()) - mean_).cwiseQuotient(scale_);
-  for (std::size_t l = 0; l < weights_.size(); ++l) {
-    x = weights_[l] * x + biases_[l];
-    if (l + 1 < weights_.size()) x = x.cwiseMax(0.0);  // ReLU on the hidden layers
+  const Eigen::VectorXd z = (Eigen::Map<const Eigen::VectorXd>(descriptors.data(), mean_.size()) - mean_).cwiseQuotient(scale_);
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(members_.front().biases.back().size());
+  for (const Network& net : members_) {
+    Eigen::VectorXd x = z;
+    for (std::size_t l = 0; l < net.weights.size(); ++l) {
+      x = net.weights[l] * x + net.biases[l];
+      if (l + 1 < net.weights.size()) x = x.cwiseMax(0.0);  // ReLU on the hidden layers
+    }
+    sum += x;
   }
-  return x;
+  return sum / static_cast<double>(members_.size());
 }
 
 }  // namespace mdn
