@@ -8,6 +8,7 @@
 #pragma once
 
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,13 @@
 #include "server/http/service_parts.h"
 
 namespace mdn::http {
+
+// The listening address cannot be bound (the port is in use, the host is not local, ...): what()
+// says which and why. meshdenoise-server exits 3 on it.
+class BindError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 // One route: method and path template as in proto/openapi.yaml ("/v1/jobs/{id}").
 struct RouteInfo {
@@ -33,7 +41,7 @@ class HttpService {
   HttpService& operator=(const HttpService&) = delete;
 
   // Binds the listening socket (config.port, or any free port if 0) and returns the port.
-  // Throws std::runtime_error if the address cannot be bound.
+  // Throws BindError if the address cannot be bound (a port in use is refused: no SO_REUSEPORT).
   int bind();
   // Accepts connections until stop(). Returns false if listening failed.
   bool serve();
