@@ -78,7 +78,9 @@ int run(int argc, char** argv) {
     std::cout << "meshdenoise " << MDN_VERSION << "\n";
     return kExitOk;
   }
-  const auto& pos = options.positional;
+  // --in-place IN: OUT is IN.
+  std::vector<std::string> pos = options.positional;
+  if (options.in_place && !options.out_dir && !options.tune && pos.size() == 1) pos.push_back(pos[0]);
   int stdin_reads = !options.out_dir && !pos.empty() && pos[0] == kStdio ? 1 : 0;
   for (const auto* file : {&options.params, &options.add_noise, &options.metrics, &options.tune})
     if (*file && **file == kStdio) ++stdin_reads;
@@ -123,6 +125,7 @@ int run(int argc, char** argv) {
   }
 
   const std::string& out_path = pos[1];
+  check_not_input(in_path, out_path, options.in_place);
   if (out_path == kStdio && (options.report || options.metrics)) {
     throw UsageError("OUT is standard output (-): --report and --metrics would print into the mesh");
   }
@@ -172,14 +175,8 @@ int run(int argc, char** argv) {
   // file's own quantisation (Draco) can be measured afterwards with --metrics GT OUT.
   std::optional<json> metrics;
   if (truth) metrics = measure(*truth, *options.metrics, result, in_path, threads);
-  // A .gltf whose data sat beside it gets its output's data beside the output (the same layout).
   const io::Format out_format = io::format_from_string(summary.value("format", std::string())).value_or(in_format);
-  if (out_format == io::Format::Gltf && in_format == io::Format::Gltf && out_path != kStdio && has_external_uris(in_bytes)) {
-    std::vector<std::pair<std::string, std::string>> files;
-    out_bytes = externalize(out_bytes, out_path, files);
-    for (const auto& [file, bytes] : files) write_file(file, bytes);
-  }
-  write_file(out_path, out_bytes);
+  write_output(in_path, in_bytes, in_format, out_path, std::move(out_bytes), out_format);
 
   if (options.report) {
     if (metrics) summary["metrics"] = *metrics;
