@@ -43,7 +43,10 @@ Options:
   --metrics GT         print {"msae": ..., "msae_deg2": ..., "ev": ...} on stdout: MSAE (mean
                        squared face-normal angle, radians^2; msae_deg2 in degrees^2) and E_v
                        (in GT's unit-box frame) of OUT (or of IN when there is no OUT) against
-                       GT, which must have the same faces in the same order. With OUT it
+                       GT, which must have the same faces in the same order. Both are
+                       measured as their scene shows them (a glTF's node transforms applied,
+                       an instanced mesh once per node), so a glTF compares with the same
+                       mesh written in world coordinates. With OUT it
                        measures the computed surface (any OUT format gives the same figures);
                        without OUT it measures the file IN as it is.
   --tune GT            for users with a clean scan of a calibration object: searches the six

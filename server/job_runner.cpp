@@ -70,6 +70,7 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
   out.bytes = document->encode(encode);
   out.timings.encode_ms = ms_since(start);
   out.notes = document->notes();
+  out.placements = document->placements();
   out.surfaces = std::move(document->surfaces());  // the document is done with them
   return out;
 }

@@ -4,6 +4,7 @@
 // truth. See usage() for the shapes.
 #include <unistd.h>
 
+#include <cstdint>
 #include <iostream>
 #include <numbers>
 #include <optional>
@@ -42,7 +43,7 @@ int run_tune(const CliOptions& options) {
   const int threads = default_threads(options);
   const std::string& in_path = options.positional[0];
   const std::string in_bytes = read_file(in_path);
-  const mdn::TriMesh truth = load_truth(*options.tune);
+  const mdn::TriMesh truth = load_mesh(*options.tune).merged;  // the search runs in the surfaces' own frame
   const LoadedMesh noisy = decode_mesh(in_path, in_bytes, input_format(in_path, in_bytes));
   if (truth.num_vertices() != noisy.merged.num_vertices() || truth.F != noisy.merged.F) {
     throw FileError(in_path + " and the ground truth " + *options.tune +
@@ -116,11 +117,11 @@ int run(int argc, char** argv) {
   const io::Format in_format = input_format(in_path, in_bytes);
   // The ground truth is read before any long work, so a bad GT fails fast.
   std::optional<mdn::TriMesh> truth;
-  if (options.metrics) truth = load_truth(*options.metrics);
+  if (options.metrics) truth = load_mesh(*options.metrics).scene;
 
   if (measure_only) {
     const LoadedMesh loaded = decode_mesh(in_path, in_bytes, in_format);
-    std::cout << measure(*truth, *options.metrics, loaded.merged, in_path, threads).dump(2) << "\n";
+    std::cout << measure(*truth, *options.metrics, loaded.scene, in_path, threads).dump(2) << "\n";
     return kExitOk;
   }
 
@@ -139,7 +140,7 @@ int run(int argc, char** argv) {
 
   json summary;
   std::string out_bytes;
-  mdn::TriMesh result;  // all output surfaces, as computed (before the format's quantisation)
+  mdn::TriMesh result;  // all output surfaces, as computed (before the format's quantisation), as the scene shows them
   if (noise) {
     LoadedMesh loaded = decode_mesh(in_path, in_bytes, in_format);
     std::uint64_t index = 0;
@@ -153,12 +154,17 @@ int run(int argc, char** argv) {
     io::EncodeOptions encode = params.output;
     if (!encode.format) encode.format = in_format;
     out_bytes = blame_file(in_path, [&] { return loaded.document->encode(encode); });
-    result = merge_surfaces(loaded.document->surfaces());
+    std::int64_t vertices = 0, faces = 0;  // of the asset (an instanced mesh counts once)
+    for (const mdn::TriMesh& surface : loaded.document->surfaces()) {
+      vertices += surface.num_vertices();
+      faces += surface.num_faces();
+    }
+    result = scene_mesh(loaded.document->surfaces(), loaded.document->placements());
     summary = {{"noise", service::to_json(*noise)},
                {"format", std::string(io::to_string(*encode.format))},
                {"bytes", out_bytes.size()},
-               {"vertices", result.num_vertices()},
-               {"faces", result.num_faces()},
+               {"vertices", vertices},
+               {"faces", faces},
                {"notes", loaded.document->notes()}};
   } else {
     install_sigint_handler();
@@ -166,7 +172,7 @@ int run(int argc, char** argv) {
     service::JobOutput output = denoise_input(in_path, in_bytes, in_format, params, threads, progress);
     summary = service::output_to_json(output);  // before the bytes move out
     out_bytes = std::move(output.bytes);
-    if (truth) result = merge_surfaces(output.surfaces);
+    if (truth) result = scene_mesh(output.surfaces, output.placements);
   }
   add_paths(summary, in_path, in_format, out_path);
 
