@@ -37,7 +37,8 @@ using namespace mdn::cli;
 int run_tune(const CliOptions& options) {
   if (options.positional.size() != 1)
     throw UsageError("--tune GT takes exactly one file, the noisy mesh, got " + std::to_string(options.positional.size()));
-  if (options.add_noise || options.metrics) throw UsageError("--tune cannot be combined with --add-noise or --metrics");
+  if (options.add_noise || options.metrics || options.in_place)
+    throw UsageError("--tune cannot be combined with --add-noise, --metrics or --in-place (it writes no mesh)");
   service::JobParams start;
   if (options.params) start = service::job_params_from_text(json_argument("--params", *options.params));
   const int threads = default_threads(options);

@@ -870,6 +870,8 @@ TEST_F(Cli, WritingOverTheInputIsRefusedUnlessInPlace) {
   EXPECT_EQ(run("--no-progress --out-dir " + quote(path("sub")) + " " + quote(path("sub/hard.off"))).code, 2);
   EXPECT_EQ(run("--no-progress --in-place --out-dir " + quote(path("sub")) + " " + quote(path("sub/hard.off"))).code, 0);
   EXPECT_NE(read_text(path("sub/hard.off")), noisy);
+  // --tune writes no mesh: --in-place there is a mistake.
+  EXPECT_EQ(run("--in-place --tune " + quote(path("clean.off")) + " " + quote(path("noisy.off"))).code, 2);
 }
 
 // Issue 34: --metrics compared a glTF's surface in its node's frame with a ground truth in world
