@@ -47,7 +47,7 @@ class HttpService {
   bool serve();
   // SIGTERM: /readyz answers 503 and new jobs get 503; accepted jobs keep running.
   void begin_drain();
-  // Waits until accepted jobs finished (and async results were fetched) or the deadline.
+  // Waits until accepted jobs finished or the deadline (results not fetched yet do not hold it).
   bool wait_drained(Clock::time_point deadline);
   // Stops accepting connections, lets in-flight requests finish, and cancels what is left.
   void stop();

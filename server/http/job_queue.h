@@ -66,7 +66,7 @@ class Job {
   JobState state() const;
   // Blocks until the job is finished or the timeout passes; true when finished.
   bool wait_for(std::chrono::milliseconds timeout) const;
-  // Marks the result as fetched by a client (drain waits for unfetched async results).
+  // Marks the result as fetched by a client (the drain counts the results nobody fetched).
   void mark_result_fetched();
   bool result_fetched() const;
 
