@@ -17,6 +17,7 @@
 #include "server/cli_job.h"
 #include "server/cli_mesh.h"
 #include "server/job_json.h"
+#include "server/output_files.h"
 
 namespace mdn::cli {
 namespace {
@@ -25,9 +26,10 @@ using nlohmann::json;
 
 // Where each input of a batch goes: DIR / its file name, with the extension of the requested
 // output format if there is one. Refused before any work: an input without a file name, two
-// inputs with one output, an output that is its own input (it would be overwritten).
+// inputs with one output, an output that is its own input (it would be overwritten) unless
+// --in-place.
 std::vector<std::string> batch_outputs(const std::vector<std::string>& inputs, const std::filesystem::path& dir,
-                                       const std::optional<io::Format>& format) {
+                                       const std::optional<io::Format>& format, bool in_place) {
   namespace fs = std::filesystem;
   auto key = [](const fs::path& path) {
     std::error_code ec;
@@ -38,14 +40,11 @@ std::vector<std::string> batch_outputs(const std::vector<std::string>& inputs, c
   std::map<fs::path, std::string> taken;  // output -> the input that goes there
   for (const std::string& in : inputs) {
     if (in == kStdio) throw UsageError("--out-dir: standard input (-) cannot be part of a batch");
-    fs::path name = fs::path(in).filename();
+    const fs::path name = fs::path(in).filename();
     if (name.empty() || name == "." || name == "..") throw UsageError("--out-dir: the input \"" + in + "\" has no file name");
-    if (format) name.replace_extension(std::string(io::to_string(*format)));
-    const fs::path out = dir / name;
+    const fs::path out = dir / service::output_file_name(in, format);
     const fs::path out_key = key(out);
-    if (out_key == key(in)) {
-      throw UsageError("--out-dir: " + out.string() + " would overwrite its input " + in + "; choose another folder");
-    }
+    check_not_input(in, out.string(), in_place, "--out-dir: ");
     if (const auto [it, fresh] = taken.emplace(out_key, in); !fresh) {
       throw UsageError("--out-dir: " + it->second + " and " + in + " would both be written to " + out.string());
     }
@@ -66,7 +65,7 @@ int run_batch(const CliOptions& options) {
   json fields;
   const service::JobParams params = job_params(options, fields);
   const fs::path dir = *options.out_dir;
-  const std::vector<std::string> outputs = batch_outputs(inputs, dir, params.output.format);
+  const std::vector<std::string> outputs = batch_outputs(inputs, dir, params.output.format, options.in_place);
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (!fs::is_directory(dir)) {
@@ -101,7 +100,7 @@ int run_batch(const CliOptions& options) {
         service::JobOutput output = denoise_input(inputs[i], in_bytes, in_format, params, threads_per_job, cancel);
         reports[i] = service::output_to_json(output);
         add_paths(reports[i], inputs[i], in_format, outputs[i]);
-        write_file(outputs[i], output.bytes);
+        write_output(inputs[i], in_bytes, in_format, outputs[i], std::move(output.bytes), output.format);
         codes[i] = kExitOk;
         if (options.progress) {
           const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -3,21 +3,17 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <iterator>
 
-#include <nlohmann/json.hpp>
-
 #include "server/cli_options.h"
+#include "server/output_files.h"
 
 namespace mdn::cli {
 namespace {
-
-using nlohmann::json;
 
 std::string read_stdin() {
   std::string bytes;
@@ -39,24 +35,6 @@ void write_bytes(const std::string& path, const std::string& bytes, const std::s
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   out.close();
   if (!out) throw FileError("cannot write " + shown + ": " + std::strerror(errno));
-}
-
-std::string base64_decode(std::string_view text) {
-  static constexpr std::string_view kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  std::uint32_t bits = 0;
-  int count = 0;
-  for (const char c : text) {
-    const std::size_t v = kAlphabet.find(c);
-    if (v == std::string_view::npos) continue;  // '=' padding
-    bits = (bits << 6) | static_cast<std::uint32_t>(v);
-    count += 6;
-    if (count >= 8) {
-      count -= 8;
-      out += static_cast<char>((bits >> count) & 0xFF);
-    }
-  }
-  return out;
 }
 
 }  // namespace
@@ -120,40 +98,43 @@ std::optional<std::string> resource_dir(const std::string& path, io::Format form
   return parent.empty() ? std::string(".") : parent.string();
 }
 
-bool has_external_uris(const std::string& gltf_text) {
-  const json j = json::parse(gltf_text, nullptr, /*allow_exceptions=*/false);
-  if (!j.is_object()) return false;
-  for (const char* key : {"buffers", "images"})
-    for (const auto& item : j.value(key, json::array()))
-      if (item.is_object() && item.contains("uri") && item["uri"].is_string() &&
-          !item["uri"].get<std::string>().starts_with("data:"))
-        return true;
-  return false;
+bool same_file(const std::string& a, const std::string& b) {
+  namespace fs = std::filesystem;
+  if (a == kStdio || b == kStdio) return false;
+  std::error_code ec;
+  if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec);
+  auto key = [](const std::string& path) {
+    std::error_code error;
+    const fs::path canonical = fs::weakly_canonical(fs::absolute(path), error);
+    return error ? fs::absolute(path).lexically_normal() : canonical;
+  };
+  return key(a) == key(b);
 }
 
-std::string externalize(const std::string& gltf_text, const std::string& out_path,
-                        std::vector<std::pair<std::string, std::string>>& files) {
+void check_not_input(const std::string& in_path, const std::string& out_path, bool in_place, const std::string& where) {
+  if (in_place || !same_file(in_path, out_path)) return;
+  throw UsageError(where + out_path + " is the input " + in_path +
+                   ": it would be overwritten; give --in-place to replace it (written to a temporary file, then "
+                   "renamed), or choose another output");
+}
+
+void write_output(const std::string& in_path, const std::string& in_bytes, io::Format in_format,
+                  const std::string& out_path, std::string out_bytes, io::Format out_format) {
   namespace fs = std::filesystem;
-  json j = json::parse(gltf_text);
-  const fs::path out(out_path);
-  const std::string stem = out.stem().string();
-  for (const char* key : {"buffers", "images"}) {
-    if (!j.contains(key)) continue;
-    for (std::size_t i = 0; i < j[key].size(); ++i) {
-      json& item = j[key][i];
-      if (!item.contains("uri") || !item["uri"].is_string()) continue;
-      const std::string uri = item["uri"].get<std::string>();
-      const std::size_t comma = uri.find(',');
-      if (!uri.starts_with("data:") || comma == std::string::npos) continue;
-      const std::string mime = uri.substr(5, uri.find(';') - 5);
-      std::string name = stem + (std::string(key) == "buffers" ? "_" + std::to_string(i) + ".bin"
-                                                                : "_image" + std::to_string(i) +
-                                                                      (mime == "image/jpeg" ? ".jpg" : mime == "image/webp" ? ".webp" : ".png"));
-      files.emplace_back((out.parent_path() / name).string(), base64_decode(std::string_view(uri).substr(comma + 1)));
-      item["uri"] = name;
+  const bool data_beside = out_path != kStdio && in_path != kStdio && in_format == io::Format::Gltf &&
+                           service::has_external_uris(in_bytes);
+  if (out_path != kStdio) {
+    const fs::path folder = fs::path(out_path).parent_path();
+    std::error_code ec;
+    if (!folder.empty() && !fs::is_directory(folder)) {
+      fs::create_directories(folder, ec);
+      if (!fs::is_directory(folder))
+        throw FileError("cannot create the folder " + folder.string() + " for " + out_path + ": " +
+                        (ec ? ec.message() : std::string("it is not a directory")));
     }
   }
-  return j.dump(2);
+  for (auto& file : service::output_files(std::move(out_bytes), out_format, out_path, data_beside))
+    write_file(file.path, file.bytes);
 }
 
 }  // namespace mdn::cli

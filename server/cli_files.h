@@ -7,8 +7,6 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
-#include <utility>
-#include <vector>
 
 #include "core/io/document.h"
 
@@ -36,12 +34,19 @@ std::string json_argument(const std::string& option, const std::string& value);
 // A .gltf read from a file may reference buffers and images beside it (relative URIs inside
 // its folder); from standard input, or in any other format, nothing outside the bytes is read.
 std::optional<std::string> resource_dir(const std::string& path, io::Format format);
-// Whether a .gltf references files (a buffer or image uri that is not a data: URI).
-bool has_external_uris(const std::string& gltf_text);
-// The files a .gltf output writes beside itself when its input had its data beside it: each
-// embedded buffer and image becomes OUT's stem + "_<i>.bin" / "_image<i>.<ext>" in OUT's
-// folder, referenced by that relative name. Returns the rewritten .gltf and the files.
-std::string externalize(const std::string& gltf_text, const std::string& out_path,
-                        std::vector<std::pair<std::string, std::string>>& files);
+
+// Whether two paths name one file (the same path written differently, a link to it); "-" is
+// never a file.
+bool same_file(const std::string& a, const std::string& b);
+// Refuses (UsageError, exit 2) writing OUT over IN unless `in_place` (then the usual temporary
+// file and rename replace it). `where` prefixes the message ("--out-dir: ").
+void check_not_input(const std::string& in_path, const std::string& out_path, bool in_place, const std::string& where = {});
+
+// The one writer of meshdenoise's outputs, single runs and batches alike: the files
+// service::output_files() makes of a job's bytes at OUT (a .gltf whose input kept its data
+// beside it keeps that layout), each through write_file; OUT's folder is created if missing,
+// as --out-dir's is.
+void write_output(const std::string& in_path, const std::string& in_bytes, io::Format in_format,
+                  const std::string& out_path, std::string out_bytes, io::Format out_format);
 
 }  // namespace mdn::cli

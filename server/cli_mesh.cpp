@@ -67,19 +67,37 @@ mdn::TriMesh merge_surfaces(const std::vector<mdn::TriMesh>& surfaces) {
   return merged;
 }
 
+mdn::TriMesh scene_mesh(const std::vector<mdn::TriMesh>& surfaces,
+                        const std::vector<std::vector<Eigen::Matrix4d>>& placements) {
+  static const std::vector<Eigen::Matrix4d> kAsIs = {Eigen::Matrix4d::Identity()};
+  std::vector<mdn::TriMesh> shown;
+  for (std::size_t i = 0; i < surfaces.size(); ++i) {
+    const auto& where = i < placements.size() && !placements[i].empty() ? placements[i] : kAsIs;
+    for (const Eigen::Matrix4d& m : where) {
+      mdn::TriMesh copy = surfaces[i];
+      // Rows are points: V * A^T + t^T.
+      copy.V = (surfaces[i].V * m.topLeftCorner<3, 3>().transpose()).rowwise() + m.topRightCorner<3, 1>().transpose();
+      shown.push_back(std::move(copy));
+    }
+  }
+  return merge_surfaces(shown);
+}
+
 LoadedMesh decode_mesh(const std::string& path, const std::string& bytes, io::Format format) {
   return blame_file(path, [&] {
     LoadedMesh loaded;
     loaded.document = io::decode(bytes, format, io::DecodeOptions{cli_limits(), resource_dir(path, format)});
     loaded.merged = merge_surfaces(loaded.document->surfaces());
     mdn::validate_mesh(loaded.merged);
+    loaded.scene = scene_mesh(loaded.document->surfaces(), loaded.document->placements());
+    mdn::validate_mesh(loaded.scene);  // a non-finite node matrix
     return loaded;
   });
 }
 
-mdn::TriMesh load_truth(const std::string& path) {
+LoadedMesh load_mesh(const std::string& path) {
   const std::string bytes = read_file(path);
-  return decode_mesh(path, bytes, input_format(path, bytes)).merged;
+  return decode_mesh(path, bytes, input_format(path, bytes));
 }
 
 json measure(const mdn::TriMesh& truth, const std::string& truth_path, const mdn::TriMesh& result,

@@ -46,14 +46,21 @@ auto blame_file(const std::string& path, Fn&& fn) -> decltype(fn()) {
 
 struct LoadedMesh {
   std::unique_ptr<io::MeshDocument> document;
-  mdn::TriMesh merged;  // all surfaces in one mesh, for the metrics
+  mdn::TriMesh merged;  // all surfaces in one mesh, in their own coordinates (what is denoised)
+  mdn::TriMesh scene;   // the same as the scene shows it (scene_mesh), for the metrics
 };
 
 // All surfaces of a document as one mesh (indices offset), so MSAE and E_v cover a whole
 // multi-mesh glTF the same way they cover a single OFF.
 mdn::TriMesh merge_surfaces(const std::vector<mdn::TriMesh>& surfaces);
+// All surfaces as the scene shows them: each once per placement (a glTF node that instances
+// it, its world matrix applied), or once as it is when nothing places it. --metrics measures
+// both meshes in this frame, so a glTF with node transforms compares with the same mesh
+// exported in world coordinates, and two glTFs compare as they render.
+mdn::TriMesh scene_mesh(const std::vector<mdn::TriMesh>& surfaces,
+                        const std::vector<std::vector<Eigen::Matrix4d>>& placements);
 LoadedMesh decode_mesh(const std::string& path, const std::string& bytes, io::Format format);
-mdn::TriMesh load_truth(const std::string& path);
+LoadedMesh load_mesh(const std::string& path);
 
 // MSAE and E_v of `result` against the ground truth (Sec. 7). Both need the same faces in the
 // same order; formats that renumber them (Draco) cannot be compared after the fact.

@@ -14,6 +14,7 @@ std::string usage() {
   out << R"(Usage:
   meshdenoise [options] IN OUT                 denoise IN, write OUT
   meshdenoise [options] --out-dir DIR IN...    denoise every IN into the folder DIR
+  meshdenoise [options] --in-place IN          denoise IN and replace it
   meshdenoise --add-noise SPEC [options] IN OUT
                                                write a noisy copy of the clean mesh IN to OUT
   meshdenoise --metrics GT IN                  only measure IN against the ground truth GT
@@ -42,7 +43,10 @@ Options:
   --metrics GT         print {"msae": ..., "msae_deg2": ..., "ev": ...} on stdout: MSAE (mean
                        squared face-normal angle, radians^2; msae_deg2 in degrees^2) and E_v
                        (in GT's unit-box frame) of OUT (or of IN when there is no OUT) against
-                       GT, which must have the same faces in the same order. With OUT it
+                       GT, which must have the same faces in the same order. Both are
+                       measured as their scene shows them (a glTF's node transforms applied,
+                       an instanced mesh once per node), so a glTF compares with the same
+                       mesh written in world coordinates. With OUT it
                        measures the computed surface (any OUT format gives the same figures);
                        without OUT it measures the file IN as it is.
   --tune GT            for users with a clean scan of a calibration object: searches the six
@@ -56,7 +60,12 @@ Options:
                        file name, with the extension of params.output.format if one is given.
                        Files run side by side (--threads of them at once); a file that fails is
                        reported and the others go on. Two inputs that would land on one output,
-                       or an output that would overwrite its input, are refused before any work.
+                       or an output that would overwrite its input (unless --in-place), are
+                       refused before any work. The files are those that IN DIR/NAME writes.
+  --in-place           allow OUT to be IN (with one file argument, OUT is IN; with --out-dir,
+                       an output may be its input): the result is written to a temporary file
+                       beside it and renamed over it. Without it, writing over the input is
+                       refused (exit 2). OUT's folder is created if missing.
   --report             print a JSON summary on stdout: effective parameters, per-stage timings
                        (ms), fold ratio and region pre-filter decision per surface; with
                        --metrics the metrics go into it under "metrics". With --out-dir:
@@ -108,7 +117,7 @@ shows what ran, the noise estimate and every candidate's score.
          normal_bits [1, 30]; texcoord_bits, color_bits, generic_bits [0, 30], 0 = lossless;
          compression_level [0, 10] (10 = smallest)
 
-Exit codes: 0 ok; 2 bad command line or parameters; 3 a file cannot be read or written, is
+Exit codes: 0 ok; 2 bad command line or parameters (OUT that is IN without --in-place); 3 a file cannot be read or written, is
 malformed or is not a valid mesh; 4 solver failure or internal error; 130 cancelled (Ctrl-C).
 On any error OUT is not written. With --out-dir: the code of the first IN (in the order given)
 that failed, 130 if cancelled; each OUT that was written is complete.
@@ -171,6 +180,9 @@ CliOptions parse_command_line(int argc, char** argv) {
       options.out_dir = value();
     } else if (arg == "--threads") {
       options.threads = parse_threads(value());
+    } else if (arg == "--in-place") {
+      flag();
+      options.in_place = true;
     } else if (arg == "--report") {
       flag();
       options.report = true;

@@ -24,6 +24,7 @@ struct CliOptions {
   std::optional<std::string> out_dir;    // --out-dir: batch mode, every positional is an input
   std::optional<std::string> mode;       // --mode: "mode" of the parameters (auto, search, manual, none)
   int threads = 0;                       // 0: hardware concurrency
+  bool in_place = false;                 // --in-place: OUT may be IN (replaced through a temporary file)
   bool report = false;
   bool progress = true;
   bool help = false;

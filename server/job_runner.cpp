@@ -82,6 +82,7 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
   out.timings.encode_ms = ms_since(start);
   out.notes = document->notes();
   out.notes.insert(out.notes.end(), choice_notes.begin(), choice_notes.end());
+  out.placements = document->placements();
   out.surfaces = std::move(document->surfaces());  // the document is done with them
   return out;
 }

@@ -40,6 +40,9 @@ struct JobOutput {
   // (before any quantisation of the output format). Moved out of the document after encoding,
   // so it costs nothing; the CLI's --metrics measures these.
   std::vector<TriMesh> surfaces;
+  // Where each surface shows in the asset's scene (io::MeshDocument::placements()), for the
+  // CLI's --metrics, which measures in the scene's frame.
+  std::vector<std::vector<Eigen::Matrix4d>> placements;
 };
 
 // Throws what io::decode and mdn::denoise throw (FormatError, UnsupportedError, LimitError,

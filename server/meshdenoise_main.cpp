@@ -4,6 +4,7 @@
 // truth. See usage() for the shapes.
 #include <unistd.h>
 
+#include <cstdint>
 #include <iostream>
 #include <numbers>
 #include <optional>
@@ -36,13 +37,14 @@ using namespace mdn::cli;
 int run_tune(const CliOptions& options) {
   if (options.positional.size() != 1)
     throw UsageError("--tune GT takes exactly one file, the noisy mesh, got " + std::to_string(options.positional.size()));
-  if (options.add_noise || options.metrics) throw UsageError("--tune cannot be combined with --add-noise or --metrics");
+  if (options.add_noise || options.metrics || options.in_place)
+    throw UsageError("--tune cannot be combined with --add-noise, --metrics or --in-place (it writes no mesh)");
   service::JobParams start;
   if (options.params) start = service::job_params_from_text(json_argument("--params", *options.params));
   const int threads = default_threads(options);
   const std::string& in_path = options.positional[0];
   const std::string in_bytes = read_file(in_path);
-  const mdn::TriMesh truth = load_truth(*options.tune);
+  const mdn::TriMesh truth = load_mesh(*options.tune).merged;  // the search runs in the surfaces' own frame
   const LoadedMesh noisy = decode_mesh(in_path, in_bytes, input_format(in_path, in_bytes));
   if (truth.num_vertices() != noisy.merged.num_vertices() || truth.F != noisy.merged.F) {
     throw FileError(in_path + " and the ground truth " + *options.tune +
@@ -78,7 +80,9 @@ int run(int argc, char** argv) {
     std::cout << "meshdenoise " << MDN_VERSION << "\n";
     return kExitOk;
   }
-  const auto& pos = options.positional;
+  // --in-place IN: OUT is IN.
+  std::vector<std::string> pos = options.positional;
+  if (options.in_place && !options.out_dir && !options.tune && pos.size() == 1) pos.push_back(pos[0]);
   int stdin_reads = !options.out_dir && !pos.empty() && pos[0] == kStdio ? 1 : 0;
   for (const auto* file : {&options.params, &options.add_noise, &options.metrics, &options.tune})
     if (*file && **file == kStdio) ++stdin_reads;
@@ -114,15 +118,16 @@ int run(int argc, char** argv) {
   const io::Format in_format = input_format(in_path, in_bytes);
   // The ground truth is read before any long work, so a bad GT fails fast.
   std::optional<mdn::TriMesh> truth;
-  if (options.metrics) truth = load_truth(*options.metrics);
+  if (options.metrics) truth = load_mesh(*options.metrics).scene;
 
   if (measure_only) {
     const LoadedMesh loaded = decode_mesh(in_path, in_bytes, in_format);
-    std::cout << measure(*truth, *options.metrics, loaded.merged, in_path, threads).dump(2) << "\n";
+    std::cout << measure(*truth, *options.metrics, loaded.scene, in_path, threads).dump(2) << "\n";
     return kExitOk;
   }
 
   const std::string& out_path = pos[1];
+  check_not_input(in_path, out_path, options.in_place);
   if (out_path == kStdio && (options.report || options.metrics)) {
     throw UsageError("OUT is standard output (-): --report and --metrics would print into the mesh");
   }
@@ -136,7 +141,7 @@ int run(int argc, char** argv) {
 
   json summary;
   std::string out_bytes;
-  mdn::TriMesh result;  // all output surfaces, as computed (before the format's quantisation)
+  mdn::TriMesh result;  // all output surfaces, as computed (before the format's quantisation), as the scene shows them
   if (noise) {
     LoadedMesh loaded = decode_mesh(in_path, in_bytes, in_format);
     std::uint64_t index = 0;
@@ -150,12 +155,17 @@ int run(int argc, char** argv) {
     io::EncodeOptions encode = params.output;
     if (!encode.format) encode.format = in_format;
     out_bytes = blame_file(in_path, [&] { return loaded.document->encode(encode); });
-    result = merge_surfaces(loaded.document->surfaces());
+    std::int64_t vertices = 0, faces = 0;  // of the asset (an instanced mesh counts once)
+    for (const mdn::TriMesh& surface : loaded.document->surfaces()) {
+      vertices += surface.num_vertices();
+      faces += surface.num_faces();
+    }
+    result = scene_mesh(loaded.document->surfaces(), loaded.document->placements());
     summary = {{"noise", service::to_json(*noise)},
                {"format", std::string(io::to_string(*encode.format))},
                {"bytes", out_bytes.size()},
-               {"vertices", result.num_vertices()},
-               {"faces", result.num_faces()},
+               {"vertices", vertices},
+               {"faces", faces},
                {"notes", loaded.document->notes()}};
   } else {
     install_sigint_handler();
@@ -163,7 +173,7 @@ int run(int argc, char** argv) {
     service::JobOutput output = denoise_input(in_path, in_bytes, in_format, params, threads, progress);
     summary = service::output_to_json(output);  // before the bytes move out
     out_bytes = std::move(output.bytes);
-    if (truth) result = merge_surfaces(output.surfaces);
+    if (truth) result = scene_mesh(output.surfaces, output.placements);
   }
   add_paths(summary, in_path, in_format, out_path);
 
@@ -172,14 +182,8 @@ int run(int argc, char** argv) {
   // file's own quantisation (Draco) can be measured afterwards with --metrics GT OUT.
   std::optional<json> metrics;
   if (truth) metrics = measure(*truth, *options.metrics, result, in_path, threads);
-  // A .gltf whose data sat beside it gets its output's data beside the output (the same layout).
   const io::Format out_format = io::format_from_string(summary.value("format", std::string())).value_or(in_format);
-  if (out_format == io::Format::Gltf && in_format == io::Format::Gltf && out_path != kStdio && has_external_uris(in_bytes)) {
-    std::vector<std::pair<std::string, std::string>> files;
-    out_bytes = externalize(out_bytes, out_path, files);
-    for (const auto& [file, bytes] : files) write_file(file, bytes);
-  }
-  write_file(out_path, out_bytes);
+  write_output(in_path, in_bytes, in_format, out_path, std::move(out_bytes), out_format);
 
   if (options.report) {
     if (metrics) summary["metrics"] = *metrics;

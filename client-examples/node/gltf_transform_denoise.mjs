@@ -12,7 +12,7 @@ import { NodeIO } from '@gltf-transform/core';
 import { ALL_EXTENSIONS } from '@gltf-transform/extensions';
 import { mergeDocuments } from '@gltf-transform/functions';
 import draco3d from 'draco3dgltf';
-import { denoise } from './denoise_client.mjs';
+import { ClientError, denoise } from './denoise_client.mjs';
 
 export async function createIO() {
   return new NodeIO().registerExtensions(ALL_EXTENSIONS).registerDependencies({
@@ -45,8 +45,14 @@ export function denoiseTransform({ params = {}, baseUrl } = {}) {
 
 if (import.meta.url === `file://${process.argv[1]}`) {
   const [input, output, params = '{}'] = process.argv.slice(2);
-  const io = await createIO();
-  const document = await io.read(input);
-  await document.transform(denoiseTransform({ params: JSON.parse(params) }));
-  await io.write(output, document);
+  try {
+    const io = await createIO();
+    const document = await io.read(input);
+    await document.transform(denoiseTransform({ params: JSON.parse(params) }));
+    await io.write(output, document);
+  } catch (e) {
+    if (!(e instanceof ClientError)) throw e;
+    console.error(`gltf_transform_denoise.mjs: ${e.message}`);  // the server could not be reached or refused the mesh
+    process.exitCode = e.exitCode;
+  }
 }

@@ -102,6 +102,12 @@ class MeshDocument {
   virtual std::string encode(const EncodeOptions& options) const = 0;
   // Notes for the caller about what was changed besides positions (e.g. "TANGENT dropped").
   virtual std::vector<std::string> notes() const { return {}; }
+  // Where each surface shows in the asset's scene: the matrices (4x4, homogeneous) that take
+  // its coordinates to the scene's. glTF: the world matrix of every node of the default scene
+  // (of every root node when the asset has no scene) that instances its mesh, in depth-first
+  // order; EXT_mesh_gpu_instancing and skins are not applied. Empty for a surface that nothing
+  // places and for formats without a scene (the default): those show as they are.
+  virtual std::vector<std::vector<Eigen::Matrix4d>> placements() const { return {}; }
   // The input's compression (glTF: Draco if a primitive used KHR_draco_mesh_compression,
   // Meshopt if a buffer view used EXT_meshopt_compression; DRC: Draco; others None).
   virtual Compression compression() const { return Compression::None; }

@@ -344,6 +344,7 @@ class GltfDocument final : public MeshDocument {
   std::vector<TriMesh>& surfaces() override { return meshes_; }
   std::vector<std::string> notes() const override { return notes_; }
   Compression compression() const override { return compression_; }
+  std::vector<std::vector<Eigen::Matrix4d>> placements() const override;
   std::string encode(const EncodeOptions& options) const override {
     try {
       return encode_json(options);
@@ -361,6 +362,58 @@ class GltfDocument final : public MeshDocument {
   std::vector<TriMesh> meshes_;
   std::vector<std::string> notes_;
 };
+
+// A node's local matrix (glTF 2.0, 5.25): `matrix` if given, else T * R * S.
+Eigen::Matrix4d local_matrix(const tinygltf::Node& node) {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  if (node.matrix.size() == 16) {
+    for (int i = 0; i < 16; ++i) m(i % 4, i / 4) = node.matrix[static_cast<std::size_t>(i)];  // column-major
+    return m;
+  }
+  Eigen::Affine3d t = Eigen::Affine3d::Identity();
+  if (node.translation.size() == 3) t.translate(Eigen::Vector3d(node.translation[0], node.translation[1], node.translation[2]));
+  if (node.rotation.size() == 4)  // (x, y, z, w)
+    t.rotate(Eigen::Quaterniond(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]).normalized());
+  if (node.scale.size() == 3) t.scale(Eigen::Vector3d(node.scale[0], node.scale[1], node.scale[2]));
+  return t.matrix();
+}
+
+std::vector<std::vector<Eigen::Matrix4d>> GltfDocument::placements() const {
+  const auto& nodes = model_.nodes;
+  const auto n = static_cast<int>(nodes.size());
+  std::vector<int> surface_of_mesh(model_.meshes.size(), -1);
+  for (std::size_t i = 0; i < surfaces_.size(); ++i) surface_of_mesh[static_cast<std::size_t>(surfaces_[i].mesh)] = static_cast<int>(i);
+  std::vector<int> roots;
+  if (!model_.scenes.empty()) {
+    const int scene = model_.defaultScene >= 0 && model_.defaultScene < static_cast<int>(model_.scenes.size()) ? model_.defaultScene : 0;
+    roots = model_.scenes[static_cast<std::size_t>(scene)].nodes;
+  } else {
+    std::vector<bool> child(nodes.size(), false);
+    for (const auto& node : nodes)
+      for (int c : node.children)
+        if (c >= 0 && c < n) child[static_cast<std::size_t>(c)] = true;
+    for (int i = 0; i < n; ++i)
+      if (!child[static_cast<std::size_t>(i)]) roots.push_back(i);
+  }
+  // Depth-first, without recursion; a node is visited once (the spec makes the hierarchy a
+  // forest; a malformed asset with a cycle or a shared child stops there).
+  std::vector<std::vector<Eigen::Matrix4d>> out(surfaces_.size());
+  std::vector<bool> visited(nodes.size(), false);
+  std::vector<std::pair<int, Eigen::Matrix4d>> stack;
+  for (auto it = roots.rbegin(); it != roots.rend(); ++it) stack.emplace_back(*it, Eigen::Matrix4d::Identity());
+  while (!stack.empty()) {
+    const auto [index, parent] = stack.back();
+    stack.pop_back();
+    if (index < 0 || index >= n || visited[static_cast<std::size_t>(index)]) continue;
+    visited[static_cast<std::size_t>(index)] = true;
+    const tinygltf::Node& node = nodes[static_cast<std::size_t>(index)];
+    const Eigen::Matrix4d world = parent * local_matrix(node);
+    if (node.mesh >= 0 && node.mesh < static_cast<int>(surface_of_mesh.size()) && surface_of_mesh[static_cast<std::size_t>(node.mesh)] >= 0)
+      out[static_cast<std::size_t>(surface_of_mesh[static_cast<std::size_t>(node.mesh)])].push_back(world);
+    for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) stack.emplace_back(*c, world);
+  }
+  return out;
+}
 
 // ---- encoding helpers ----
 

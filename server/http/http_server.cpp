@@ -6,8 +6,10 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <functional>
 #include <map>
@@ -121,9 +123,14 @@ struct HttpService::Impl : JobRoutes {
     // POST routes count bytes themselves because chunked uploads bypass it (0.11.4).
     svr.set_payload_max_length(std::size_t(config.max_body_bytes));
     svr.set_tcp_nodelay(true);
+    // Not httplib::default_socket_options: 0.11.4 sets SO_REUSEPORT there, with which a second
+    // server binds the same port without a word and the kernel splits connections between the
+    // two (async jobs then answer 404 on half the polls). SO_REUSEADDR alone lets a restart bind
+    // while old connections sit in TIME_WAIT and still refuses a port another socket listens on.
     // Remember the listening socket: bind() enlarges its backlog (see there).
     svr.set_socket_options([this](socket_t sock) {
-      httplib::default_socket_options(sock);
+      int yes = 1;
+      ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
       listen_fd = sock;
     });
 
@@ -512,11 +519,16 @@ int HttpService::bind() {
   auto& svr = impl_->svr;
   const auto& c = impl_->config;
   int port = c.port;
+  errno = 0;
   if (port == 0) {
     port = svr.bind_to_any_port(c.host);
-    if (port < 0) throw std::runtime_error("cannot bind " + c.host + " on any port");
+    if (port < 0) throw BindError("cannot listen on " + c.host + " on any port: " + std::strerror(errno ? errno : EADDRNOTAVAIL));
   } else if (!svr.bind_to_port(c.host, port)) {
-    throw std::runtime_error("cannot bind " + c.host + ":" + std::to_string(port));
+    const int error = errno ? errno : EADDRNOTAVAIL;
+    const std::string where = c.host + ":" + std::to_string(port);
+    throw BindError(error == EADDRINUSE
+                        ? "cannot listen on " + where + ": the port is in use (another meshdenoise-server?); stop it or choose another --port"
+                        : "cannot listen on " + where + ": " + std::strerror(error));
   }
   // cpp-httplib 0.11.4 listens with a backlog of 5 (CPPHTTPLIB_LISTEN_BACKLOG, fixed when
   // Debian compiled it): a burst of clients overflows it and the kernel drops their handshakes

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,13 @@
 #include "server/http/service_parts.h"
 
 namespace mdn::http {
+
+// The listening address cannot be bound (the port is in use, the host is not local, ...): what()
+// says which and why. meshdenoise-server exits 3 on it.
+class BindError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 // One route: method and path template as in proto/openapi.yaml ("/v1/jobs/{id}").
 struct RouteInfo {
@@ -33,13 +41,13 @@ class HttpService {
   HttpService& operator=(const HttpService&) = delete;
 
   // Binds the listening socket (config.port, or any free port if 0) and returns the port.
-  // Throws std::runtime_error if the address cannot be bound.
+  // Throws BindError if the address cannot be bound (a port in use is refused: no SO_REUSEPORT).
   int bind();
   // Accepts connections until stop(). Returns false if listening failed.
   bool serve();
   // SIGTERM: /readyz answers 503 and new jobs get 503; accepted jobs keep running.
   void begin_drain();
-  // Waits until accepted jobs finished (and async results were fetched) or the deadline.
+  // Waits until accepted jobs finished or the deadline (results not fetched yet do not hold it).
   bool wait_drained(Clock::time_point deadline);
   // Stops accepting connections, lets in-flight requests finish, and cancels what is left.
   void stop();

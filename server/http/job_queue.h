@@ -66,7 +66,7 @@ class Job {
   JobState state() const;
   // Blocks until the job is finished or the timeout passes; true when finished.
   bool wait_for(std::chrono::milliseconds timeout) const;
-  // Marks the result as fetched by a client (drain waits for unfetched async results).
+  // Marks the result as fetched by a client (the drain counts the results nobody fetched).
   void mark_result_fetched();
   bool result_fetched() const;
 
@@ -163,13 +163,15 @@ class JobQueue {
   // Refuses new jobs from now on (503); what was accepted still runs.
   void begin_drain();
   bool draining() const;
-  // Waits until no job is queued or running and every succeeded asynchronous job's result was
-  // fetched once, or the deadline passes. True if everything finished.
+  // Waits until no job is queued or running, or the deadline passes. True if everything
+  // finished. Finished results not downloaded yet do not hold it (see unfetched_results()).
   bool wait_drained(Clock::time_point deadline);
 
-  // Jobs a drain that ends now would abandon: queued or running, and asynchronous results not
-  // fetched yet (running synchronous jobs are not listed; their requests are answered 503).
+  // Jobs a drain that ends now would abandon: queued or running (running synchronous jobs are
+  // not listed; their requests are answered 503).
   std::vector<JobSnapshot> unfinished() const;
+  // Succeeded asynchronous jobs whose result was never fetched (lost when a memory store stops).
+  int unfetched_results() const;
 
   // Jobs queued before this one (0: it starts next); nullopt when it is not in the queue.
   std::optional<int> jobs_ahead(const Job& job) const;

@@ -7,6 +7,7 @@
 
 #include "server/http/content_coding.h"
 #include "server/job_json.h"
+#include "server/output_files.h"
 #include "server/params_json.h"
 
 namespace mdn::http {
@@ -81,7 +82,7 @@ void write_result(Context& ctx, const JobSnapshot& s) {
                            [body](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
                              return sink.write(body->data() + offset, length);
                            });
-  res.set_header("Content-Disposition", "attachment; filename=\"denoised." + std::string(io::to_string(out.format)) + "\"");
+  res.set_header("Content-Disposition", "attachment; filename=\"" + service::output_file_name({}, out.format) + "\"");
   res.set_header("X-Denoise-Params", service::to_json(out.effective).dump());
   res.set_header("X-Denoise-Input-Bytes", std::to_string(s.input_bytes));
   res.set_header("X-Denoise-Output-Bytes", std::to_string(out.bytes.size()));

@@ -44,7 +44,7 @@ class JobStore {
   // Long poll (GET /v1/jobs/{id}?wait=): blocks until the job is finished, `deadline` passes or
   // the server drains, then answers as find(id, false) does.
   virtual std::optional<JobSnapshot> wait_finished(const std::string& id, Clock::time_point deadline) = 0;
-  // GET /result delivered the bytes once (the memory store's drain waits for this).
+  // GET /result delivered the bytes once (the memory store counts, at a drain, the results nobody fetched).
   virtual void result_fetched(const std::string& id) = 0;
 
   struct CancelResult {

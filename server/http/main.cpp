@@ -1,7 +1,8 @@
 // meshdenoise-server: parses the configuration (flags, then MDN_* variables), builds the
 // metrics, the job queue and the job store (memory or Redis), runs the HTTP service over them,
 // and drains on SIGTERM/SIGINT: /readyz turns 503, new jobs get 503, accepted jobs finish
-// within --drain-grace seconds, then the process exits 0; a drain that runs out of grace logs
+// within --drain-grace seconds, then the process exits 0 as soon as the last one ends (results
+// not downloaded yet do not hold it; the log counts them); a drain that runs out of grace logs
 // every job it abandons and exits 1. A second signal stops at once. Either way the process
 // ends within kStopBound of the drain's end: a worker stuck in a step that cannot be
 // interrupted is not joined (the stuck jobs are logged, then std::_Exit(1)).
@@ -31,6 +32,11 @@ namespace {
 // stop before the process exits without joining them. Cancelled jobs stop within one poll
 // (a few milliseconds); only a step that polls no cancellation (Draco) takes longer.
 constexpr std::chrono::seconds kStopBound{5};
+
+// Exit codes (help_text() lists them): 0 stopped after a clean drain, 1 the drain ran out of
+// grace or a fatal error, 2 bad configuration, 3 the address cannot be listened on (a port in
+// use: a second server on it is refused rather than sharing it through SO_REUSEPORT).
+constexpr int kExitCannotListen = 3;
 
 // Writes the port atomically (write then rename) so a reader never sees a partial file.
 void write_port_file(const std::string& path, int port) {
@@ -124,9 +130,18 @@ int main(int argc, char** argv) {
 
     wait_for_signal(signals, -1);
     stopping = true;
+    // What the drain waits for (queued and running jobs, by id), and what it does not: finished
+    // results nobody downloaded yet (with the memory store they go with the process).
+    auto waiting_for = [&service] {
+      nlohmann::json ids = nlohmann::json::array();
+      for (const auto& job : service.queue().unfinished()) ids.push_back(job.id);
+      return ids;
+    };
     log->info("draining", {{"grace_s", config.drain_grace_s},
                            {"queued", service.queue().queued()},
-                           {"running", service.queue().running()}});
+                           {"running", service.queue().running()},
+                           {"waiting_for", waiting_for()},
+                           {"results_not_downloaded", service.queue().unfetched_results()}});
     service.begin_drain();
     // Drain on a helper thread so a second signal can still cut the grace period short.
     std::atomic<bool> drained_done{false};
@@ -147,9 +162,12 @@ int main(int argc, char** argv) {
       // Every job the drain gives up on is named (with the Redis store, unfinished jobs stay
       // in Redis for another replica); the exit code says the drain was incomplete.
       const auto abandoned = service.queue().unfinished();
+      nlohmann::json ids = nlohmann::json::array();
+      for (const auto& job : abandoned) ids.push_back(job.id);
       log->warn("drain_incomplete", {{"queued", service.queue().queued()},
                                      {"running", service.queue().running()},
-                                     {"abandoned", abandoned.size()}});
+                                     {"abandoned", abandoned.size()},
+                                     {"still_running", ids}});
       for (const auto& job : abandoned)
         log->warn("job_abandoned", {{"job_id", job.id}, {"state", std::string(to_string(job.state))}, {"async", job.asynchronous}});
     }
@@ -158,6 +176,9 @@ int main(int argc, char** argv) {
     server.join();
     log->info("stopped", {{"drained", drained}});
     if (!serve_ok || !drained) return 1;
+  } catch (const BindError& e) {
+    log->error("cannot_listen", {{"host", config.host}, {"port", config.port}, {"detail", e.what()}});
+    return kExitCannotListen;
   } catch (const std::exception& e) {
     log->error("fatal", {{"detail", e.what()}});
     return 1;
