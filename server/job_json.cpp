@@ -46,8 +46,7 @@ json choice_to_json(const ParameterChoice& c) {
             {"noise", noise_to_json(c.noise)},
             {"descriptors", std::move(descriptors)},
             {"sets", std::move(sets)},
-            {"notes", c.notes},
-            {"ms", c.ms}};
+            {"notes", c.notes}};
   if (c.search) j["search"] = search_to_json(*c.search);
   return j;
 }

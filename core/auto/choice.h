@@ -32,7 +32,6 @@ struct ParameterChoice {
   double predicted = 0;           // the chosen set's predicted error ratio (0 when not predicted)
   std::vector<std::string> notes;
   std::optional<Selection> search;  // ParamMode::Search: the recorrupted scores and the descent
-  double ms = 0;                    // time taken by the choice
 };
 
 }  // namespace mdn

@@ -1,6 +1,5 @@
 #include "core/auto/choose.h"
 
-#include <chrono>
 #include <cmath>
 
 #include "core/auto/descriptors.h"
@@ -51,7 +50,6 @@ DenoiseParams paper_row(const DenoiseParams& requested) {
 
 ParameterChoice choose_parameters(const Vertices& P, const Triangles& F, const Topology& topo, const DenoiseParams& requested,
                                   double box_scale, Executor& executor, ProgressObserver* progress, DenoiseParams& chosen) {
-  const auto t0 = std::chrono::steady_clock::now();
   checkpoint(progress, Stage::SelectParameters, 0);
   const ParameterModel& model = ParameterModel::shipped();
   ParameterChoice c;
@@ -104,7 +102,6 @@ ParameterChoice choose_parameters(const Vertices& P, const Triangles& F, const T
     c.chosen = won.name;
   }
   checkpoint(progress, Stage::SelectParameters, 1);
-  c.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return c;
 }
 

@@ -26,7 +26,7 @@
 #include "core/metrics.h"
 #include "core/noise.h"
 #include "core/params.h"
-#include "core/pipeline.h"
+#include "core/auto/denoise.h"
 #include "core/smoothing.h"
 #include "core/topology.h"
 #include "subdivide.h"

@@ -718,7 +718,7 @@ TEST_F(Cli, ModeNoneConvertsOnly) {
   EXPECT_EQ(report["params"]["mode"], "none");
   ASSERT_EQ(report["reports"].size(), 1u);
   EXPECT_EQ(report["reports"][0]["mode"], "none");
-  EXPECT_FALSE(report["reports"][0].contains("selection"));
+  EXPECT_FALSE(report["reports"][0].contains("choice"));
   EXPECT_EQ(report["timings_ms"]["normal_filter"], 0.0);
   const mdn::TriMesh back = mdn::io::decode(read_text(path("out.ply")), mdn::io::Format::Ply)->surfaces()[0];
   ASSERT_EQ(back.F, noisy_.F);

@@ -109,7 +109,7 @@ TEST(GltfJob, ModeNoneConvertsWithoutDenoising) {
   const Json report = output_to_json(out);
   EXPECT_EQ(report["params"]["mode"], "none");
   EXPECT_EQ(report["reports"][0]["mode"], "none");
-  EXPECT_FALSE(report["reports"][0].contains("selection"));
+  EXPECT_FALSE(report["reports"][0].contains("choice"));
   EXPECT_FALSE(report["reports"][0].contains("measures"));
   for (const char* stage : {"measure", "initial_prefilter", "region_prefilter", "anisotropic_prefilter", "normal_filter",
                             "vertex_update"})

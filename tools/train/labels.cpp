@@ -7,7 +7,7 @@
 #include "core/metrics.h"
 #include "core/normal_filter.h"
 #include "core/parallel.h"
-#include "core/pipeline.h"
+#include "core/auto/denoise.h"
 #include "core/vertex_update.h"
 #include "label_grid.h"
 

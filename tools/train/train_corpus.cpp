@@ -68,10 +68,17 @@ std::vector<CaseRef> all_cases(const fs::path& cgal, const Options& o, std::map<
     for (const std::string& noise : noise_names_for(s)) out.push_back({name, noise});
     shapes.emplace(name, std::move(s));
   }
-  if (o.limit > 0) {  // a few cases spread over the shapes and noise kinds
+  if (o.limit > 0) {  // a few cases spread over the shapes and noise kinds, a quarter of them holdout
     std::vector<CaseRef> few;
-    const std::size_t stride = std::max<std::size_t>(1, out.size() / static_cast<std::size_t>(o.limit));
-    for (std::size_t i = 0; i < out.size() && static_cast<int>(few.size()) < o.limit; i += stride) few.push_back(out[i]);
+    for (const std::string split : {"train", "holdout"}) {
+      std::vector<CaseRef> in;
+      for (const CaseRef& c : out)
+        if (split_of(c.shape) == split) in.push_back(c);
+      const int want = split == "train" ? o.limit - o.limit / 4 : o.limit / 4;
+      if (in.empty() || want <= 0) continue;
+      const std::size_t stride = std::max<std::size_t>(1, in.size() / static_cast<std::size_t>(want));
+      for (std::size_t i = 0, n = 0; i < in.size() && static_cast<int>(n) < want; i += stride, ++n) few.push_back(in[i]);
+    }
     out = few;
   }
   return out;

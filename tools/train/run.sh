@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Rebuilds the trained parameter choice from nothing: corpus labels, descriptors, model.
+#
+#   bash tools/train/run.sh [--tiny] [--jobs N] WORK_DIR
+#
+# WORK_DIR keeps labels.tsv and descriptors.tsv (resumable: a rerun computes only the cases
+# they lack; delete descriptors.tsv after changing core/auto/descriptors.cpp, labels.tsv after
+# changing the method or the label grid) and the model. Without --tiny the model is written to
+# core/auto/model_data.inc (rebuild afterwards); with --tiny (CI: a dozen small cases, seconds)
+# to WORK_DIR/model_data.inc only. Needs a Release build with the benchmarks
+# (build/release/tools/train/train_corpus; $MDN_BUILD_DIR overrides), CGAL's demo data for the
+# full corpus (fetched on first use) and Debian's python3-sklearn.
+set -euo pipefail
+root="$(cd "$(dirname "$0")/../.." && pwd)"
+tiny=0
+jobs="$(nproc)"
+while [ $# -gt 1 ]; do
+  case "$1" in
+    --tiny) tiny=1; shift ;;
+    --jobs) jobs="$2"; shift 2 ;;
+    *) echo "usage: $0 [--tiny] [--jobs N] WORK_DIR" >&2; exit 2 ;;
+  esac
+done
+[ $# -eq 1 ] || { echo "usage: $0 [--tiny] [--jobs N] WORK_DIR" >&2; exit 2; }
+work="$1"
+mkdir -p "$work"
+bin="${MDN_BUILD_DIR:-$root/build/release}/tools/train/train_corpus"
+[ -x "$bin" ] || { echo "$bin not found: build the Release preset with -DMDN_BUILD_BENCH=ON" >&2; exit 2; }
+python=/usr/bin/python3  # Debian's, with python3-sklearn (not a virtual environment's)
+
+select=()
+train_args=()
+if [ "$tiny" = 1 ]; then
+  # Small procedural shapes only (no CGAL data), two of them holdout shapes.
+  select=(--shapes box_coarse,sphere_coarse,torus_coarse,gear_coarse,washer_coarse,rounded_box_coarse --limit 12)
+  train_args=(--members 1 --sets 8 --hidden 8)
+  out="$work/model_data.inc"
+else
+  out="$root/core/auto/model_data.inc"
+fi
+"$bin" label --jobs "$jobs" "${select[@]}" "$work/labels.tsv"
+"$bin" describe --jobs "$jobs" "${select[@]}" "$work/descriptors.tsv"
+"$python" "$root/tools/train/train.py" "$work/labels.tsv" "$work/descriptors.tsv" "$out" \
+  --report "$work/report.json" "${train_args[@]}"
+echo "model written to $out"

@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# The offline pipeline end to end on a dozen cases (ctest): the model file it writes must have
+# the shipped model's shape (the descriptors core computes, the identity set, every array).
+set -euo pipefail
+build="$1"
+work="$2"
+rm -rf "$work"
+root="$(cd "$(dirname "$0")/../.." && pwd)"
+MDN_BUILD_DIR="$build" bash "$root/tools/train/run.sh" --tiny --jobs 2 "$work"
+model="$work/model_data.inc"
+fail() { echo "FAIL: $*" >&2; exit 1; }
+[ "$(wc -l < "$work/labels.tsv")" -eq 13 ] || fail "labels.tsv should hold 12 cases and a header"
+[ "$(wc -l < "$work/descriptors.tsv")" -eq 13 ] || fail "descriptors.tsv should hold 12 cases and a header"
+# The descriptor names are the shipped model's (both lists generated from the same tables).
+grep -o 'kDescriptorNames\[kInputs\] = {[^}]*}' "$model" > "$work/names.tiny"
+grep -o 'kDescriptorNames\[kInputs\] = {[^}]*}' "$root/core/auto/model_data.inc" > "$work/names.shipped"
+cmp -s "$work/names.tiny" "$work/names.shipped" || fail "descriptor names differ from core/auto/model_data.inc"
+grep -q 'kSetNames\[kSetCount\] = {"identity", "a0.1_t30_k2_g30_n20_v10"' "$model" || fail "identity and the paper's row come first"
+for array in kMean kScale kSetValues kW0 kB0 kW1 kB1 kW2 kB2 kProbeInputs kProbeOutputs; do
+  grep -q "constexpr double $array\[" "$model" || fail "$array missing"
+done
+grep -q '"holdout"' "$work/report.json" || fail "no holdout figures"
+echo "tiny training pipeline: ok"
