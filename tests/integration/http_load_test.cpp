@@ -328,8 +328,8 @@ TEST(HttpLoad, ADrainOutOfGraceNamesEveryAbandonedJobAndExitsNonZero) {
   ServerProcess server({"--workers", "1", "--drain-grace", "0.5"});
   ASSERT_TRUE(server.started()) << server.log();
   auto c = server.client();
-  const std::string medium = noisy_sphere_off(4, 9);
-  const std::string params = R"({"n_normal":1000,"n_vertex":1000})";  // about a second each: still running at the grace
+  const std::string medium = noisy_sphere_off(5, 9);
+  const std::string params = R"({"n_normal":1000,"n_vertex":1000})";  // seconds each: still running at the grace
   const std::vector<std::string> ids = post_jobs(*c, 3, medium, params);
   ASSERT_EQ(ids.size(), 3u);
   const auto signalled = std::chrono::steady_clock::now();

@@ -131,8 +131,12 @@ TEST(GltfJob, NoisySceneIsDenoisedAndReadsBack) {
   // Uncompressed, the surface comes back in the input's welded order.
   ASSERT_EQ(plain.F, truth.F);
   EXPECT_LT(msae(plain, truth), msae(before, truth) / 3);
-  // Still the unit sphere: the pre-filter's shrinkage stays small on this coarse mesh.
-  EXPECT_NEAR(plain.V.rowwise().norm().mean(), 1.0, 0.02);
+  // Still the unit sphere. The trained choice minimises MSAE (normals), not shrinkage: on this
+  // 528-face sphere it picks a strong smoothing set that shrinks the radius by about 7%
+  // (core/auto/README.md, "Limits"); the paper's row keeps it within 2%.
+  EXPECT_NEAR(plain.V.rowwise().norm().mean(), 1.0, 0.08);
+  const TriMesh paper_row = io::decode(run_with(test_io::sphere_scene_glb(noisy), {{"mode", "manual"}}).bytes, io::Format::Glb)->surfaces()[0];
+  EXPECT_NEAR(paper_row.V.rowwise().norm().mean(), 1.0, 0.02);
 
   // Draco reorders vertices: every decoded vertex must be one of the denoised ones, within
   // the 16-bit position quantisation, and none may be missing (no seam opened).
