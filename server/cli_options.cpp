@@ -78,13 +78,13 @@ Options:
   --help, --version
 
 Parameters (--params). By default ("mode": "auto") the six parameters of Table 1 (alpha ...
-n_vertex) and region_mode are chosen per surface: its noise is estimated from the surface,
-candidates (no filtering, Table 1's row, fitted prototypes) are scored on recorrupted copies
-of a sample of it, and the best runs; a field given explicitly keeps its value. "mode":
-"search" refines the pick by a coordinate descent on the same score (several times slower).
+n_vertex) and region_mode are chosen per surface by a model trained offline: it reads cheap
+statistics of the surface and runs the parameter set of lowest predicted error (a clean surface
+is left alone); a field given explicitly keeps its value. "mode": "search" refines the pick by a
+coordinate descent on an error estimated from recorrupted copies (several times slower).
 "mode": "manual" uses the values as given and the defaults below (Table 1's Fandisk row) for
 the others. "mode": "none" denoises nothing (a format or compression conversion). --report
-shows what ran, the noise estimate and every candidate's score.
+shows what ran and the choice: the model, what it read, the noise estimate and the pick.
   mode "auto"|"search"|"manual"|"none", default "auto"
 [accepted range], default:
 )";

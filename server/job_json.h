@@ -17,7 +17,7 @@ namespace mdn::service {
 
 // One surface: fold_ratio, cluster_area_ratio, region_*, "mode", "params" (what ran: the six
 // parameters and region_mode, as a manual-mode params object) and, in auto and search modes,
-// "measures" and "selection".
+// "measures" and "choice" (core/auto/choice.h).
 nlohmann::json report_to_json(const DenoiseReport& report);
 nlohmann::json reports_to_json(const std::vector<DenoiseReport>& reports);
 

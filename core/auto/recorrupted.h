@@ -38,7 +38,7 @@ struct SelectionOptions {
 };
 
 struct ScoredCandidate {
-  std::string name;       // "identity", "paper", "prototype 3", "search"
+  std::string name;       // the model's pick, "paper", "search"
   DenoiseParams params;   // mode Manual; what was scored
   double score = 0;       // recorrupted normal error, mean over `draws` draws (lower is better)
   int draws = 0;          // draws the score averages: the pick is among those with the most
