@@ -116,10 +116,8 @@ bool read_available(Conn& c) {
   return true;
 }
 
-bool peer_address(int fd, std::string& ip, int& port) {
-  sockaddr_storage addr{};
-  socklen_t len = sizeof addr;
-  if (getpeername(fd, reinterpret_cast<sockaddr*>(&addr), &len) != 0) return false;
+// The text address and port of an IPv4 or IPv6 socket address; false for another family.
+bool address_text(const sockaddr_storage& addr, std::string& ip, int& port) {
   char text[INET6_ADDRSTRLEN] = "";
   if (addr.ss_family == AF_INET) {
     const auto* a = reinterpret_cast<const sockaddr_in*>(&addr);
@@ -134,6 +132,13 @@ bool peer_address(int fd, std::string& ip, int& port) {
   }
   ip = text;
   return true;
+}
+
+bool peer_address(int fd, std::string& ip, int& port) {
+  sockaddr_storage addr{};
+  socklen_t len = sizeof addr;
+  if (getpeername(fd, reinterpret_cast<sockaddr*>(&addr), &len) != 0) return false;
+  return address_text(addr, ip, port);
 }
 
 int poll_ms(Clock::duration d) {
@@ -202,17 +207,7 @@ class GateStream final : public httplib::Stream {
     ip.clear();
     port = 0;
     if (getsockname(c_.fd, reinterpret_cast<sockaddr*>(&addr), &len) != 0) return;
-    char text[INET6_ADDRSTRLEN] = "";
-    if (addr.ss_family == AF_INET) {
-      const auto* a = reinterpret_cast<const sockaddr_in*>(&addr);
-      inet_ntop(AF_INET, &a->sin_addr, text, sizeof text);
-      port = ntohs(a->sin_port);
-    } else if (addr.ss_family == AF_INET6) {
-      const auto* a = reinterpret_cast<const sockaddr_in6*>(&addr);
-      inet_ntop(AF_INET6, &a->sin6_addr, text, sizeof text);
-      port = ntohs(a->sin6_port);
-    }
-    ip = text;
+    address_text(addr, ip, port);
   }
   socket_t socket() const override { return c_.fd; }
 

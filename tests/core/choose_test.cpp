@@ -16,11 +16,7 @@
 namespace mdn {
 namespace {
 
-DenoiseParams automatic() {
-  DenoiseParams p;
-  p.mode = ParamMode::Auto;
-  return p;
-}
+using test::automatic;
 
 double diagonal(const TriMesh& m) { return (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm(); }
 double max_displacement(const TriMesh& a, const TriMesh& b) { return (a.V - b.V).rowwise().norm().maxCoeff(); }

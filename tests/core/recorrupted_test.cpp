@@ -14,11 +14,7 @@
 namespace mdn {
 namespace {
 
-DenoiseParams automatic() {
-  DenoiseParams p;
-  p.mode = ParamMode::Auto;
-  return p;
-}
+using test::automatic;
 
 double max_displacement(const TriMesh& a, const TriMesh& b) { return (a.V - b.V).rowwise().norm().maxCoeff(); }
 

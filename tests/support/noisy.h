@@ -5,6 +5,7 @@
 
 #include "core/mesh.h"
 #include "core/noise.h"
+#include "core/params.h"
 
 namespace mdn::test {
 
@@ -15,6 +16,13 @@ inline TriMesh with_noise(const TriMesh& clean, double sigma, NoiseKind kind = N
   spec.sigma = sigma;
   spec.seed = seed;
   return TriMesh{add_noise(clean, spec), clean.F};
+}
+
+// The default parameters with ParamMode::Auto, as the CLI and the service send them.
+inline DenoiseParams automatic() {
+  DenoiseParams p;
+  p.mode = ParamMode::Auto;
+  return p;
 }
 
 }  // namespace mdn::test
