@@ -69,10 +69,23 @@ ParameterChoice choose_parameters(const Vertices& P, const Triangles& F, const T
                                                                                                : RegionMode::Off;
 
   if (const std::string why = outside_training_range(F, topo); !why.empty()) {
+    // Decision 26: no filtering or the paper's row, whichever the recorrupted score prefers
+    // (a surface that reads clean is left alone, decision 20). The paper's row alone moved a
+    // clean CAD soup (CGAL's boeing) by 35% of its diagonal.
     c.method = "fallback";
-    c.notes.push_back(why + "; the paper's Table 1 row ran instead (decision 26)");
-    chosen = paper_row(requested);
-    c.chosen = "paper";
+    DenoiseParams identity = paper_row(requested);
+    if (!requested.is_pinned(AutoField::Alpha)) identity.alpha = 0;
+    if (!requested.is_pinned(AutoField::NAniso)) identity.n_aniso = 0;
+    if (!requested.is_pinned(AutoField::NNormal)) identity.n_normal = 0;
+    if (!requested.is_pinned(AutoField::NVertex)) identity.n_vertex = 0;
+    std::vector<ScoredCandidate> candidates{{"identity", identity, 0}, {"paper", paper_row(requested), 0}};
+    for (ScoredCandidate& k : candidates) k.params.region_mode = region;
+    c.search = select_parameters(P, F, topo, requested, std::move(candidates), executor, progress);
+    const ScoredCandidate& won = c.search->candidates[static_cast<std::size_t>(c.search->chosen)];
+    chosen = won.params;
+    c.chosen = won.name;
+    c.notes.push_back(why + "; chose between no filtering and the paper's Table 1 row by the recorrupted score instead (" +
+                      c.chosen + ", decision 26)");
   } else {
     const Eigen::VectorXd regret = model.predict(d.values);
     int best = 0;
@@ -89,7 +102,7 @@ ParameterChoice choose_parameters(const Vertices& P, const Triangles& F, const T
   chosen.region_mode = c.chosen == "identity" && !requested.is_pinned(AutoField::RegionMode) ? RegionMode::Off : region;
   chosen.pinned = requested.pinned;
 
-  if (requested.mode == ParamMode::Search) {
+  if (requested.mode == ParamMode::Search && c.method == "model") {
     // Decision 22: the pick and the paper's row scored on recorrupted copies of a sample, then
     // the coordinate descent from the better of them under the same score.
     std::vector<ScoredCandidate> candidates{{c.chosen, chosen, 0}, {"paper", paper_row(requested), 0}};
