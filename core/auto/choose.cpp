@@ -14,7 +14,7 @@ namespace {
 
 // Decision 26: what the model was trained on. Its corpus holds closed and open manifold
 // surfaces of 346 to 48,000 faces with at most 4% boundary edges; a mesh far outside that
-// gets the paper's row.
+// gets the fallback below.
 constexpr std::int64_t kMinFaces = 100;
 constexpr double kMaxBoundaryShare = 0.15;
 constexpr double kMaxNonManifoldShare = 0.01;

@@ -1,7 +1,8 @@
 // ParamMode::Auto and Search: the parameters per input, without ground truth (issue 31;
 // core/auto/README.md). Auto: the descriptors (descriptors.h) go through the trained model
 // (model.h), which predicts the error of every shipped set; the lowest runs. Inputs outside
-// the model's training range get the paper's Table 1 row, named in the notes. Search: the
+// the model's training range get no filtering or the paper's Table 1 row, whichever the
+// recorrupted score prefers, named in the notes. Search: the
 // model's pick, then the coordinate descent driven by the recorrupted score (recorrupted.h).
 #pragma once
 

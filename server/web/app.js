@@ -404,7 +404,7 @@ function showReports(reports, paramsText) {
     box.append(title, table(rows, ['Parameter', 'Ran with', 'Set by']));
     if (r.choice) {
       const c = r.choice;
-      const rows = [['How', c.method === 'fallback' ? "the paper's Table 1 row (outside the model's range)" : c.method === 'search' ? 'model, refined by search' : 'trained model'],
+      const rows = [['How', c.method === 'fallback' ? "outside the model's range: no filtering or the paper's row" : c.method === 'search' ? 'model, refined by search' : 'trained model'],
                     ['Set', c.chosen], ['Estimated noise', `${num(c.noise.sigma_edges)} edge lengths`]];
       if (c.predicted_ratio > 0) rows.push(['Predicted error', `${num(c.predicted_ratio)} x the best set's`]);
       rows.push(['Model', c.model_version]);
