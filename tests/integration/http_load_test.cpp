@@ -189,8 +189,9 @@ TEST(HttpLoad, SigtermDrainsWithoutLosingAcceptedJobs) {
   ServerProcess server({"--workers", "1", "--drain-grace", "60"});
   ASSERT_TRUE(server.started()) << server.log();
   auto c = server.client();
-  const std::string medium = noisy_sphere_off(4, 7);
-  const std::string params = R"({"n_normal":60,"n_vertex":30})";
+  // Jobs of about half a second each, so the drain is still on when the test looks at it.
+  const std::string medium = noisy_sphere_off(5, 7);
+  const std::string params = R"({"n_normal":300,"n_vertex":100})";
   const std::vector<std::string> ids = post_jobs(*c, 3, medium, params);
   ASSERT_EQ(ids.size(), 3u);
   // A synchronous request in flight when the signal comes is answered too.
