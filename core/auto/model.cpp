@@ -1,11 +1,10 @@
 #include "core/auto/model.h"
 
 #include <algorithm>
+#include <array>
 #include <stdexcept>
 
 #include "core/auto/descriptors.h"
-
-#include <array>
 
 namespace mdn {
 
