@@ -32,18 +32,13 @@ std::string outside_training_range(const Triangles& F, const Topology& topo) {
   return {};
 }
 
-// The paper's Table 1 Fandisk row (DenoiseParams' defaults) with the caller's pinned fields.
-DenoiseParams paper_row(const DenoiseParams& requested) {
+// The paper's Table 1 Fandisk row (DenoiseParams' defaults) with the caller's pinned fields;
+// with `filtering` false, the same without pre-filter or iterations (no filtering at all).
+DenoiseParams paper_row(const DenoiseParams& requested, bool filtering = true) {
   const DenoiseParams paper;
-  DenoiseParams p = requested;
-  p.mode = ParamMode::Manual;
-  if (!requested.is_pinned(AutoField::Alpha)) p.alpha = paper.alpha;
-  if (!requested.is_pinned(AutoField::SigmaTheta)) p.sigma_theta = paper.sigma_theta;
-  if (!requested.is_pinned(AutoField::NAniso)) p.n_aniso = paper.n_aniso;
-  if (!requested.is_pinned(AutoField::SigmaGamma)) p.sigma_gamma = paper.sigma_gamma;
-  if (!requested.is_pinned(AutoField::NNormal)) p.n_normal = paper.n_normal;
-  if (!requested.is_pinned(AutoField::NVertex)) p.n_vertex = paper.n_vertex;
-  return p;
+  const double on = filtering ? 1 : 0;
+  return fill_unpinned(requested, {on * paper.alpha, paper.sigma_theta, on * paper.n_aniso, paper.sigma_gamma,
+                                   on * paper.n_normal, on * paper.n_vertex});
 }
 
 }  // namespace
@@ -73,12 +68,7 @@ ParameterChoice choose_parameters(const Vertices& P, const Triangles& F, const T
     // (a surface that reads clean is left alone, decision 20). The paper's row alone moved a
     // clean CAD soup (CGAL's boeing) by 35% of its diagonal.
     c.method = "fallback";
-    DenoiseParams identity = paper_row(requested);
-    if (!requested.is_pinned(AutoField::Alpha)) identity.alpha = 0;
-    if (!requested.is_pinned(AutoField::NAniso)) identity.n_aniso = 0;
-    if (!requested.is_pinned(AutoField::NNormal)) identity.n_normal = 0;
-    if (!requested.is_pinned(AutoField::NVertex)) identity.n_vertex = 0;
-    std::vector<ScoredCandidate> candidates{{"identity", identity, 0}, {"paper", paper_row(requested), 0}};
+    std::vector<ScoredCandidate> candidates{{"identity", paper_row(requested, false), 0}, {"paper", paper_row(requested), 0}};
     for (ScoredCandidate& k : candidates) k.params.region_mode = region;
     c.search = select_parameters(P, F, topo, requested, std::move(candidates), executor, progress);
     const ScoredCandidate& won = c.search->candidates[static_cast<std::size_t>(c.search->chosen)];

@@ -56,19 +56,26 @@ const ParameterModel& ParameterModel::shipped() {
   return model;
 }
 
-DenoiseParams ParameterModel::set_params(int k, const DenoiseParams& requested) const {
-  const std::array<double, 6>& s = sets_.at(static_cast<std::size_t>(k));
+DenoiseParams fill_unpinned(const DenoiseParams& requested, const std::array<double, 6>& values) {
   DenoiseParams p = requested;
   p.mode = ParamMode::Manual;
-  // identity: no pre-filter (alpha 0), no iterations; the angles keep their defaults.
-  const bool id = is_identity(k);
-  if (!requested.is_pinned(AutoField::Alpha)) p.alpha = s[0];
-  if (!requested.is_pinned(AutoField::SigmaTheta) && !id) p.sigma_theta = s[1];
-  if (!requested.is_pinned(AutoField::NAniso)) p.n_aniso = static_cast<int>(s[2]);
-  if (!requested.is_pinned(AutoField::SigmaGamma) && !id) p.sigma_gamma = s[3];
-  if (!requested.is_pinned(AutoField::NNormal)) p.n_normal = static_cast<int>(s[4]);
-  if (!requested.is_pinned(AutoField::NVertex)) p.n_vertex = static_cast<int>(s[5]);
+  if (!requested.is_pinned(AutoField::Alpha)) p.alpha = values[0];
+  if (!requested.is_pinned(AutoField::SigmaTheta)) p.sigma_theta = values[1];
+  if (!requested.is_pinned(AutoField::NAniso)) p.n_aniso = static_cast<int>(values[2]);
+  if (!requested.is_pinned(AutoField::SigmaGamma)) p.sigma_gamma = values[3];
+  if (!requested.is_pinned(AutoField::NNormal)) p.n_normal = static_cast<int>(values[4]);
+  if (!requested.is_pinned(AutoField::NVertex)) p.n_vertex = static_cast<int>(values[5]);
   return p;
+}
+
+DenoiseParams ParameterModel::set_params(int k, const DenoiseParams& requested) const {
+  std::array<double, 6> s = sets_.at(static_cast<std::size_t>(k));
+  // identity: no pre-filter (alpha 0), no iterations; the angles keep the caller's values.
+  if (is_identity(k)) {
+    s[1] = requested.sigma_theta;
+    s[3] = requested.sigma_gamma;
+  }
+  return fill_unpinned(requested, s);
 }
 
 Eigen::VectorXd ParameterModel::predict(const std::vector<double>& descriptors) const {

@@ -22,6 +22,10 @@ struct ModelProbe {
 };
 const std::vector<ModelProbe>& model_probes();
 
+// `requested` with each of the six Table 1 fields it did not pin taken from `values` (alpha,
+// sigma_theta, n_aniso, sigma_gamma, n_normal, n_vertex), mode Manual.
+DenoiseParams fill_unpinned(const DenoiseParams& requested, const std::array<double, 6>& values);
+
 class ParameterModel {
  public:
   // The compiled-in model. Throws std::logic_error if its descriptor list differs from
