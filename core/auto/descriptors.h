@@ -3,6 +3,7 @@
 // (tools/train) and for a user's input. core/auto/README.md lists them.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -25,11 +26,11 @@ struct Descriptors {
 // The names of Descriptors::values, in order; the model file lists the same names.
 const std::vector<std::string>& descriptor_names();
 
-// P in the unit-box frame. The face statistics are taken over at most 60,000 faces (a fixed
-// stride) and the noise estimate's fits over at most 20,000 vertices. The smoothed normals,
-// measure_input's residuals and the ring-mean normals still cover the whole mesh: 3.8 s of a
-// 14.6 s auto run at 1.2M faces (docs/measurements/trained-choice.md). Deterministic for any
-// thread count.
-Descriptors describe_input(const Vertices& P, const Triangles& F, const Topology& topo, Executor& executor);
+// P in the unit-box frame. Decision 33: a surface of more than `max_faces` faces is read on 16
+// patches of max_faces / 16 faces (core/auto/surface_sample.h), so the cost does not grow with
+// the mesh; the noise reading takes 1,500 vertices. Deterministic for any thread count.
+constexpr std::int64_t kDescribedFaces = 20000;
+Descriptors describe_input(const Vertices& P, const Triangles& F, const Topology& topo, Executor& executor,
+                           std::int64_t max_faces = kDescribedFaces);
 
 }  // namespace mdn

@@ -20,21 +20,25 @@ struct Residuals {
   double median = 0, p90 = 0, above4 = 0;  // above4: share of r_i > 4 x median
 };
 
-// r_i (see InputMeasures) of every vertex with neighbours and a normal, summarised.
-Residuals residuals(const Vertices& P, const Triangles& F, const Topology& topo, Executor& ex) {
+// r_i (see InputMeasures) of every vertex in `vertices` (all if empty) with neighbours and a
+// normal, summarised.
+Residuals residuals(const Vertices& P, const Triangles& F, const Topology& topo, const std::vector<std::int32_t>& vertices,
+                    Executor& ex) {
   const Vertices N = vertex_normals(P, F);
-  std::vector<double> r(static_cast<std::size_t>(P.rows()));
-  ex.parallel_for(P.rows(), [&](std::int64_t begin, std::int64_t end) {
-    for (std::int64_t i = begin; i < end; ++i) {
+  const std::int64_t n = vertices.empty() ? P.rows() : static_cast<std::int64_t>(vertices.size());
+  std::vector<double> r(static_cast<std::size_t>(n));
+  ex.parallel_for(n, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t k = begin; k < end; ++k) {
+      const std::int64_t i = vertices.empty() ? k : vertices[static_cast<std::size_t>(k)];
       const std::int32_t b = topo.vv_offsets[static_cast<std::size_t>(i)], e = topo.vv_offsets[static_cast<std::size_t>(i) + 1];
       const Eigen::RowVector3d n = N.row(i);
       if (b == e || n.squaredNorm() == 0) {
-        r[static_cast<std::size_t>(i)] = std::nan("");
+        r[static_cast<std::size_t>(k)] = std::nan("");
         continue;
       }
       Eigen::RowVector3d c = Eigen::RowVector3d::Zero();
       for (std::int32_t k = b; k < e; ++k) c += P.row(topo.vv_vertices[static_cast<std::size_t>(k)]);
-      r[static_cast<std::size_t>(i)] = std::abs(n.dot(P.row(i) - c / static_cast<double>(e - b)));
+      r[static_cast<std::size_t>(k)] = std::abs(n.dot(P.row(i) - c / static_cast<double>(e - b)));
     }
   });
   std::erase_if(r, [](double x) { return std::isnan(x); });
@@ -55,18 +59,18 @@ Residuals residuals(const Vertices& P, const Triangles& F, const Topology& topo,
 }  // namespace
 
 InputMeasures measure_input(const Vertices& P, const Triangles& F, const Topology& topo, const DenoiseParams& params,
-                            Executor* executor) {
+                            Executor* executor, const std::vector<std::int32_t>& vertices) {
   const auto t0 = std::chrono::steady_clock::now();
   Executor serial(1);
   Executor& ex = executor ? *executor : serial;
   InputMeasures m;
   const double l = topo.mean_edge_length(P);
   if (l > 0) {
-    const Residuals raw = residuals(P, F, topo, ex);
+    const Residuals raw = residuals(P, F, topo, vertices, ex);
     m.noise = raw.median / l;
     m.tail = raw.median > 0 ? raw.p90 / raw.median : 1;
     m.feature_share = raw.median > 0 ? raw.above4 : 0;
-    const Residuals smooth = residuals(umbrella_smooth(P, topo, 4, 0.5, &ex), F, topo, ex);
+    const Residuals smooth = residuals(umbrella_smooth(P, topo, 4, 0.5, &ex), F, topo, vertices, ex);
     m.smooth_residual = smooth.median / l;
     m.smooth_tail = smooth.median > 0 ? smooth.p90 / smooth.median : 1;
   }

@@ -3,6 +3,9 @@
 // mode).
 #pragma once
 
+#include <cstdint>
+#include <vector>
+
 #include "core/mesh.h"
 #include "core/params.h"
 #include "core/topology.h"
@@ -29,8 +32,9 @@ struct InputMeasures {
 };
 
 // Measures the input. P in the unit-box frame; K-means uses params.kmeans_k and kmeans_seed
-// on at most 4000 faces (a fixed-stride sample: the area ratio does not need them all).
+// on at most 4000 faces (a fixed-stride sample: the area ratio does not need them all). The
+// residuals are read at `vertices` (all if empty).
 InputMeasures measure_input(const Vertices& P, const Triangles& F, const Topology& topo, const DenoiseParams& params,
-                            Executor* executor = nullptr);
+                            Executor* executor = nullptr, const std::vector<std::int32_t>& vertices = {});
 
 }  // namespace mdn

@@ -94,10 +94,12 @@ namespace {
 
 // Vertex i's leave-one-out fit: the ring, the prediction weights w (prediction = w . h over the
 // ring's heights in i's frame) and the error r = 0 - w . h; empty where no fit was possible.
+// With `weights` false, w is not kept: only r and w2 = |w|^2 (the one-pass readings).
 struct VertexFit {
   std::vector<std::int32_t> ring;
   std::vector<double> w;
-  double r = 0;
+  double r = 0, w2 = 0;
+  bool weights = true;
 };
 
 void fit_vertex(const Vertices& P, const Topology& topo, const Vertices& N, LocalFit fit, double l, std::int32_t i, VertexFit& out) {
@@ -131,35 +133,90 @@ void fit_vertex(const Vertices& P, const Topology& topo, const Vertices& N, Loca
   const Eigen::Vector3d x = (std::abs(z.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(z).normalized();
   const Eigen::Vector3d y = z.cross(x);
   const Eigen::RowVector3d o = P.row(i);
-  Eigen::MatrixXd A(m, terms);
-  Eigen::VectorXd h(m);
-  for (int r = 0; r < m; ++r) {
+  // Rows of A: the monomials 1, u, v, u^2, uv, v^2, u^3, u^2 v, u v^2, v^3 of each ring
+  // vertex's tangent coordinates; h: its height.
+  using Row = Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, 10>;
+  const auto row_of = [&](int r, double& height) {
     const Eigen::Vector3d d = (P.row(ring[static_cast<std::size_t>(r)]) - o).transpose() / l;
     const double u = d.dot(x), v = d.dot(y);
-    h[r] = d.dot(z);
-    A(r, 0) = 1;
-    A(r, 1) = u;
-    A(r, 2) = v;
+    height = d.dot(z);
+    Row a(terms);
+    a(0) = 1;
+    a(1) = u;
+    a(2) = v;
     if (terms >= 6) {
-      A(r, 3) = u * u;
-      A(r, 4) = u * v;
-      A(r, 5) = v * v;
+      a(3) = u * u;
+      a(4) = u * v;
+      a(5) = v * v;
     }
     if (terms >= 10) {
-      A(r, 6) = u * u * u;
-      A(r, 7) = u * u * v;
-      A(r, 8) = u * v * v;
-      A(r, 9) = v * v * v;
+      a(6) = u * u * u;
+      a(7) = u * u * v;
+      a(8) = u * v * v;
+      a(9) = v * v * v;
     }
+    return a;
+  };
+  // The prediction at i (u = v = 0) is the constant term: w = first row of (A^T A)^-1 A^T, so
+  // w . h = [(A^T A)^-1 A^T h]_0 and |w|^2 = [(A^T A)^-1]_00.
+  using Square = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 10, 10>;
+  using Column = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 10, 1>;
+  Square AtA = Square::Zero(terms, terms);
+  Column Ath = Column::Zero(terms);
+  std::vector<Row> rows;
+  if (out.weights) rows.reserve(static_cast<std::size_t>(m));
+  for (int r = 0; r < m; ++r) {
+    double height = 0;
+    const Row a = row_of(r, height);
+    AtA.noalias() += a.transpose() * a;
+    Ath += height * a.transpose();
+    if (out.weights) rows.push_back(a);
   }
-  // The prediction at i (u = v = 0) is the constant term: w = first row of (A^T A)^-1 A^T.
-  const Eigen::MatrixXd AtA = A.transpose() * A;
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(AtA);
+  const Eigen::LDLT<Square> ldlt(AtA);
   if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-10)) return ring.clear();
-  const Eigen::VectorXd e0 = Eigen::VectorXd::Unit(terms, 0);
-  const Eigen::VectorXd wv = A * ldlt.solve(e0);
-  out.w.assign(wv.data(), wv.data() + m);
-  out.r = (0 - wv.dot(h)) * l;  // vertex i sits at height 0 in its own frame
+  const Column g = ldlt.solve(Column::Unit(terms, 0));  // (A^T A)^-1 e0
+  out.w2 = g(0);
+  out.r = (0 - g.dot(Ath)) * l;  // vertex i sits at height 0 in its own frame
+  if (out.weights) {
+    out.w.resize(static_cast<std::size_t>(m));
+    for (int r = 0; r < m; ++r) out.w[static_cast<std::size_t>(r)] = rows[static_cast<std::size_t>(r)].dot(g);
+  }
+}
+
+struct Reading {
+  double sigma, core;
+};
+
+// The mean reads the RMS of any noise, impulses included, but also creases; the median only
+// the Gaussian core. Impulses put the mean at most ~3.2x the median (measured), creases on a
+// clean CAD surface at any multiple of a median of ~0: cap the mean at 4x (decision 19).
+std::optional<Reading> read(std::vector<double> s) {
+  std::erase_if(s, [](double v) { return std::isnan(v); });
+  if (s.empty()) return std::nullopt;
+  const auto mid = s.begin() + static_cast<std::ptrdiff_t>(s.size() / 2);
+  std::nth_element(s.begin(), mid, s.end());
+  const double core = std::sqrt(*mid / 0.45493642311957);  // median of chi^2_1
+  const double rms = std::sqrt(std::accumulate(s.begin(), s.end(), 0.0) / static_cast<double>(s.size()));
+  return Reading{std::min(rms, 4 * core), core};
+}
+
+// The estimate from the kept reading and the quadric's one-pass reading.
+NoiseEstimate finish(const std::optional<Reading>& best, const std::optional<Reading>& one_pass, double noisy_edge,
+                     std::chrono::steady_clock::time_point t0) {
+  NoiseEstimate est;
+  if (best) {
+    est.sigma = best->sigma;
+    est.gaussian_sigma = best->core;
+  }
+  // Noise lengthens edges: |e + d|^2 = |e|^2 + 2 e.d + |d|^2 with E|d|^2 = 2 sigma^2 for the
+  // difference d of two normal displacements, so the clean length is about
+  // sqrt(l^2 - 2 sigma^2) (decision 19; at most halved, for estimates beyond the model).
+  const double r = noisy_edge > 0 ? est.sigma / noisy_edge : 0;
+  est.edge_length = noisy_edge * std::sqrt(std::max(0.25, 1 - 2 * r * r));
+  est.sigma_edges = est.edge_length > 0 ? est.sigma / est.edge_length : 0;
+  est.one_pass_edges = one_pass && est.edge_length > 0 ? one_pass->sigma / est.edge_length : 0;
+  est.estimate_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return est;
 }
 
 }  // namespace
@@ -178,11 +235,10 @@ std::vector<double> local_fit_residuals(const Vertices& P, const Topology& topo,
   if (fit.passes <= 1) {
     ex.parallel_for(n, [&](std::int64_t begin, std::int64_t end) {
       VertexFit f;
+      f.weights = false;
       for (std::int64_t k = begin; k < end; ++k) {
         fit_vertex(P, topo, N, fit, l, vertex(k), f);
-        double w2 = 0;
-        for (const double w : f.w) w2 += w * w;
-        if (!f.ring.empty()) out[static_cast<std::size_t>(k)] = f.r * f.r / (1 + w2);
+        if (!f.ring.empty()) out[static_cast<std::size_t>(k)] = f.r * f.r / (1 + f.w2);
       }
     });
     return out;
@@ -273,22 +329,8 @@ std::vector<double> local_fit_residuals(const Vertices& P, const Topology& topo,
 NoiseEstimate estimate_noise(const Vertices& P, const Triangles& F, const Topology& topo, const Vertices& smoothed,
                              const std::vector<std::int32_t>& vertices, Executor* executor) {
   const auto t0 = std::chrono::steady_clock::now();
-  NoiseEstimate est;
   // Decision 19: planes over the 1-ring applied three times, quadrics over the 2-ring twice;
   // each reads the noise plus what is left of the shape, so the smaller is kept.
-  // The mean reads the RMS of any noise, impulses included, but also creases; the median only
-  // the Gaussian core. Impulses put the mean at most ~3.2x the median (measured), creases on a
-  // clean CAD surface at any multiple of a median of ~0: cap the mean at 4x (decision 19).
-  struct Reading { double sigma, core; };
-  const auto read = [](std::vector<double> s) -> std::optional<Reading> {
-    std::erase_if(s, [](double v) { return std::isnan(v); });
-    if (s.empty()) return std::nullopt;
-    const auto mid = s.begin() + static_cast<std::ptrdiff_t>(s.size() / 2);
-    std::nth_element(s.begin(), mid, s.end());
-    const double core = std::sqrt(*mid / 0.45493642311957);  // median of chi^2_1
-    const double rms = std::sqrt(std::accumulate(s.begin(), s.end(), 0.0) / static_cast<double>(s.size()));
-    return Reading{std::min(rms, 4 * core), core};
-  };
   // The smaller reading of the two fits in the given frames (decision 19).
   const auto smaller = [&](const Vertices& frames, std::optional<Reading>* one_pass) {
     std::optional<Reading> best;
@@ -321,19 +363,24 @@ NoiseEstimate estimate_noise(const Vertices& P, const Triangles& F, const Topolo
     if ((widened.array() != normals.array()).any())
       if (const std::optional<Reading> second = smaller(widened, nullptr)) best = second;
   }
-  if (best) {
-    est.sigma = best->sigma;
-    est.gaussian_sigma = best->core;
+  return finish(best, one_pass, noisy_edge, t0);
+}
+
+NoiseEstimate estimate_noise_quick(const Vertices& P, const Triangles& F, const Topology& topo,
+                                   const std::vector<std::int32_t>& vertices, Executor* executor) {
+  const auto t0 = std::chrono::steady_clock::now();
+  // Decision 33: one pass of each fit of decision 19 (planes over the 1-ring, quadrics over
+  // the 2-ring) in the frames of smoothed_normals, the smaller reading kept; no re-reading at
+  // high noise, no widened frames. Shape error is not filtered out, so a coarse curved surface
+  // reads noisier than it is: a descriptor for the model, not a measurement.
+  const Vertices frames = smoothed_normals(P, F, topo, executor);
+  std::optional<Reading> best, one_pass;
+  for (const LocalFit fit : {LocalFit{1, 1, 1}, LocalFit{2, 2, 1}}) {
+    const std::optional<Reading> r = read(local_fit_residuals(P, topo, frames, fit, vertices, executor));
+    if (r && (!best || r->sigma < best->sigma)) best = r;
+    if (fit.rings == 2) one_pass = r;
   }
-  // Noise lengthens edges: |e + d|^2 = |e|^2 + 2 e.d + |d|^2 with E|d|^2 = 2 sigma^2 for the
-  // difference d of two normal displacements, so the clean length is about
-  // sqrt(l^2 - 2 sigma^2) (decision 19; at most halved, for estimates beyond the model).
-  const double r = noisy_edge > 0 ? est.sigma / noisy_edge : 0;
-  est.edge_length = noisy_edge * std::sqrt(std::max(0.25, 1 - 2 * r * r));
-  est.sigma_edges = est.edge_length > 0 ? est.sigma / est.edge_length : 0;
-  est.one_pass_edges = one_pass && est.edge_length > 0 ? one_pass->sigma / est.edge_length : 0;
-  est.estimate_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  return est;
+  return finish(best, one_pass, topo.mean_edge_length(P), t0);
 }
 
 }  // namespace mdn

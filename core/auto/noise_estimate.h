@@ -31,6 +31,12 @@ struct NoiseEstimate {
 NoiseEstimate estimate_noise(const Vertices& P, const Triangles& F, const Topology& topo, const Vertices& normals,
                              const std::vector<std::int32_t>& vertices = {}, Executor* executor = nullptr);
 
+// Decision 33: the cheap reading the parameter choice's descriptors take: one pass of each of
+// the two fits in smoothed_normals frames at `vertices` (all if empty); no high-noise re-reading,
+// no widened frames. Reads shape as noise on coarse curved surfaces.
+NoiseEstimate estimate_noise_quick(const Vertices& P, const Triangles& F, const Topology& topo,
+                                   const std::vector<std::int32_t>& vertices = {}, Executor* executor = nullptr);
+
 // Per-vertex squared errors of one fit, (I - W)^passes h, over their variance under white
 // noise (NaN where no fit was possible), in the order of `vertices` (or of all vertices).
 // Exposed for the benchmark of the estimate and its tests.

@@ -6,10 +6,12 @@
 //   tune_bench clean   [--data DIR] [--jobs N] [--only MESH]
 //       every CGAL demo mesh of 500 to 30,000 vertices through auto without noise: what auto
 //       does to a clean asset (the largest vertex displacement; the target is at most 0.1%).
-//   tune_bench report  [--data DIR] [--jobs N] [--set S] [--search] [--only MESH] [ROWS.tsv]
+//   tune_bench report  [--data DIR] [--jobs N] [--set S] [--search] [--only MESH] [--grid-cache F] [ROWS.tsv]
 //       re-creates every case, runs Auto (the trained model compiled in now) and prints, per
 //       set, the ratios MSAE(auto)/MSAE(best found) and MSAE(auto)/MSAE(paper's Fandisk
-//       parameters), the noise estimate, the cost, the clean inputs and Fandisk.
+//       parameters), the noise estimate, the cost, the clean inputs and Fandisk. --grid-cache F
+//       keeps each case's label-grid best in F (TSV) and reuses it: delete F when the method
+//       changes (the grid is most of the report's time).
 //
 // The sets (issue 31). The trained model learns from tools/train's corpus, never from these
 // meshes. "validation": every CGAL demo mesh of 1,000 to 20,000 triangles that is not a corpus
@@ -22,16 +24,18 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <functional>
-#include <cstdlib>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <map>
 #include <mutex>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
@@ -257,13 +261,45 @@ Framed framed(const Case& c) {
 
 using bench::median;
 
-int report(const fs::path& data, int jobs, const std::string& which, const fs::path& rows_path, bool with_search, const std::string& only) {
+// --grid-cache: "mesh/config<TAB>faces<TAB>best MSAE" lines.
+class GridCache {
+ public:
+  explicit GridCache(fs::path path) : path_(std::move(path)) {
+    if (path_.empty()) return;
+    std::ifstream in(path_);
+    std::string key;
+    std::int64_t faces = 0;
+    double best = 0;
+    while (in >> key >> faces >> best) best_[key + "#" + std::to_string(faces)] = best;
+  }
+  std::optional<double> find(const std::string& key, std::int64_t faces) const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = best_.find(key + "#" + std::to_string(faces));
+    return it == best_.end() ? std::nullopt : std::optional<double>(it->second);
+  }
+  void add(const std::string& key, std::int64_t faces, double best) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    best_[key + "#" + std::to_string(faces)] = best;
+    if (path_.empty()) return;
+    std::ofstream out(path_, std::ios::app);
+    out << key << '\t' << faces << '\t' << std::setprecision(17) << best << '\n';
+  }
+
+ private:
+  fs::path path_;
+  mutable std::mutex mutex_;
+  std::map<std::string, double> best_;
+};
+
+int report(const fs::path& data, int jobs, const std::string& which, const fs::path& rows_path, bool with_search, const std::string& only,
+           const fs::path& grid_cache) {
   // ROWS.tsv (optional): `search`'s coordinate-descent optima; the dense label grid of
   // tools/train (925 sets, exhaustive) is the ground-truth search run here on every case.
   const std::vector<Row> rows = rows_path.empty() ? std::vector<Row>{} : read_rows(rows_path);
   std::map<std::string, const Row*> by_key;
   for (const Row& r : rows) by_key[r.field.at("mesh") + "/" + r.field.at("config")] = &r;
   std::vector<Case> cases = build_cases(data, which, only);
+  GridCache cache(grid_cache);
   struct Out {
     double auto_msae = 0, search_msae = 0, sigma_true = 0, sigma_est = 0, auto_ms = 0, one_ms = 0, search_ms = 0, moved = 0;
     double grid_best = 0, paper = 0;
@@ -284,9 +320,15 @@ int report(const fs::path& data, int jobs, const std::string& which, const fs::p
     const DenoiseResult again = denoise(c.noisy, r.report.params);  // one run of what auto chose
     o.one_ms = again.report.timings.total_ms;
     if (c.config != "clean") {
-      const train::Prepared prepared = train::prepare(c.truth, c.noisy.V);
-      const std::vector<double> grid = train::label_case(prepared, train::auto_region_mode(prepared));
-      o.grid_best = *std::min_element(grid.begin(), grid.end());
+      const std::string key = c.mesh + "/" + c.config;
+      if (const std::optional<double> known = cache.find(key, c.truth.num_faces())) {
+        o.grid_best = *known;
+      } else {
+        const train::Prepared prepared = train::prepare(c.truth, c.noisy.V);
+        const std::vector<double> grid = train::label_case(prepared, train::auto_region_mode(prepared));
+        o.grid_best = *std::min_element(grid.begin(), grid.end());
+        cache.add(key, c.truth.num_faces(), o.grid_best);
+      }
       o.paper = msae(denoise(c.noisy, DenoiseParams{}).mesh, c.truth);
     }
     const DenoiseParams& q = r.report.params;
@@ -492,7 +534,8 @@ int clean_command(const fs::path& data, int jobs, const std::string& only) {
 [[noreturn]] void usage(int code) {
   std::fprintf(code ? stderr : stdout,
                "usage: tune_bench search [--data DIR] [--jobs N] [--set train|validation|all] [--only MESH] OUT.tsv\n"
-               "       tune_bench report [--data DIR] [--jobs N] [--set train|validation|all] [--search] [--only MESH] [ROWS.tsv]\n"
+               "       tune_bench report [--data DIR] [--jobs N] [--set train|validation|all] [--search] [--only MESH]\n"
+               "                         [--grid-cache FILE] [ROWS.tsv]\n"
                "       tune_bench noise [--data DIR] [--jobs N] [--set train|validation|all]\n"
                "       tune_bench clean [--data DIR] [--jobs N] [--only MESH]\n");
   std::exit(code);
@@ -508,6 +551,7 @@ int main(int argc, char** argv) {
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::string which = "all", only;
   bool with_search = false;
+  fs::path grid_cache;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     const auto value = [&]() -> std::string {
@@ -519,6 +563,7 @@ int main(int argc, char** argv) {
     else if (a == "--set") which = value();
     else if (a == "--only") only = value();
     else if (a == "--search") with_search = true;
+    else if (a == "--grid-cache") grid_cache = value();
     else if (a == "--help" || a == "-h") usage(0);
     else if (!a.empty() && a[0] != '-' && file.empty()) file = a;
     else usage(2);
@@ -526,7 +571,7 @@ int main(int argc, char** argv) {
   if (file.empty() && command != "noise" && command != "clean" && command != "report") usage(2);
   try {
     if (command == "search") return search(data, jobs, which, only, file);
-    if (command == "report") return report(data, jobs, which, file, with_search, only);
+    if (command == "report") return report(data, jobs, which, file, with_search, only, grid_cache);
     if (command == "noise") return noise_command(data, jobs, which);
     if (command == "clean") return clean_command(data, jobs, only);
   } catch (const std::exception& e) {
