@@ -26,8 +26,8 @@
 #include "server/http/secure_random.h"
 #include "server/http/service_parts.h"
 #include "server/http/web_routes.h"
-#include "server/job_json.h"
-#include "server/params_json.h"
+#include "service/job_json.h"
+#include "service/params_json.h"
 
 namespace mdn::http {
 namespace {

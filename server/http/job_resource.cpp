@@ -6,9 +6,9 @@
 #include <vector>
 
 #include "server/http/content_coding.h"
-#include "server/job_json.h"
-#include "server/output_files.h"
-#include "server/params_json.h"
+#include "service/job_json.h"
+#include "service/output_files.h"
+#include "service/params_json.h"
 
 namespace mdn::http {
 

@@ -28,7 +28,7 @@
 #include "core/noise.h"
 #include "server/http/http_server.h"
 #include "bench_stats.h"
-#include "server/job_runner.h"
+#include "service/job_runner.h"
 
 // After Eigen: <httplib.h> pulls in <resolv.h>, whose `_res` macro breaks Eigen's headers.
 #include <httplib.h>

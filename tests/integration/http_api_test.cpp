@@ -7,7 +7,7 @@
 
 #include "http_fixture.h"
 
-#include "server/params_json.h"
+#include "service/params_json.h"
 
 namespace mdn::test {
 namespace {

@@ -7,7 +7,7 @@
 
 #include "server/http/problem.h"
 #include "server/http/redis/job_codec.h"
-#include "server/params_json.h"
+#include "service/params_json.h"
 
 namespace mdn::http::redis {
 

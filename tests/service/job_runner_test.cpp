@@ -1,6 +1,6 @@
 // The shared job runner: bytes in, denoised bytes out, deterministic across thread counts,
 // typed errors from every stage.
-#include "server/job_runner.h"
+#include "service/job_runner.h"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 #include "core/errors.h"
 #include "core/metrics.h"
 #include "core/noise.h"
-#include "server/job_json.h"
+#include "service/job_json.h"
 #include "support/shapes.h"
 
 namespace mdn::service {

@@ -14,7 +14,7 @@
 #include "core/errors.h"
 #include "core/io/document.h"
 #include "core/mesh.h"
-#include "server/cli_files.h"
+#include "cli/files.h"
 
 namespace mdn::cli {
 

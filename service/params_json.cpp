@@ -1,7 +1,7 @@
 // JSON <-> JobParams. Names, ranges and defaults of the numeric method parameters come from
 // mdn::param_specs() (core/params.h), so they are defined once; this file only adds the JSON
 // typing rules, the enumerations and the "output" object, whose ranges live in kOutputInts.
-#include "server/params_json.h"
+#include "service/params_json.h"
 
 #include <cmath>
 #include <cstdint>

@@ -1,4 +1,4 @@
-#include "server/cli_job.h"
+#include "cli/job.h"
 
 #include <algorithm>
 #include <csignal>
@@ -8,9 +8,9 @@
 
 #include "core/errors.h"
 #include "core/params.h"
-#include "server/cli_files.h"
-#include "server/cli_mesh.h"
-#include "server/params_json.h"
+#include "cli/files.h"
+#include "cli/mesh.h"
+#include "service/params_json.h"
 
 namespace mdn::cli {
 namespace {

@@ -1,4 +1,4 @@
-#include "server/cli_batch.h"
+#include "cli/batch.h"
 
 #include <algorithm>
 #include <atomic>
@@ -13,11 +13,11 @@
 
 #include <nlohmann/json.hpp>
 
-#include "server/cli_files.h"
-#include "server/cli_job.h"
-#include "server/cli_mesh.h"
-#include "server/job_json.h"
-#include "server/output_files.h"
+#include "cli/files.h"
+#include "cli/job.h"
+#include "cli/mesh.h"
+#include "service/job_json.h"
+#include "service/output_files.h"
 
 namespace mdn::cli {
 namespace {

@@ -1,6 +1,6 @@
 // One job from bytes to bytes. Both executables go through here, so a mesh denoised by the
 // CLI and by the HTTP server with the same parameters gives identical bytes.
-#include "server/job_runner.h"
+#include "service/job_runner.h"
 
 #include <chrono>
 #include <memory>

@@ -1,10 +1,10 @@
-#include "server/job_json.h"
+#include "service/job_json.h"
 
 #include <string>
 #include <utility>
 
 #include "core/auto/choice.h"
-#include "server/params_json.h"
+#include "service/params_json.h"
 
 namespace mdn::service {
 

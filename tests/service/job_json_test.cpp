@@ -1,6 +1,6 @@
 // The one JSON view of a job's output: the timings table, and output_to_json / output_from_json
 // as inverses (the Redis store relies on it to answer for a job another replica ran).
-#include "server/job_json.h"
+#include "service/job_json.h"
 
 #include <gtest/gtest.h>
 

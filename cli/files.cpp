@@ -1,4 +1,4 @@
-#include "server/cli_files.h"
+#include "cli/files.h"
 
 #include <unistd.h>
 
@@ -9,8 +9,8 @@
 #include <iostream>
 #include <iterator>
 
-#include "server/cli_options.h"
-#include "server/output_files.h"
+#include "cli/options.h"
+#include "service/output_files.h"
 
 namespace mdn::cli {
 namespace {

@@ -9,8 +9,8 @@
 
 #include "core/io/document.h"
 #include "core/auto/denoise.h"
-#include "server/job_timings.h"
-#include "server/params_json.h"
+#include "service/job_timings.h"
+#include "service/params_json.h"
 
 namespace mdn::service {
 
@@ -49,6 +49,6 @@ struct JobOutput {
 // InvalidMeshError, InvalidParamsError, SolverError, CancelledError).
 JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObserver* progress = nullptr);
 
-// Its JSON view (CLI --report, HTTP, Redis) is server/job_json.h.
+// Its JSON view (CLI --report, HTTP, Redis) is service/job_json.h.
 
 }  // namespace mdn::service

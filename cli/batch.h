@@ -4,7 +4,7 @@
 // in the report, and the others go on; Ctrl-C cancels the running files and starts no more.
 #pragma once
 
-#include "server/cli_options.h"
+#include "cli/options.h"
 
 namespace mdn::cli {
 

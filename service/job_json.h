@@ -11,7 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "server/job_runner.h"
+#include "service/job_runner.h"
 
 namespace mdn::service {
 

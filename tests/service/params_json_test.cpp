@@ -1,6 +1,6 @@
 // The JSON shape of the parameters: defaults come from core, every kind of bad field is
 // refused with InvalidParamsError naming its JSON path, and to_json round-trips.
-#include "server/params_json.h"
+#include "service/params_json.h"
 
 #include <gtest/gtest.h>
 

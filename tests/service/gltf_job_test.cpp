@@ -10,8 +10,8 @@
 #include "core/metrics.h"
 #include "io/gltf_fixtures.h"
 #include "io/meshopt_fixture.h"
-#include "server/job_json.h"
-#include "server/job_runner.h"
+#include "service/job_json.h"
+#include "service/job_runner.h"
 
 namespace mdn::service {
 namespace {

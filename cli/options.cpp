@@ -1,9 +1,9 @@
-#include "server/cli_options.h"
+#include "cli/options.h"
 
 #include <sstream>
 
 #include "core/params.h"
-#include "server/params_json.h"
+#include "service/params_json.h"
 
 namespace mdn::cli {
 

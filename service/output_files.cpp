@@ -1,4 +1,4 @@
-#include "server/output_files.h"
+#include "service/output_files.h"
 
 #include <cstdint>
 #include <filesystem>

@@ -10,8 +10,8 @@
 #include <nlohmann/json.hpp>
 
 #include "core/progress.h"
-#include "server/cli_options.h"
-#include "server/job_runner.h"
+#include "cli/options.h"
+#include "service/job_runner.h"
 
 namespace mdn::cli {
 

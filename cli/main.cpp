@@ -14,13 +14,13 @@
 
 #include "core/noise.h"
 #include "core/auto/tune.h"
-#include "server/cli_batch.h"
-#include "server/cli_files.h"
-#include "server/cli_job.h"
-#include "server/cli_mesh.h"
-#include "server/cli_options.h"
-#include "server/job_json.h"
-#include "server/params_json.h"
+#include "cli/batch.h"
+#include "cli/files.h"
+#include "cli/job.h"
+#include "cli/mesh.h"
+#include "cli/options.h"
+#include "service/job_json.h"
+#include "service/params_json.h"
 
 #ifndef MDN_VERSION
 #define MDN_VERSION "unknown"

@@ -1,4 +1,4 @@
-#include "server/cli_mesh.h"
+#include "cli/mesh.h"
 
 #include <cstdint>
 #include <filesystem>
@@ -6,7 +6,7 @@
 
 #include "core/metrics.h"
 #include "core/parallel.h"
-#include "server/cli_options.h"
+#include "cli/options.h"
 
 namespace mdn::cli {
 namespace {
