@@ -154,7 +154,7 @@ int run(int argc, char** argv) {
     }
     io::EncodeOptions encode = params.output;
     if (!encode.format) encode.format = in_format;
-    out_bytes = blame_file(in_path, [&] { return loaded.document->encode(encode); });
+    out_bytes = blame_file(in_path, [&] { return loaded.document->encode(encode).bytes; });
     std::int64_t vertices = 0, faces = 0;  // of the asset (an instanced mesh counts once)
     for (const mdn::TriMesh& surface : loaded.document->surfaces()) {
       vertices += surface.num_vertices();

@@ -19,12 +19,6 @@ double ms_since(Clock::time_point start) {
 
 bool is_gltf(io::Format format) { return format == io::Format::Glb || format == io::Format::Gltf; }
 
-// What an encode to `format` writes (see JobOutput::compression).
-io::Compression written_compression(const io::EncodeOptions& options, io::Format format, io::Compression input) {
-  if (is_gltf(format)) return io::resolve_compression(options, input);
-  return format == io::Format::Drc ? io::Compression::Draco : io::Compression::None;
-}
-
 }  // namespace
 
 JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObserver* progress) {
@@ -74,11 +68,12 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
   out.format = *encode.format;
   out.media_type = std::string(io::media_type(out.format));
   out.effective.output.format = out.format;  // echo what was actually produced
-  out.compression = written_compression(encode, out.format, document->compression());
-  if (is_gltf(out.format)) out.effective.output.compression = out.compression;
 
   start = Clock::now();
-  out.bytes = document->encode(encode);
+  io::Encoded encoded = document->encode(encode);
+  out.bytes = std::move(encoded.bytes);
+  out.compression = encoded.compression;  // what the encoder wrote: the one place it is known
+  if (is_gltf(out.format)) out.effective.output.compression = out.compression;
   out.timings.encode_ms = ms_since(start);
   out.notes = document->notes();
   out.notes.insert(out.notes.end(), choice_notes.begin(), choice_notes.end());

@@ -28,14 +28,14 @@ struct JobOutput {
   std::string bytes;
   io::Format format;
   std::string media_type;
-  // The compression written: glTF as io::resolve_compression decided it (the input's by
-  // default), DRC Draco, every other container None.
+  // The compression written, as the encoder reports it (io::Encoded): glTF as
+  // io::resolve_compression chose it (the input's by default), DRC Draco, every other None.
   io::Compression compression = io::Compression::None;
-  JobParams effective;                  // parameters actually used, output.format and compression resolved
-  std::vector<DenoiseReport> reports;   // one per surface
-  std::vector<std::string> notes;       // from the adapter (e.g. TANGENT dropped)
-  std::int64_t vertices = 0, faces = 0; // summed over surfaces
-  JobTimings timings;                   // summed over surfaces
+  JobParams effective;                   // parameters actually used, output.format and compression resolved
+  std::vector<DenoiseReport> reports;    // one per surface
+  std::vector<std::string> notes;        // from the adapter (e.g. TANGENT dropped)
+  std::int64_t vertices = 0, faces = 0;  // summed over surfaces
+  JobTimings timings;                    // summed over surfaces
   // The denoised surfaces in the document's order, in the input frame, exactly as encoded
   // (before any quantisation of the output format). Moved out of the document after encoding,
   // so it costs nothing; the CLI's --metrics measures these.

@@ -35,12 +35,18 @@ std::string describe(const json& value) {
       if (s.size() <= 40) return "the string " + json(s).dump();
       return "a string";
     }
-    case json::value_t::boolean: return value.get<bool>() ? "true" : "false";
-    case json::value_t::null: return "null";
-    case json::value_t::object: return "an object";
-    case json::value_t::array: return "an array";
-    case json::value_t::number_float: return number_text(value.get<double>());
-    default: return value.dump();  // integers
+    case json::value_t::boolean:
+      return value.get<bool>() ? "true" : "false";
+    case json::value_t::null:
+      return "null";
+    case json::value_t::object:
+      return "an object";
+    case json::value_t::array:
+      return "an array";
+    case json::value_t::number_float:
+      return number_text(value.get<double>());
+    default:
+      return value.dump();  // integers
   }
 }
 
@@ -191,13 +197,14 @@ void parse_output(const json& j, io::EncodeOptions& out) {
   if (draco) {
     const io::Compression by_draco = *draco ? io::Compression::Draco : io::Compression::None;
     if (compression && *compression != by_draco)
-      fail("output.draco", std::string("consistent with output.compression \"") + std::string(io::to_string(*compression)) +
-                               "\" (or left out)", json(*draco));
+      fail("output.draco",
+           std::string("consistent with output.compression \"") + std::string(io::to_string(*compression)) +
+               "\" (or left out)",
+           json(*draco));
     compression = by_draco;
   }
   if (compression) {
     out.compression = *compression;
-    out.draco = *compression == io::Compression::Draco;
   }
 }
 
@@ -277,16 +284,15 @@ JobParams job_params_from_json(const nlohmann::json& j) {
   return p;
 }
 
-JobParams job_params_from_text(std::string_view text) {
-  return job_params_from_json(parse_text(text, "params"));
-}
+JobParams job_params_from_text(std::string_view text) { return job_params_from_json(parse_text(text, "params")); }
 
 nlohmann::json to_json(const JobParams& p) {
   json j = json::object();
   const bool automatic = p.denoise.mode != ParamMode::Manual;
   j["mode"] = std::string(to_string(p.denoise.mode));
   for (const auto& spec : param_specs()) {
-    if (const auto field = auto_field_from_string(spec.name); automatic && field && !p.denoise.is_pinned(*field)) continue;
+    if (const auto field = auto_field_from_string(spec.name); automatic && field && !p.denoise.is_pinned(*field))
+      continue;
     if (spec.int_field) {
       j[std::string(spec.name)] = p.denoise.*spec.int_field;
     } else {
@@ -299,8 +305,7 @@ nlohmann::json to_json(const JobParams& p) {
   j["solver"] = std::string(to_string(p.denoise.solver));
   json out = json::object();
   out["format"] = p.output.format ? json(std::string(io::to_string(*p.output.format))) : json(nullptr);
-  out["compression"] = std::string(io::to_string(p.output.compression.value_or(
-      p.output.draco ? io::Compression::Draco : io::Compression::None)));
+  out["compression"] = std::string(io::to_string(p.output.compression));
   for (const auto& spec : kOutputInts) out[spec.name] = p.output.*spec.field;
   j["output"] = std::move(out);
   return j;
@@ -346,9 +351,14 @@ nlohmann::json to_json(const NoiseSpec& spec) {
 }
 
 nlohmann::json method_params_json(const DenoiseParams& p) {
-  return {{"mode", "manual"},          {"alpha", p.alpha},     {"sigma_theta", p.sigma_theta},
-          {"n_aniso", p.n_aniso},      {"sigma_gamma", p.sigma_gamma}, {"n_normal", p.n_normal},
-          {"n_vertex", p.n_vertex},    {"region_mode", std::string(to_string(p.region_mode))}};
+  return {{"mode", "manual"},
+          {"alpha", p.alpha},
+          {"sigma_theta", p.sigma_theta},
+          {"n_aniso", p.n_aniso},
+          {"sigma_gamma", p.sigma_gamma},
+          {"n_normal", p.n_normal},
+          {"n_vertex", p.n_vertex},
+          {"region_mode", std::string(to_string(p.region_mode))}};
 }
 
 }  // namespace mdn::service

@@ -66,8 +66,8 @@ std::string noisy_fandisk_glb(const fs::path& data) {
   mesh.V = mdn::add_noise(mesh, noise);
   mdn::io::EncodeOptions options;
   options.format = mdn::io::Format::Glb;
-  options.draco = true;
-  return doc->encode(options);
+  options.compression = mdn::io::Compression::Draco;
+  return doc->encode(options).bytes;
 }
 
 struct Server {

@@ -45,8 +45,8 @@ std::vector<Seed> seeds() {
   const auto convert = [&](const char* name, io::Format format, bool draco) {
     io::EncodeOptions options;
     options.format = format;
-    options.draco = draco;
-    out.push_back({name, format, io::decode(off, io::Format::Off)->encode(options)});
+    options.compression = draco ? mdn::io::Compression::Draco : mdn::io::Compression::None;
+    out.push_back({name, format, io::decode(off, io::Format::Off)->encode(options).bytes});
   };
   convert("sphere.obj", io::Format::Obj, false);
   convert("sphere.ply", io::Format::Ply, false);

@@ -105,7 +105,6 @@ TEST(ParamsJson, ParsesEveryKindOfField) {
   EXPECT_EQ(p.denoise.kmeans_seed, std::numeric_limits<std::uint64_t>::max());
   EXPECT_EQ(p.denoise.solver, LinearSolver::ConjugateGradient);
   EXPECT_EQ(p.output.format, io::Format::Glb);
-  EXPECT_FALSE(p.output.draco);
   EXPECT_EQ(p.output.compression, io::Compression::None);  // draco false overrides the default
   EXPECT_EQ(p.output.position_bits, 20);
   EXPECT_EQ(p.output.normal_bits, 8);
@@ -176,7 +175,7 @@ TEST(ParamsJson, RoundTripThroughToJson) {
   p.denoise.solver = LinearSolver::ConjugateGradient;
   p.denoise.cg_tolerance = 1e-12;
   p.output.format = io::Format::Ply;
-  p.output.draco = false;
+  p.output.compression = mdn::io::Compression::None;
   p.output.position_bits = 11;
   p.output.compression_level = 10;
   const json j = to_json(p);
