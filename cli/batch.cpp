@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli/denoise.h"
 #include "cli/files.h"
 #include "cli/job.h"
 #include "cli/mesh.h"
@@ -41,7 +42,8 @@ std::vector<std::string> batch_outputs(const std::vector<std::string>& inputs, c
   for (const std::string& in : inputs) {
     if (in == kStdio) throw UsageError("--out-dir: standard input (-) cannot be part of a batch");
     const fs::path name = fs::path(in).filename();
-    if (name.empty() || name == "." || name == "..") throw UsageError("--out-dir: the input \"" + in + "\" has no file name");
+    if (name.empty() || name == "." || name == "..")
+      throw UsageError("--out-dir: the input \"" + in + "\" has no file name");
     const fs::path out = dir / service::output_file_name(in, format);
     const fs::path out_key = key(out);
     check_not_input(in, out.string(), in_place, "--out-dir: ");
@@ -51,6 +53,46 @@ std::vector<std::string> batch_outputs(const std::vector<std::string>& inputs, c
     outputs.push_back(out.string());
   }
   return outputs;
+}
+
+// The folder every output goes to, created if missing.
+void make_output_dir(const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (!std::filesystem::is_directory(dir)) {
+    throw FileError("cannot use " + dir.string() +
+                    " as the output folder: " + (ec ? ec.message() : std::string("it is not a directory")));
+  }
+}
+
+// The report entry of a file that failed (or never started).
+json error_report(const std::string& input, const std::string& output, int exit_code, const std::string& message) {
+  return json{
+      {"input", {{"path", input}}}, {"output", output}, {"error", {{"exit_code", exit_code}, {"message", message}}}};
+}
+
+// The batch's end: --report's document, then the exit code (the first failure's, in the order
+// given; 130 when cancelled).
+int finish_batch(const CliOptions& options, const std::vector<std::string>& inputs,
+                 const std::vector<std::string>& outputs, std::vector<json>& reports, const std::vector<int>& codes) {
+  const std::size_t n = inputs.size();
+  std::size_t failed = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (codes[i] == kExitOk) continue;
+    ++failed;
+    if (reports[i].is_null())
+      reports[i] = error_report(inputs[i], outputs[i], kExitCancelled, "cancelled before it started");
+  }
+  if (options.report) {
+    std::cout << json{{"files", reports}, {"succeeded", n - failed}, {"failed", failed}}.dump(2) << "\n";
+  }
+  if (interrupted()) {
+    print_error("cancelled");
+    return kExitCancelled;
+  }
+  for (int code : codes)
+    if (code != kExitOk) return code;
+  return kExitOk;
 }
 
 }  // namespace
@@ -66,12 +108,7 @@ int run_batch(const CliOptions& options) {
   const service::JobParams params = job_params(options, fields);
   const fs::path dir = *options.out_dir;
   const std::vector<std::string> outputs = batch_outputs(inputs, dir, params.output.format, options.in_place);
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (!fs::is_directory(dir)) {
-    throw FileError("cannot use " + dir.string() + " as the output folder: " +
-                    (ec ? ec.message() : std::string("it is not a directory")));
-  }
+  make_output_dir(dir);
 
   const std::size_t n = inputs.size();
   const int threads = default_threads(options);
@@ -82,12 +119,6 @@ int run_batch(const CliOptions& options) {
   std::atomic<std::size_t> next{0};
   std::mutex stderr_mutex;
   std::size_t finished = 0;
-  // The report entry of a file that failed (or never started).
-  auto error_report = [&](std::size_t i, int exit_code, const std::string& message) {
-    return json{{"input", {{"path", inputs[i]}}},
-                {"output", outputs[i]},
-                {"error", {{"exit_code", exit_code}, {"message", message}}}};
-  };
   install_sigint_handler();
   auto work = [&] {
     CliProgress cancel(false);  // no bar: several files run at once; Ctrl-C still cancels
@@ -95,18 +126,15 @@ int run_batch(const CliOptions& options) {
       const auto start = std::chrono::steady_clock::now();
       std::string line;
       try {
-        const std::string in_bytes = read_file(inputs[i]);
-        const io::Format in_format = input_format(inputs[i], in_bytes);
-        service::JobOutput output = denoise_input(inputs[i], in_bytes, in_format, params, threads_per_job, cancel);
-        reports[i] = service::output_to_json(output);
-        add_paths(reports[i], inputs[i], in_format, outputs[i]);
-        write_output(inputs[i], in_bytes, in_format, outputs[i], std::move(output.bytes), output.format);
+        // The one denoise path, as a single run's (cli/denoise.h).
+        const DenoisedFile file = denoise_file(read_input(inputs[i]), outputs[i], params, threads_per_job, cancel);
+        reports[i] = file.summary;
         codes[i] = kExitOk;
         if (options.progress) {
           const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
           std::ostringstream text;
           text.precision(3);
-          text << inputs[i] << " -> " << outputs[i] << " (" << output.faces << " faces, " << seconds << " s)";
+          text << inputs[i] << " -> " << outputs[i] << " (" << file.faces << " faces, " << seconds << " s)";
           line = text.str();
         }
       } catch (...) {
@@ -115,7 +143,7 @@ int run_batch(const CliOptions& options) {
         // Most messages name the file already; the rest get it in front.
         const std::string message =
             failure.message.find(inputs[i]) == std::string::npos ? inputs[i] + ": " + failure.message : failure.message;
-        reports[i] = error_report(i, failure.exit_code, message);
+        reports[i] = error_report(inputs[i], outputs[i], failure.exit_code, message);
         line = "error: " + message;
       }
       const std::lock_guard lock(stderr_mutex);
@@ -128,24 +156,7 @@ int run_batch(const CliOptions& options) {
   work();
   for (auto& t : helpers) t.join();
 
-  std::size_t failed = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (codes[i] == kExitOk) continue;
-    ++failed;
-    if (reports[i].is_null()) {
-      reports[i] = error_report(i, kExitCancelled, "cancelled before it started");
-    }
-  }
-  if (options.report) {
-    std::cout << json{{"files", reports}, {"succeeded", n - failed}, {"failed", failed}}.dump(2) << "\n";
-  }
-  if (interrupted()) {
-    print_error("cancelled");
-    return kExitCancelled;
-  }
-  for (int code : codes)
-    if (code != kExitOk) return code;
-  return kExitOk;
+  return finish_batch(options, inputs, outputs, reports, codes);
 }
 
 }  // namespace mdn::cli

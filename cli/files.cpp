@@ -121,8 +121,8 @@ void check_not_input(const std::string& in_path, const std::string& out_path, bo
 void write_output(const std::string& in_path, const std::string& in_bytes, io::Format in_format,
                   const std::string& out_path, std::string out_bytes, io::Format out_format) {
   namespace fs = std::filesystem;
-  const bool data_beside = out_path != kStdio && in_path != kStdio && in_format == io::Format::Gltf &&
-                           service::has_external_uris(in_bytes);
+  const bool data_beside =
+      out_path != kStdio && in_path != kStdio && in_format == io::Format::Gltf && service::has_external_uris(in_bytes);
   if (out_path != kStdio) {
     const fs::path folder = fs::path(out_path).parent_path();
     std::error_code ec;

@@ -40,7 +40,8 @@ std::optional<std::string> resource_dir(const std::string& path, io::Format form
 bool same_file(const std::string& a, const std::string& b);
 // Refuses (UsageError, exit 2) writing OUT over IN unless `in_place` (then the usual temporary
 // file and rename replace it). `where` prefixes the message ("--out-dir: ").
-void check_not_input(const std::string& in_path, const std::string& out_path, bool in_place, const std::string& where = {});
+void check_not_input(const std::string& in_path, const std::string& out_path, bool in_place,
+                     const std::string& where = {});
 
 // The one writer of meshdenoise's outputs, single runs and batches alike: the files
 // service::output_files() makes of a job's bytes at OUT (a .gltf whose input kept its data

@@ -17,9 +17,9 @@ namespace mdn::cli {
 
 // Exit codes (documented in usage()).
 constexpr int kExitOk = 0;
-constexpr int kExitUsage = 2;      // bad command line or bad parameters
-constexpr int kExitFile = 3;       // a file cannot be read or written, is malformed or not a valid mesh
-constexpr int kExitInternal = 4;   // solver failure or anything unexpected
+constexpr int kExitUsage = 2;     // bad command line or bad parameters
+constexpr int kExitFile = 3;      // a file cannot be read or written, is malformed or not a valid mesh
+constexpr int kExitInternal = 4;  // solver failure or anything unexpected
 constexpr int kExitCancelled = 130;
 
 struct Failure {

@@ -1,5 +1,5 @@
 // The command line of meshdenoise: its options, the usage text (which documents the exit codes)
-// and the parser. Parsing only: what the options mean is meshdenoise_main.cpp's and its cli_* parts'.
+// and the parser, both from one table of options (options.cpp). Parsing only: what the options mean is main.cpp's.
 #pragma once
 
 #include <optional>
