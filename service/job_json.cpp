@@ -13,7 +13,10 @@ using nlohmann::json;
 namespace {
 
 json noise_to_json(const NoiseEstimate& n) {
-  return {{"sigma_edges", n.sigma_edges}, {"sigma", n.sigma}, {"gaussian_sigma", n.gaussian_sigma}, {"edge_length", n.edge_length}};
+  return {{"sigma_edges", n.sigma_edges},
+          {"sigma", n.sigma},
+          {"gaussian_sigma", n.gaussian_sigma},
+          {"edge_length", n.edge_length}};
 }
 
 // ParamMode::Search's recorrupted scores and descent (core/auto/recorrupted.h).

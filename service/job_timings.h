@@ -24,7 +24,7 @@ struct JobTimings {
 };
 
 struct TimingField {
-  std::string_view name;           // key in "timings_ms" (proto/report.schema.json)
+  std::string_view name;  // key in "timings_ms" (proto/report.schema.json)
   double JobTimings::*member;
   double StageTimings::*stage;     // the core pipeline's figure summed into it; nullptr if none
   std::string_view server_timing;  // the Server-Timing metric it adds to; empty if not shown

@@ -64,11 +64,11 @@ std::vector<OutputFile> output_files(std::string bytes, io::Format format, const
         const std::size_t comma = uri.find(',');
         if (!uri.starts_with("data:") || comma == std::string::npos) continue;
         const std::string mime = uri.substr(5, uri.find(';') - 5);
-        const std::string name =
-            stem + (std::string(key) == "buffers"
-                        ? "_" + std::to_string(i) + ".bin"
-                        : "_image" + std::to_string(i) +
-                              (mime == "image/jpeg" ? ".jpg" : mime == "image/webp" ? ".webp" : ".png"));
+        const std::string name = stem + (std::string(key) == "buffers" ? "_" + std::to_string(i) + ".bin"
+                                                                       : "_image" + std::to_string(i) +
+                                                                             (mime == "image/jpeg"   ? ".jpg"
+                                                                              : mime == "image/webp" ? ".webp"
+                                                                                                     : ".png"));
         files.push_back({(out.parent_path() / name).string(), base64_decode(std::string_view(uri).substr(comma + 1))});
         item["uri"] = name;
       }

@@ -22,7 +22,7 @@ struct JobParams {
     DenoiseParams d;
     d.mode = ParamMode::Auto;
     return d;
-  }();                        // method parameters (defaults from core, mode auto)
+  }();  // method parameters (defaults from core, mode auto)
   // Output container and compression (glTF: as the input's by default, issue 18) and the
   // Draco settings.
   io::EncodeOptions output = [] {
