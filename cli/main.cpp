@@ -124,7 +124,9 @@ SingleRun single_run(const CliOptions& options) {
                          ? "missing OUT (or give --metrics GT to only measure IN)"
                          : "expected IN and OUT, got " + std::to_string(files.size()) + " file arguments");
   }
-  SingleRun run{.in_path = files[0], .out_path = files[1]};
+  SingleRun run;
+  run.in_path = files[0];
+  run.out_path = files[1];
   run.threads = default_threads(options);
   if (options.add_noise && options.mode) throw UsageError("--mode cannot be combined with --add-noise");
   run.params = job_params(options, run.fields);
