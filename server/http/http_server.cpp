@@ -46,10 +46,10 @@ constexpr std::size_t kMaxRequestHeaders = 100;
 
 }  // namespace
 
-// The service: the wiring, the route table and the service's own routes; the job routes are
-// inherited (job_routes.h), so the table names every handler as a member.
-struct HttpService::Impl : JobRoutes {
-  using HandlerFn = void (Impl::*)(Context&);
+// The service: the wiring, the route table and the service's own routes; the job routes are a
+// part of it (job_routes.h, composed, not inherited): the table says which part answers.
+struct HttpService::Impl {
+  using HandlerFn = void (*)(Impl&, Context&);
   struct Route {
     std::string method;
     std::string pattern;  // regex over the path
@@ -60,13 +60,13 @@ struct HttpService::Impl : JobRoutes {
   };
 
   Impl(const ServerConfig& c, std::shared_ptr<const EventLog> l, ServiceParts p)
-      : JobRoutes(c, l, *p.metrics, *p.queue, *p.store),
-        config(c),
+      : config(c),
         log(std::move(l)),
         parts(std::move(p)),
         metrics(*parts.metrics),
         queue(*parts.queue),
-        store(parts.store.get()) {
+        store(parts.store.get()),
+        jobs(config, log, metrics, queue, *store) {
     id_prefix = random_hex(4);
     routes = make_routes();
     for (Route& r : routes) r.regex = std::regex(r.pattern);
@@ -76,20 +76,20 @@ struct HttpService::Impl : JobRoutes {
   // All routes, in one table. Patterns match the whole path (std::regex_match).
   static std::vector<Route> make_routes() {
     return {
-        {"GET", "/healthz", "/healthz", &Impl::healthz, false, {}},
-        {"GET", "/readyz", "/readyz", &Impl::readyz, false, {}},
-        {"GET", "/metrics", "/metrics", &Impl::metrics_route, false, {}},
-        {"GET", "/openapi.yaml", "/openapi.yaml", &Impl::openapi, false, {}},
-        {"GET", "/v1/params", "/v1/params", &Impl::params, false, {}},
-        {"GET", "/v1/params/schema", "/v1/params/schema", &Impl::params_schema, false, {}},
-        {"GET", "/v1/report/schema", "/v1/report/schema", &Impl::report_schema, false, {}},
-        {"POST", "/v1/denoise", "/v1/denoise", &Impl::denoise, true, {}},
-        {"POST", "/v1/jobs", "/v1/jobs", &Impl::create_job, true, {}},
-        {"GET", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", &Impl::get_job, false, {}},
-        {"DELETE", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", &Impl::delete_job, false, {}},
-        {"GET", "/v1/jobs/([^/]+)/result", "/v1/jobs/{id}/result", &Impl::get_result, false, {}},
-        {"GET", "/", "/", &Impl::web_page, false, {}},
-        {"GET", "/web/(.+)", "/web/{path}", &Impl::web_page, false, {}},
+        {"GET", "/healthz", "/healthz", [](Impl& s, Context& c) { s.healthz(c); }, false, {}},
+        {"GET", "/readyz", "/readyz", [](Impl& s, Context& c) { s.readyz(c); }, false, {}},
+        {"GET", "/metrics", "/metrics", [](Impl& s, Context& c) { s.metrics_route(c); }, false, {}},
+        {"GET", "/openapi.yaml", "/openapi.yaml", [](Impl& s, Context& c) { s.openapi(c); }, false, {}},
+        {"GET", "/v1/params", "/v1/params", [](Impl& s, Context& c) { s.params(c); }, false, {}},
+        {"GET", "/v1/params/schema", "/v1/params/schema", [](Impl& s, Context& c) { s.params_schema(c); }, false, {}},
+        {"GET", "/v1/report/schema", "/v1/report/schema", [](Impl& s, Context& c) { s.report_schema(c); }, false, {}},
+        {"POST", "/v1/denoise", "/v1/denoise", [](Impl& s, Context& c) { s.jobs.denoise(c); }, true, {}},
+        {"POST", "/v1/jobs", "/v1/jobs", [](Impl& s, Context& c) { s.jobs.create_job(c); }, true, {}},
+        {"GET", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", [](Impl& s, Context& c) { s.jobs.get_job(c); }, false, {}},
+        {"DELETE", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", [](Impl& s, Context& c) { s.jobs.delete_job(c); }, false, {}},
+        {"GET", "/v1/jobs/([^/]+)/result", "/v1/jobs/{id}/result", [](Impl& s, Context& c) { s.jobs.get_result(c); }, false, {}},
+        {"GET", "/", "/", [](Impl& s, Context& c) { s.web_page(c); }, false, {}},
+        {"GET", "/web/(.+)", "/web/{path}", [](Impl& s, Context& c) { s.web_page(c); }, false, {}},
     };
   }
 
@@ -192,7 +192,7 @@ struct HttpService::Impl : JobRoutes {
                 const httplib::ContentReader* reader) {
     Context ctx{req, res, reader, request_id_of(req, res)};
     try {
-      (this->*route.handler)(ctx);
+      route.handler(*this, ctx);
     } catch (...) {
       const Problem p = problem_from_exception(std::current_exception());
       if (route.reads_body && !ctx.body_consumed && has_request_body(req)) close_after_response(req, res);
@@ -269,9 +269,9 @@ struct HttpService::Impl : JobRoutes {
     static const std::regex result_path("/v1/jobs/[^/]+/result");
     if (!req.ranges.empty() && !(req.method == "GET" && std::regex_match(req.path, result_path)))
       const_cast<httplib::Request&>(req).ranges.clear();
-    if ((!config.auth_token.empty() || client_keys().enabled()) && req.method != "OPTIONS" && req.path.rfind("/v1/", 0) == 0) {
+    if ((!config.auth_token.empty() || jobs.client_keys().enabled()) && req.method != "OPTIONS" && req.path.rfind("/v1/", 0) == 0) {
       if (!authorized(req.get_header_value("Authorization")))
-        return reject(make_problem(ProblemType::Unauthorized, client_keys().enabled()
+        return reject(make_problem(ProblemType::Unauthorized, jobs.client_keys().enabled()
                                                                   ? "this server requires 'Authorization: Bearer <your API key>' on /v1 routes"
                                                                   : "this server requires 'Authorization: Bearer <token>' on /v1 routes"));
     }
@@ -281,7 +281,7 @@ struct HttpService::Impl : JobRoutes {
   // --api-keys: one of the clients' keys; --auth-token: the shared token (constant-time
   // comparisons: timing does not reveal how many leading bytes matched).
   bool authorized(const std::string& header) const {
-    if (client_keys().enabled()) return client_keys().client(header) != nullptr;
+    if (jobs.client_keys().enabled()) return jobs.client_keys().client(header) != nullptr;
     const std::string token = bearer_token(header);
     return !token.empty() && equal_secrets(token, config.auth_token);
   }
@@ -408,7 +408,7 @@ struct HttpService::Impl : JobRoutes {
   void metrics_route(Context& ctx) {
     ctx.res.status = 200;
     std::string text = metrics.render({queue.queued(), queue.capacity(), queue.running(), queue.workers(),
-                                       queue.draining(), std::max(0, waiting())});
+                                       queue.draining(), std::max(0, jobs.waiting())});
     store->render_metrics(text);
     render_connection_metrics(text);
     ctx.res.set_content(text, "text/plain; version=0.0.4; charset=utf-8");
@@ -483,6 +483,7 @@ struct HttpService::Impl : JobRoutes {
   Metrics& metrics;
   JobQueue& queue;
   JobStore* store;
+  JobRoutes jobs;  // the job routes (/v1/denoise, /v1/jobs...)
   GatedServer svr;
   std::vector<Route> routes;
   std::string id_prefix;
