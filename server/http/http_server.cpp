@@ -25,6 +25,7 @@
 #include "server/http/request_body.h"
 #include "server/http/secure_random.h"
 #include "server/http/service_parts.h"
+#include "server/http/service_routes.h"
 #include "server/http/web_routes.h"
 #include "service/job_json.h"
 #include "service/params_json.h"
@@ -46,8 +47,9 @@ constexpr std::size_t kMaxRequestHeaders = 100;
 
 }  // namespace
 
-// The service: the wiring, the route table and the service's own routes; the job routes are a
-// part of it (job_routes.h, composed, not inherited): the table says which part answers.
+// The service: the wiring and the route table over its parts, composed, not inherited: the job
+// routes (job_routes.h) and the service's own routes (service_routes.h); the table says which
+// part answers each route.
 struct HttpService::Impl {
   using HandlerFn = void (*)(Impl&, Context&);
   struct Route {
@@ -66,7 +68,8 @@ struct HttpService::Impl {
         metrics(*parts.metrics),
         queue(*parts.queue),
         store(parts.store.get()),
-        jobs(config, log, metrics, queue, *store) {
+        jobs(config, log, metrics, queue, *store),
+        service_routes(config, metrics, queue, *store, jobs, [this] { return svr.gate().counts(); }) {
     id_prefix = random_hex(4);
     routes = make_routes();
     for (Route& r : routes) r.regex = std::regex(r.pattern);
@@ -76,20 +79,20 @@ struct HttpService::Impl {
   // All routes, in one table. Patterns match the whole path (std::regex_match).
   static std::vector<Route> make_routes() {
     return {
-        {"GET", "/healthz", "/healthz", [](Impl& s, Context& c) { s.healthz(c); }, false, {}},
-        {"GET", "/readyz", "/readyz", [](Impl& s, Context& c) { s.readyz(c); }, false, {}},
-        {"GET", "/metrics", "/metrics", [](Impl& s, Context& c) { s.metrics_route(c); }, false, {}},
-        {"GET", "/openapi.yaml", "/openapi.yaml", [](Impl& s, Context& c) { s.openapi(c); }, false, {}},
-        {"GET", "/v1/params", "/v1/params", [](Impl& s, Context& c) { s.params(c); }, false, {}},
-        {"GET", "/v1/params/schema", "/v1/params/schema", [](Impl& s, Context& c) { s.params_schema(c); }, false, {}},
-        {"GET", "/v1/report/schema", "/v1/report/schema", [](Impl& s, Context& c) { s.report_schema(c); }, false, {}},
+        {"GET", "/healthz", "/healthz", [](Impl& s, Context& c) { s.service_routes.healthz(c); }, false, {}},
+        {"GET", "/readyz", "/readyz", [](Impl& s, Context& c) { s.service_routes.readyz(c); }, false, {}},
+        {"GET", "/metrics", "/metrics", [](Impl& s, Context& c) { s.service_routes.metrics_route(c); }, false, {}},
+        {"GET", "/openapi.yaml", "/openapi.yaml", [](Impl& s, Context& c) { s.service_routes.openapi(c); }, false, {}},
+        {"GET", "/v1/params", "/v1/params", [](Impl& s, Context& c) { s.service_routes.params(c); }, false, {}},
+        {"GET", "/v1/params/schema", "/v1/params/schema", [](Impl& s, Context& c) { s.service_routes.params_schema(c); }, false, {}},
+        {"GET", "/v1/report/schema", "/v1/report/schema", [](Impl& s, Context& c) { s.service_routes.report_schema(c); }, false, {}},
         {"POST", "/v1/denoise", "/v1/denoise", [](Impl& s, Context& c) { s.jobs.denoise(c); }, true, {}},
         {"POST", "/v1/jobs", "/v1/jobs", [](Impl& s, Context& c) { s.jobs.create_job(c); }, true, {}},
         {"GET", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", [](Impl& s, Context& c) { s.jobs.get_job(c); }, false, {}},
         {"DELETE", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", [](Impl& s, Context& c) { s.jobs.delete_job(c); }, false, {}},
         {"GET", "/v1/jobs/([^/]+)/result", "/v1/jobs/{id}/result", [](Impl& s, Context& c) { s.jobs.get_result(c); }, false, {}},
-        {"GET", "/", "/", [](Impl& s, Context& c) { s.web_page(c); }, false, {}},
-        {"GET", "/web/(.+)", "/web/{path}", [](Impl& s, Context& c) { s.web_page(c); }, false, {}},
+        {"GET", "/", "/", [](Impl& s, Context& c) { s.service_routes.web_page(c); }, false, {}},
+        {"GET", "/web/(.+)", "/web/{path}", [](Impl& s, Context& c) { s.service_routes.web_page(c); }, false, {}},
     };
   }
 
@@ -382,100 +385,6 @@ struct HttpService::Impl {
               {"remote", req.remote_addr}});
   }
 
-  // ---------------------------------------------------------------- handlers
-  void healthz(Context& ctx) { set_json(ctx.res, {{"status", "ok"}}); }
-
-  void readyz(Context& ctx) {
-    if (queue.draining()) {
-      Problem p = make_problem(ProblemType::Draining, "the server is shutting down");
-      p.retry_after_s = 5;
-      throw HttpError(p);
-    }
-    if (queue.saturated()) {
-      Problem p = make_problem(ProblemType::QueueFull, "the job queue is full");
-      p.retry_after_s = queue.retry_after_s();
-      throw HttpError(p);
-    }
-    if (auto p = store->unavailable()) throw HttpError(*p);
-    set_json(ctx.res, {{"status", "ready"},
-                       {"job_store", store->kind()},
-                       {"queued", queue.queued()},
-                       {"running", queue.running()},
-                       {"capacity", queue.capacity()},
-                       {"workers", queue.workers()}});
-  }
-
-  void metrics_route(Context& ctx) {
-    ctx.res.status = 200;
-    std::string text = metrics.render({queue.queued(), queue.capacity(), queue.running(), queue.workers(),
-                                       queue.draining(), std::max(0, jobs.waiting())});
-    store->render_metrics(text);
-    render_connection_metrics(text);
-    ctx.res.set_content(text, "text/plain; version=0.0.4; charset=utf-8");
-  }
-
-  // The connection gate's state and the connections it closed to protect the service.
-  void render_connection_metrics(std::string& out) {
-    const ConnectionGate::Counts c = svr.gate().counts();
-    out += "# HELP mdn_http_connections Client connections: open, waiting for a request (no thread), queued for a thread.\n"
-           "# TYPE mdn_http_connections gauge\n";
-    out += "mdn_http_connections{state=\"open\"} " + std::to_string(c.open) + "\n";
-    out += "mdn_http_connections{state=\"waiting\"} " + std::to_string(c.parked) + "\n";
-    out += "mdn_http_connections{state=\"queued\"} " + std::to_string(c.queued) + "\n";
-    out += "# HELP mdn_http_connections_closed_total Connections closed by the gate: refused at a per-client or total cap, "
-           "evicted while waiting, head not complete in time, no thread in time.\n"
-           "# TYPE mdn_http_connections_closed_total counter\n";
-    const std::pair<const char*, std::int64_t> reasons[] = {{"client_limit", c.refused_client}, {"total_limit", c.refused_total},
-                                                            {"evicted", c.evicted},           {"head_timeout", c.head_timeouts},
-                                                            {"queue_timeout", c.queue_timeouts}};
-    for (const auto& [reason, n] : reasons)
-      out += std::string("mdn_http_connections_closed_total{reason=\"") + reason + "\"} " + std::to_string(n) + "\n";
-  }
-
-  void openapi(Context& ctx) {
-    ctx.res.status = 200;
-    const auto doc = embedded::openapi_yaml();
-    ctx.res.set_content(doc.data(), doc.size(), "application/yaml");
-  }
-
-  void params(Context& ctx) {
-    json specs = json::array();
-    for (const ParamSpec& s : param_specs()) {
-      specs.push_back({{"name", s.name},
-                       {"type", s.integer ? "integer" : "number"},
-                       {"default", s.default_value()},
-                       {"minimum", s.min},
-                       {"maximum", s.max},
-                       {"paper_minimum", s.paper_min},
-                       {"paper_maximum", s.paper_max},
-                       {"unit", s.unit},
-                       {"equation", s.equation},
-                       {"description", s.description}});
-    }
-    set_json(ctx.res, {{"defaults", service::to_json(service::JobParams{})},
-                       {"parameters", specs},
-                       {"schema", json::parse(embedded::params_schema_json())}});
-  }
-
-  void params_schema(Context& ctx) {
-    ctx.res.status = 200;
-    const auto doc = embedded::params_schema_json();
-    ctx.res.set_content(doc.data(), doc.size(), "application/schema+json");
-  }
-
-  void report_schema(Context& ctx) {
-    ctx.res.status = 200;
-    const auto doc = embedded::report_schema_json();
-    ctx.res.set_content(doc.data(), doc.size(), "application/schema+json");
-  }
-
-  // GET / and GET /web/{path}: the web page (web_routes.h), unless --web off.
-  void web_page(Context& ctx) {
-    if (!config.web)
-      throw HttpError(make_problem(ProblemType::NotFound, "no route GET " + ctx.req.path + " (--web off)"));
-    serve_web_file(ctx.req, ctx.res, ctx.req.matches.size() > 1 ? ctx.req.matches[1].str() : "index.html");
-  }
-
   // ---------------------------------------------------------------- state
   const ServerConfig config;
   const std::shared_ptr<const EventLog> log;
@@ -483,8 +392,9 @@ struct HttpService::Impl {
   Metrics& metrics;
   JobQueue& queue;
   JobStore* store;
-  JobRoutes jobs;  // the job routes (/v1/denoise, /v1/jobs...)
+  JobRoutes jobs;        // the job routes (/v1/denoise, /v1/jobs...)
   GatedServer svr;
+  ServiceRoutes service_routes;  // the service's own routes (health, readiness, metrics, contract, page)
   std::vector<Route> routes;
   std::string id_prefix;
   std::atomic<std::uint64_t> request_counter{0};
