@@ -125,6 +125,9 @@ struct HttpService::Impl {
     // Only bodies read by httplib itself (routes without a ContentReader) obey this; our
     // POST routes count bytes themselves because chunked uploads bypass it (0.11.4).
     svr.set_payload_max_length(std::size_t(config.max_body_bytes));
+    // Byte ranges leave the request before routing (http_support.h, request_ranges()), so an
+    // error body is never sliced and no handler changes a const request.
+    svr.set_request_setup([](httplib::Request& req) { take_request_ranges(req); });
     svr.set_tcp_nodelay(true);
     // Not httplib::default_socket_options: 0.11.4 sets SO_REUSEPORT there, with which a second
     // server binds the same port without a word and the kernel splits connections between the
@@ -180,9 +183,6 @@ struct HttpService::Impl {
 
   void write_problem(const httplib::Request& req, httplib::Response& res, const Problem& p,
                      const std::string& request_id) {
-    // Byte ranges apply to result downloads only, never to an error body (httplib would
-    // otherwise slice it into multipart/byteranges).
-    const_cast<httplib::Request&>(req).ranges.clear();
     res.status = p.status;
     if (p.retry_after_s) replace_header(res, "Retry-After", std::to_string(*p.retry_after_s));
     if (p.status == 401) replace_header(res, "WWW-Authenticate", "Bearer realm=\"meshdenoise\"");
@@ -266,12 +266,10 @@ struct HttpService::Impl {
       return reject(make_problem(ProblemType::TooManyHeaders, "the request has " + std::to_string(req.headers.size()) + " header fields, more than the limit of " +
                                      std::to_string(kMaxRequestHeaders)));
     // Several ranges could multiply a result's size (one 1 MB result became 209 MB with 200
-    // ranges in 0.11.4): refuse them; single ranges are honoured on result downloads only.
-    if (req.ranges.size() > 1)
+    // ranges in 0.11.4): refuse them. A single range is honoured by result downloads only
+    // (job_resource.cpp); the request setup took the ranges out of the request (install()).
+    if (request_ranges().size() > 1)
       return reject(make_problem(ProblemType::MultipleRanges, "send at most one byte range"));
-    static const std::regex result_path("/v1/jobs/[^/]+/result");
-    if (!req.ranges.empty() && !(req.method == "GET" && std::regex_match(req.path, result_path)))
-      const_cast<httplib::Request&>(req).ranges.clear();
     if ((!config.auth_token.empty() || jobs.client_keys().enabled()) && req.method != "OPTIONS" && req.path.rfind("/v1/", 0) == 0) {
       if (!authorized(req.get_header_value("Authorization")))
         return reject(make_problem(ProblemType::Unauthorized, jobs.client_keys().enabled()
