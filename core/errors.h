@@ -1,5 +1,5 @@
 // Typed errors of the core library. Every precondition failure throws one of these;
-// adapters and the server map them to user-facing messages (see server/problem.h).
+// adapters and the server map them to user-facing messages (see server/http/problem.h).
 #pragma once
 
 #include <stdexcept>

@@ -24,7 +24,7 @@ threads="${MDN_FIGURE_THREADS:-2}"
 fail() { echo "make-figures.sh: $*" >&2; exit 2; }
 
 bench="$build/tests/bench/figures_bench"
-cli="$build/server/meshdenoise"
+cli="$build/cli/meshdenoise"
 [ -x "$cli" ] || fail "$cli is not built: cmake --build $build --target meshdenoise"
 [ -d "$root/tests/tools/node_modules/three" ] || fail "three.js and puppeteer-core are missing: bash scripts/install-deps.sh test"
 [ -x "$bench" ] || fail "$bench is not built: cmake --build $build --target figures_bench (a build with -DMDN_BUILD_BENCH=ON)"

@@ -18,7 +18,7 @@ trap cleanup EXIT
 
 meshes="$(bash "$root/scripts/fetch-cgal-data.sh" "$root/third_party_data")"
 # sigma 0.3 mean edge lengths along the normals: clearly visible noise, as in the paper's figures.
-"$build/server/meshdenoise" --add-noise '{"kind":"along_normal","sigma":0.3,"seed":1}' \
+"$build/cli/meshdenoise" --add-noise '{"kind":"along_normal","sigma":0.3,"seed":1}' \
   "$meshes/bunny00.off" "$work/bunny-noisy.off"
 
 "$build/server/http/meshdenoise-server" --host 127.0.0.1 --port 0 --port-file "$work/port" --workers 1 \

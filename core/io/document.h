@@ -69,11 +69,10 @@ struct Limits {
 
 struct EncodeOptions {
   std::optional<Format> format;  // default: the input's container
-  // glTF output compression. Unset: `draco` decides (what the HTTP API and the CLI pass today).
-  // Set, it wins over `draco`; AsInput follows the input (glTF-Transform keeps what it read).
-  // The choice is made in one place: resolve_compression().
-  std::optional<Compression> compression;
-  bool draco = true;             // glTF: KHR_draco_mesh_compression when `compression` is unset; DRC is always Draco
+  // glTF output compression: Draco (the library's default), None, or AsInput (the input's, as
+  // glTF-Transform keeps what it read; the service's default). Meshopt is not written yet. DRC
+  // is always Draco. What an encode wrote comes back in Encoded::compression.
+  Compression compression = Compression::Draco;
   // Draco quantisation bits. Positions: [8, 30] (11 bits costs about 0.8 mm on a 2 m scan).
   // The other attributes: [1, 30], or 0 = stored losslessly. UVs, colours, joints and weights
   // default to 0, so they come back bit for bit (the assets' other data is untouched, and
@@ -92,6 +91,13 @@ struct EncodeOptions {
   std::int64_t max_memory_bytes = std::int64_t{1} << 30;
 };
 
+// What an encode wrote: the bytes, and the compression they hold (glTF: resolve_compression's
+// choice; DRC: Draco; every other format: None). Callers read the compression here, nowhere else.
+struct Encoded {
+  std::string bytes;
+  Compression compression = Compression::None;
+};
+
 class MeshDocument {
  public:
   virtual ~MeshDocument() = default;
@@ -99,7 +105,7 @@ class MeshDocument {
   // Surfaces to denoise, in a stable order. Callers may replace their V (same #V).
   virtual std::vector<TriMesh>& surfaces() = 0;
   // Re-encodes the asset with the current surface positions.
-  virtual std::string encode(const EncodeOptions& options) const = 0;
+  virtual Encoded encode(const EncodeOptions& options) const = 0;
   // Notes for the caller about what was changed besides positions (e.g. "TANGENT dropped").
   virtual std::vector<std::string> notes() const { return {}; }
   // Where each surface shows in the asset's scene: the matrices (4x4, homogeneous) that take
@@ -114,9 +120,9 @@ class MeshDocument {
 };
 
 // The glTF compression an encode writes, given the options and the input's compression:
-// `compression` if set (AsInput: `input`), else Draco or None by `draco`. Meshopt is not
-// written yet: as the input's it resolves to None, asked for explicitly it is an
-// UnsupportedError (HTTP 422).
+// `compression` (AsInput: `input`). Meshopt is not written yet: as the input's it resolves to
+// None, asked for explicitly it is an UnsupportedError (HTTP 422). The glTF writer calls it; a
+// caller that must know before encoding (a check of the encoder's memory) may too.
 Compression resolve_compression(const EncodeOptions& options, Compression input);
 
 // How to decode, beyond the format. The service uses the defaults: nothing outside the bytes

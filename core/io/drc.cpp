@@ -21,13 +21,13 @@ class DrcDocument final : public MeshDocument {
     return notes;
   }
   Compression compression() const override { return Compression::Draco; }
-  std::string encode(const EncodeOptions& options) const override {
+  Encoded encode(const EncodeOptions& options) const override {
     check_surface_sizes(surfaces_, {welded_count_});
     if (options.format && *options.format != Format::Drc) return encode_plain(surfaces_, *options.format, options);
     draco::Mesh copy;
     copy.Copy(*mesh_);
     draco_update_geometry(copy, surfaces_.front().V, point_to_weld_);
-    return draco_encode(copy, options);
+    return {draco_encode(copy, options), Compression::Draco};
   }
 
   std::unique_ptr<draco::Mesh> mesh_;

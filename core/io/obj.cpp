@@ -28,7 +28,7 @@ class ObjDocument final : public MeshDocument {
     return {};
   }
 
-  std::string encode(const EncodeOptions& options) const override {
+  Encoded encode(const EncodeOptions& options) const override {
     check_surface_sizes(surfaces_, {static_cast<std::int64_t>(vertex_spans_.size())});
     if (options.format && *options.format != Format::Obj) return encode_plain(surfaces_, *options.format, options);
     const TriMesh& mesh = surfaces_.front();
@@ -75,7 +75,7 @@ class ObjDocument final : public MeshDocument {
       pos = span.end;
     }
     out.append(source_, pos, std::string::npos);
-    return out;
+    return {std::move(out), Compression::None};
   }
 
   std::string source_;

@@ -21,7 +21,7 @@ class OffDocument final : public MeshDocument {
     return {};
   }
 
-  std::string encode(const EncodeOptions& options) const override {
+  Encoded encode(const EncodeOptions& options) const override {
     check_surface_sizes(surfaces_, {vertex_count_});
     if (options.format && *options.format != Format::Off) return encode_plain(surfaces_, *options.format, options);
     const TriMesh& mesh = surfaces_.front();
@@ -63,7 +63,7 @@ class OffDocument final : public MeshDocument {
       }
       out += '\n';
     }
-    return out;
+    return {std::move(out), Compression::None};
   }
 
   std::string keyword_ = "OFF";

@@ -126,16 +126,16 @@ std::string write_drc(const TriMesh& mesh, const EncodeOptions& options) {
   return draco_encode(dm, options);
 }
 
-std::string encode_plain(const std::vector<TriMesh>& surfaces, Format format, const EncodeOptions& options) {
+Encoded encode_plain(const std::vector<TriMesh>& surfaces, Format format, const EncodeOptions& options) {
   if (format == Format::Ply || format == Format::Stl || format == Format::Glb || format == Format::Gltf)
     check_float_coordinates(surfaces, format);
   CancelPoll(options.cancel).check();  // the writers below are linear in the (limited) mesh size
   switch (format) {
-    case Format::Off: return write_off(concatenate(surfaces));
-    case Format::Obj: return write_obj(concatenate(surfaces));
-    case Format::Ply: return write_ply(concatenate(surfaces));
-    case Format::Drc: return write_drc(concatenate(surfaces), options);
-    case Format::Stl: return write_stl_binary(concatenate(surfaces));
+    case Format::Off: return {write_off(concatenate(surfaces)), Compression::None};
+    case Format::Obj: return {write_obj(concatenate(surfaces)), Compression::None};
+    case Format::Ply: return {write_ply(concatenate(surfaces)), Compression::None};
+    case Format::Drc: return {write_drc(concatenate(surfaces), options), Compression::Draco};
+    case Format::Stl: return {write_stl_binary(concatenate(surfaces)), Compression::None};
     case Format::Glb:
     case Format::Gltf: return write_plain_gltf(surfaces, format, options);
   }

@@ -14,7 +14,7 @@ namespace mdn::io::detail {
 
 // Surfaces are concatenated into one mesh for the single-mesh formats (OFF, OBJ, PLY, DRC, STL)
 // and become one glTF mesh each (one node per mesh) for GLB / glTF.
-std::string encode_plain(const std::vector<TriMesh>& surfaces, Format format, const EncodeOptions& options);
+Encoded encode_plain(const std::vector<TriMesh>& surfaces, Format format, const EncodeOptions& options);
 
 std::string write_off(const TriMesh& mesh);
 std::string write_obj(const TriMesh& mesh);
@@ -25,7 +25,7 @@ std::string write_drc(const TriMesh& mesh, const EncodeOptions& options);
 std::string write_stl_binary(const TriMesh& mesh, std::string_view header = {},
                              const std::vector<std::uint16_t>& attributes = {});
 std::string write_stl_ascii(const TriMesh& mesh, std::string_view name);
-std::string write_plain_gltf(const std::vector<TriMesh>& surfaces, Format format, const EncodeOptions& options);
+Encoded write_plain_gltf(const std::vector<TriMesh>& surfaces, Format format, const EncodeOptions& options);
 
 // Throws UnsupportedError (HTTP 422) if a coordinate does not fit in the float32 that `format`
 // stores positions in (PLY as written here, glTF), before anything is written.

@@ -99,7 +99,7 @@ class PlyDocument final : public MeshDocument {
     if (has_normals_) return {"PLY vertex normals (nx, ny, nz) recomputed from the denoised surface"};
     return {};
   }
-  std::string encode(const EncodeOptions& options) const override;
+  Encoded encode(const EncodeOptions& options) const override;
 
   std::string header_;  // verbatim, through "end_header\n"
   Encoding encoding_ = Encoding::Ascii;
@@ -234,7 +234,7 @@ void write_ascii(std::string& out, Type type, double value) {
   else out += std::to_string(static_cast<std::int64_t>(std::nearbyint(value)));
 }
 
-std::string PlyDocument::encode(const EncodeOptions& options) const {
+Encoded PlyDocument::encode(const EncodeOptions& options) const {
   check_surface_sizes(surfaces_, {elements_[vertex_element_].count});
   if (options.format && *options.format != Format::Ply) return encode_plain(surfaces_, *options.format, options);
   const TriMesh& mesh = surfaces_.front();
@@ -298,16 +298,12 @@ std::string PlyDocument::encode(const EncodeOptions& options) const {
       if (encoding_ == Encoding::Ascii) out += '\n';
     }
   }
-  return out;
+  return {std::move(out), Compression::None};
 }
 
-}  // namespace
-
-std::unique_ptr<MeshDocument> decode_ply(std::string_view bytes, const Limits& limits) {
-  auto doc = std::make_unique<PlyDocument>();
-  LineReader reader(bytes);
+// The header, up to end_header: the encoding, the elements and their properties.
+void parse_header(LineReader& reader, PlyDocument& doc) {
   std::string_view line;
-  if (!reader.next(line) || trim(line) != "ply") throw FormatError("PLY: the input does not start with 'ply'");
   bool have_format = false, ended = false;
   auto fail = [&](const std::string& message) -> void {
     throw FormatError("PLY header line " + std::to_string(reader.line_number()) + ": " + message);
@@ -322,9 +318,9 @@ std::unique_ptr<MeshDocument> decode_ply(std::string_view bytes, const Limits& l
     }
     if (keyword == "format") {
       const std::string_view name = next_token(rest);
-      if (name == "ascii") doc->encoding_ = Encoding::Ascii;
-      else if (name == "binary_little_endian") doc->encoding_ = Encoding::BinaryLittle;
-      else if (name == "binary_big_endian") doc->encoding_ = Encoding::BinaryBig;
+      if (name == "ascii") doc.encoding_ = Encoding::Ascii;
+      else if (name == "binary_little_endian") doc.encoding_ = Encoding::BinaryLittle;
+      else if (name == "binary_big_endian") doc.encoding_ = Encoding::BinaryBig;
       else fail("unknown format '" + std::string(name.substr(0, 32)) + "'");
       have_format = true;
     } else if (keyword == "element") {
@@ -332,9 +328,9 @@ std::unique_ptr<MeshDocument> decode_ply(std::string_view bytes, const Limits& l
       element.name = std::string(next_token(rest));
       if (element.name.empty() || !parse_integer(next_token(rest), element.count) || element.count < 0)
         fail("expected 'element <name> <count>'");
-      doc->elements_.push_back(std::move(element));
+      doc.elements_.push_back(std::move(element));
     } else if (keyword == "property") {
-      if (doc->elements_.empty()) fail("a property before any element");
+      if (doc.elements_.empty()) fail("a property before any element");
       Property p;
       std::string_view type = next_token(rest);
       if (type == "list") {
@@ -349,25 +345,26 @@ std::unique_ptr<MeshDocument> decode_ply(std::string_view bytes, const Limits& l
       p.type = *t;
       p.name = std::string(next_token(rest));
       if (p.name.empty()) fail("a property without a name");
-      doc->elements_.back().properties.push_back(std::move(p));
+      doc.elements_.back().properties.push_back(std::move(p));
     } else {
       fail("unknown keyword '" + std::string(keyword.substr(0, 32)) + "'");
     }
   }
   if (!ended) throw FormatError("PLY: the header has no end_header line");
   if (!have_format) throw FormatError("PLY: the header has no format line");
-  doc->header_.assign(bytes.substr(0, reader.position()));
-  if (doc->header_.back() != '\n') doc->header_ += '\n';
+}
 
-  // Locate the vertex and face elements and check their shape before reading any data.
+// Locates the vertex and face elements and checks their shape before reading any data:
+// returns their indices.
+std::pair<std::size_t, std::size_t> locate_elements(PlyDocument& doc, const Limits& limits) {
   std::optional<std::size_t> vertex_index, face_index;
-  for (std::size_t e = 0; e < doc->elements_.size(); ++e) {
-    if (doc->elements_[e].name == "vertex") vertex_index = e;
-    if (doc->elements_[e].name == "face") face_index = e;
+  for (std::size_t e = 0; e < doc.elements_.size(); ++e) {
+    if (doc.elements_[e].name == "vertex") vertex_index = e;
+    if (doc.elements_[e].name == "face") face_index = e;
   }
   if (!vertex_index) throw FormatError("PLY: no 'vertex' element");
   if (!face_index) throw FormatError("PLY: no 'face' element (point clouds are not supported)");
-  Element& vertex = doc->elements_[*vertex_index];
+  Element& vertex = doc.elements_[*vertex_index];
   for (const char* axis : {"x", "y", "z"}) {
     const Property* p = vertex.find(axis);
     if (!p || p->is_list) throw FormatError(std::string("PLY: the vertex element has no scalar '") + axis + "' property");
@@ -375,28 +372,21 @@ std::unique_ptr<MeshDocument> decode_ply(std::string_view bytes, const Limits& l
   const Property* nx = vertex.find("nx");
   const Property* ny = vertex.find("ny");
   const Property* nz = vertex.find("nz");
-  doc->has_normals_ = nx && ny && nz && !nx->is_list && !ny->is_list && !nz->is_list;
-  Element& face = doc->elements_[*face_index];
+  doc.has_normals_ = nx && ny && nz && !nx->is_list && !ny->is_list && !nz->is_list;
+  Element& face = doc.elements_[*face_index];
   const Property* indices = face.find("vertex_indices");
   if (!indices) indices = face.find("vertex_index");
   if (!indices || !indices->is_list) throw FormatError("PLY: the face element has no 'vertex_indices' list");
   if (!is_integer(indices->type)) throw FormatError("PLY: face vertex indices must have an integer type");
   check_count(vertex.count, limits.max_vertices, "vertices");
   check_count(face.count, limits.max_faces, "faces");
-  doc->vertex_element_ = *vertex_index;
+  doc.vertex_element_ = *vertex_index;
 
-  const std::string_view body = bytes.substr(reader.position());
-  if (doc->encoding_ == Encoding::Ascii) {
-    AsciiReader ascii(body);
-    read_body(ascii, doc->elements_, 2, limits);
-  } else {
-    const bool host_little = std::endian::native == std::endian::little;
-    BinaryReader binary(body, (doc->encoding_ == Encoding::BinaryLittle) != host_little);
-    read_body(binary, doc->elements_, 1, limits);
-  }
+  return {*vertex_index, *face_index};
+}
 
-  Element& v = doc->elements_[*vertex_index];
-  Element& f = doc->elements_[*face_index];
+// The polygon mesh of the vertex element's x, y, z and the face element's index lists.
+PolygonMesh polygon_mesh(Element& v, Element& f) {
   PolygonMesh poly;
   poly.V.resize(v.count, 3);
   const char* axes[3] = {"x", "y", "z"};
@@ -412,6 +402,31 @@ std::unique_ptr<MeshDocument> decode_ply(std::string_view bytes, const Limits& l
   if (!list) list = f.find("vertex_index");
   poly.offsets = list->offsets;
   poly.indices.assign(list->values.begin(), list->values.end());
+  return poly;
+}
+
+}  // namespace
+
+std::unique_ptr<MeshDocument> decode_ply(std::string_view bytes, const Limits& limits) {
+  auto doc = std::make_unique<PlyDocument>();
+  LineReader reader(bytes);
+  std::string_view line;
+  if (!reader.next(line) || trim(line) != "ply") throw FormatError("PLY: the input does not start with 'ply'");
+  parse_header(reader, *doc);
+  doc->header_.assign(bytes.substr(0, reader.position()));
+  if (doc->header_.back() != '\n') doc->header_ += '\n';
+  const auto [vertex_index, face_index] = locate_elements(*doc, limits);
+  const std::string_view body = bytes.substr(reader.position());
+  if (doc->encoding_ == Encoding::Ascii) {
+    AsciiReader ascii(body);
+    read_body(ascii, doc->elements_, 2, limits);
+  } else {
+    const bool host_little = std::endian::native == std::endian::little;
+    BinaryReader binary(body, (doc->encoding_ == Encoding::BinaryLittle) != host_little);
+    read_body(binary, doc->elements_, 1, limits);
+  }
+
+  const PolygonMesh poly = polygon_mesh(doc->elements_[vertex_index], doc->elements_[face_index]);
   doc->surfaces_.push_back(to_tri_mesh(poly));  // the core's documented error for non-triangles
   return doc;
 }

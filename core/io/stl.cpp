@@ -46,7 +46,7 @@ class StlDocument final : public MeshDocument {
   std::vector<TriMesh>& surfaces() override { return surfaces_; }
   std::vector<std::string> notes() const override { return {"STL facet normals recomputed from the denoised surface"}; }
 
-  std::string encode(const EncodeOptions& options) const override;
+  Encoded encode(const EncodeOptions& options) const override;
 
   bool ascii_ = false;
   std::string header_;                     // binary: the 80 header bytes
@@ -291,12 +291,12 @@ std::string write_stl_ascii(const TriMesh& mesh, std::string_view name) {
   return out;
 }
 
-std::string StlDocument::encode(const EncodeOptions& options) const {
+Encoded StlDocument::encode(const EncodeOptions& options) const {
   check_surface_sizes(surfaces_, {welded_count_});
   if (options.format && *options.format != Format::Stl) return encode_plain(surfaces_, *options.format, options);
   check_float_coordinates(surfaces_, Format::Stl);
   const TriMesh& mesh = surfaces_.front();
-  return ascii_ ? write_stl_ascii(mesh, name_) : write_stl_binary(mesh, header_, attributes_);
+  return {ascii_ ? write_stl_ascii(mesh, name_) : write_stl_binary(mesh, header_, attributes_), Compression::None};
 }
 
 }  // namespace mdn::io::detail

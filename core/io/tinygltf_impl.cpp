@@ -2,7 +2,7 @@
 //
 // No file system (TINYGLTF_NO_FS): tinygltf's default callbacks would read any path a file
 // names, "../../etc/hostname" included. No image decoding: images pass through as bytes.
-// Draco payloads (KHR_draco_mesh_compression) are decoded by gltf.cpp with Draco's core
+// Draco payloads (KHR_draco_mesh_compression) are decoded by gltf_read.cpp with Draco's core
 // Decoder, so tinygltf's own Draco path is not compiled in either.
 #include <fstream>  // tiny_gltf.h 2.7 uses std::ofstream even with TINYGLTF_NO_FS
 

@@ -59,8 +59,9 @@ std::string show_double(double v) {
   return s.str();
 }
 
-const std::vector<Setting>& settings() {
-  static const std::vector<Setting> table = {
+// Listening, workers and jobs.
+std::vector<Setting> listen_and_jobs_settings() {
+  return {
       {"host", "MDN_HOST", "address to listen on (0.0.0.0: every interface)",
        [](ServerConfig& c, const std::string&, const std::string& v) { c.host = v; },
        [](const ServerConfig& c) { return c.host; }},
@@ -92,6 +93,12 @@ const std::vector<Setting>& settings() {
       {"max-stored-jobs", "MDN_MAX_STORED_JOBS", "asynchronous jobs kept at most (queued, running, finished); when all are taken, new ones get 503",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_stored_jobs = int(parse_int(n, v, 1, 1000000)); },
        [](const ServerConfig& c) { return std::to_string(c.max_stored_jobs); }},
+  };
+}
+
+// The job store (memory or Redis).
+std::vector<Setting> job_store_settings() {
+  return {
       {"queue", "MDN_QUEUE", "job store: memory (this process) or redis://[:password@]host[:port][/db] (shared by replicas)",
        [](ServerConfig& c, const std::string& n, const std::string& v) {
          try {
@@ -118,6 +125,12 @@ const std::vector<Setting>& settings() {
       {"queue-max-result", "MDN_QUEUE_MAX_RESULT", "Redis: largest result stored, in bytes (suffix K, M or G; at most 512M)",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.queue_max_result_bytes = parse_int(n, v, 1, std::int64_t{512} << 20); },
        [](const ServerConfig& c) { return std::to_string(c.queue_max_result_bytes); }},
+  };
+}
+
+// Request and decoder limits.
+std::vector<Setting> limit_settings() {
+  return {
       {"max-body", "MDN_MAX_BODY", "largest request body in bytes (suffix K, M or G allowed)",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_body_bytes = parse_int(n, v, 1, std::int64_t{1} << 40); },
        [](const ServerConfig& c) { return std::to_string(c.max_body_bytes); }},
@@ -139,6 +152,12 @@ const std::vector<Setting>& settings() {
       {"max-accessors", "MDN_MAX_ACCESSORS", "glTF: most accessors plus buffer views (and primitives)",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_accessors = parse_int(n, v, 1, 100'000'000); },
        [](const ServerConfig& c) { return std::to_string(c.max_accessors); }},
+  };
+}
+
+// Connections and the drain.
+std::vector<Setting> connection_settings() {
+  return {
       {"io-threads", "MDN_IO_THREADS", "HTTP threads; each open connection holds one; at most half wait in long polls; 0 = 4 per core, at least 8",
        [](ServerConfig& c, const std::string& n, const std::string& v) {
          c.io_threads = int(parse_int(n, v, 0, 4096));
@@ -179,6 +198,12 @@ const std::vector<Setting>& settings() {
       {"drain-grace", "MDN_DRAIN_GRACE", "on SIGTERM/SIGINT, seconds allowed for queued and running jobs",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.drain_grace_s = parse_seconds(n, v, 0, 1e6, false); },
        [](const ServerConfig& c) { return show_double(c.drain_grace_s); }},
+  };
+}
+
+// Access, the web page and logs.
+std::vector<Setting> access_and_log_settings() {
+  return {
       {"auth-token", "MDN_AUTH_TOKEN", "require 'Authorization: Bearer <token>' on /v1 (prefer the variable: flags show in ps)",
        [](ServerConfig& c, const std::string&, const std::string& v) { c.auth_token = v; },
        [](const ServerConfig& c) { return c.auth_token.empty() ? std::string("(none)") : std::string("(set)"); }},
@@ -224,6 +249,19 @@ const std::vector<Setting>& settings() {
        },
        [](const ServerConfig& c) { return c.log_level; }},
   };
+}
+
+// Every setting, in --help's order.
+const std::vector<Setting>& settings() {
+  static const std::vector<Setting> table = [] {
+    std::vector<Setting> all;
+    for (auto part : {listen_and_jobs_settings, job_store_settings, limit_settings, connection_settings,
+                      access_and_log_settings}) {
+      std::vector<Setting> group = part();
+      all.insert(all.end(), std::make_move_iterator(group.begin()), std::make_move_iterator(group.end()));
+    }
+    return all;
+  }();
   return table;
 }
 

@@ -586,7 +586,7 @@ void ConnectionGate::close_after_this_response(bool bytes_left_unread) {
 
 void GatedServer::set_gate_options(const GateOptions& options) {
   gate_ = std::make_unique<ConnectionGate>(options, [this](httplib::Stream& stream, bool close_connection, bool& closed) {
-    return process_request(stream, close_connection, closed, nullptr);
+    return process_request(stream, close_connection, closed, request_setup_);
   });
   ConnectionGate* gate = gate_.get();
   new_task_queue = [gate] { return new InlineTaskQueue(*gate); };

@@ -105,11 +105,15 @@ class GatedServer final : public httplib::Server {
  public:
   // Must be called before listening; the gate lives as long as the server.
   void set_gate_options(const GateOptions& options);
+  // Called with each parsed request before routing (cpp-httplib's setup_request: after the
+  // head and the Range header are parsed): the one place a request may be changed.
+  void set_request_setup(std::function<void(httplib::Request&)> setup) { request_setup_ = std::move(setup); }
   ConnectionGate& gate() { return *gate_; }
 
  private:
   bool process_and_close_socket(socket_t sock) override;
   std::unique_ptr<ConnectionGate> gate_;
+  std::function<void(httplib::Request&)> request_setup_;
 };
 
 }  // namespace mdn::http

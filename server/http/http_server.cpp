@@ -25,9 +25,10 @@
 #include "server/http/request_body.h"
 #include "server/http/secure_random.h"
 #include "server/http/service_parts.h"
+#include "server/http/service_routes.h"
 #include "server/http/web_routes.h"
-#include "server/job_json.h"
-#include "server/params_json.h"
+#include "service/job_json.h"
+#include "service/params_json.h"
 
 namespace mdn::http {
 namespace {
@@ -46,10 +47,11 @@ constexpr std::size_t kMaxRequestHeaders = 100;
 
 }  // namespace
 
-// The service: the wiring, the route table and the service's own routes; the job routes are
-// inherited (job_routes.h), so the table names every handler as a member.
-struct HttpService::Impl : JobRoutes {
-  using HandlerFn = void (Impl::*)(Context&);
+// The service: the wiring and the route table over its parts, composed, not inherited: the job
+// routes (job_routes.h) and the service's own routes (service_routes.h); the table says which
+// part answers each route.
+struct HttpService::Impl {
+  using HandlerFn = void (*)(Impl&, Context&);
   struct Route {
     std::string method;
     std::string pattern;  // regex over the path
@@ -60,13 +62,14 @@ struct HttpService::Impl : JobRoutes {
   };
 
   Impl(const ServerConfig& c, std::shared_ptr<const EventLog> l, ServiceParts p)
-      : JobRoutes(c, l, *p.metrics, *p.queue, *p.store),
-        config(c),
+      : config(c),
         log(std::move(l)),
         parts(std::move(p)),
         metrics(*parts.metrics),
         queue(*parts.queue),
-        store(parts.store.get()) {
+        store(parts.store.get()),
+        jobs(config, log, metrics, queue, *store),
+        service_routes(config, metrics, queue, *store, jobs, [this] { return svr.gate().counts(); }) {
     id_prefix = random_hex(4);
     routes = make_routes();
     for (Route& r : routes) r.regex = std::regex(r.pattern);
@@ -76,20 +79,20 @@ struct HttpService::Impl : JobRoutes {
   // All routes, in one table. Patterns match the whole path (std::regex_match).
   static std::vector<Route> make_routes() {
     return {
-        {"GET", "/healthz", "/healthz", &Impl::healthz, false, {}},
-        {"GET", "/readyz", "/readyz", &Impl::readyz, false, {}},
-        {"GET", "/metrics", "/metrics", &Impl::metrics_route, false, {}},
-        {"GET", "/openapi.yaml", "/openapi.yaml", &Impl::openapi, false, {}},
-        {"GET", "/v1/params", "/v1/params", &Impl::params, false, {}},
-        {"GET", "/v1/params/schema", "/v1/params/schema", &Impl::params_schema, false, {}},
-        {"GET", "/v1/report/schema", "/v1/report/schema", &Impl::report_schema, false, {}},
-        {"POST", "/v1/denoise", "/v1/denoise", &Impl::denoise, true, {}},
-        {"POST", "/v1/jobs", "/v1/jobs", &Impl::create_job, true, {}},
-        {"GET", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", &Impl::get_job, false, {}},
-        {"DELETE", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", &Impl::delete_job, false, {}},
-        {"GET", "/v1/jobs/([^/]+)/result", "/v1/jobs/{id}/result", &Impl::get_result, false, {}},
-        {"GET", "/", "/", &Impl::web_page, false, {}},
-        {"GET", "/web/(.+)", "/web/{path}", &Impl::web_page, false, {}},
+        {"GET", "/healthz", "/healthz", [](Impl& s, Context& c) { s.service_routes.healthz(c); }, false, {}},
+        {"GET", "/readyz", "/readyz", [](Impl& s, Context& c) { s.service_routes.readyz(c); }, false, {}},
+        {"GET", "/metrics", "/metrics", [](Impl& s, Context& c) { s.service_routes.metrics_route(c); }, false, {}},
+        {"GET", "/openapi.yaml", "/openapi.yaml", [](Impl& s, Context& c) { s.service_routes.openapi(c); }, false, {}},
+        {"GET", "/v1/params", "/v1/params", [](Impl& s, Context& c) { s.service_routes.params(c); }, false, {}},
+        {"GET", "/v1/params/schema", "/v1/params/schema", [](Impl& s, Context& c) { s.service_routes.params_schema(c); }, false, {}},
+        {"GET", "/v1/report/schema", "/v1/report/schema", [](Impl& s, Context& c) { s.service_routes.report_schema(c); }, false, {}},
+        {"POST", "/v1/denoise", "/v1/denoise", [](Impl& s, Context& c) { s.jobs.denoise(c); }, true, {}},
+        {"POST", "/v1/jobs", "/v1/jobs", [](Impl& s, Context& c) { s.jobs.create_job(c); }, true, {}},
+        {"GET", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", [](Impl& s, Context& c) { s.jobs.get_job(c); }, false, {}},
+        {"DELETE", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", [](Impl& s, Context& c) { s.jobs.delete_job(c); }, false, {}},
+        {"GET", "/v1/jobs/([^/]+)/result", "/v1/jobs/{id}/result", [](Impl& s, Context& c) { s.jobs.get_result(c); }, false, {}},
+        {"GET", "/", "/", [](Impl& s, Context& c) { s.service_routes.web_page(c); }, false, {}},
+        {"GET", "/web/(.+)", "/web/{path}", [](Impl& s, Context& c) { s.service_routes.web_page(c); }, false, {}},
     };
   }
 
@@ -122,6 +125,9 @@ struct HttpService::Impl : JobRoutes {
     // Only bodies read by httplib itself (routes without a ContentReader) obey this; our
     // POST routes count bytes themselves because chunked uploads bypass it (0.11.4).
     svr.set_payload_max_length(std::size_t(config.max_body_bytes));
+    // Byte ranges leave the request before routing (http_support.h, request_ranges()), so an
+    // error body is never sliced and no handler changes a const request.
+    svr.set_request_setup([](httplib::Request& req) { take_request_ranges(req); });
     svr.set_tcp_nodelay(true);
     // Not httplib::default_socket_options: 0.11.4 sets SO_REUSEPORT there, with which a second
     // server binds the same port without a word and the kernel splits connections between the
@@ -177,9 +183,6 @@ struct HttpService::Impl : JobRoutes {
 
   void write_problem(const httplib::Request& req, httplib::Response& res, const Problem& p,
                      const std::string& request_id) {
-    // Byte ranges apply to result downloads only, never to an error body (httplib would
-    // otherwise slice it into multipart/byteranges).
-    const_cast<httplib::Request&>(req).ranges.clear();
     res.status = p.status;
     if (p.retry_after_s) replace_header(res, "Retry-After", std::to_string(*p.retry_after_s));
     if (p.status == 401) replace_header(res, "WWW-Authenticate", "Bearer realm=\"meshdenoise\"");
@@ -192,7 +195,7 @@ struct HttpService::Impl : JobRoutes {
                 const httplib::ContentReader* reader) {
     Context ctx{req, res, reader, request_id_of(req, res)};
     try {
-      (this->*route.handler)(ctx);
+      route.handler(*this, ctx);
     } catch (...) {
       const Problem p = problem_from_exception(std::current_exception());
       if (route.reads_body && !ctx.body_consumed && has_request_body(req)) close_after_response(req, res);
@@ -263,15 +266,13 @@ struct HttpService::Impl : JobRoutes {
       return reject(make_problem(ProblemType::TooManyHeaders, "the request has " + std::to_string(req.headers.size()) + " header fields, more than the limit of " +
                                      std::to_string(kMaxRequestHeaders)));
     // Several ranges could multiply a result's size (one 1 MB result became 209 MB with 200
-    // ranges in 0.11.4): refuse them; single ranges are honoured on result downloads only.
-    if (req.ranges.size() > 1)
+    // ranges in 0.11.4): refuse them. A single range is honoured by result downloads only
+    // (job_resource.cpp); the request setup took the ranges out of the request (install()).
+    if (request_ranges().size() > 1)
       return reject(make_problem(ProblemType::MultipleRanges, "send at most one byte range"));
-    static const std::regex result_path("/v1/jobs/[^/]+/result");
-    if (!req.ranges.empty() && !(req.method == "GET" && std::regex_match(req.path, result_path)))
-      const_cast<httplib::Request&>(req).ranges.clear();
-    if ((!config.auth_token.empty() || client_keys().enabled()) && req.method != "OPTIONS" && req.path.rfind("/v1/", 0) == 0) {
+    if ((!config.auth_token.empty() || jobs.client_keys().enabled()) && req.method != "OPTIONS" && req.path.rfind("/v1/", 0) == 0) {
       if (!authorized(req.get_header_value("Authorization")))
-        return reject(make_problem(ProblemType::Unauthorized, client_keys().enabled()
+        return reject(make_problem(ProblemType::Unauthorized, jobs.client_keys().enabled()
                                                                   ? "this server requires 'Authorization: Bearer <your API key>' on /v1 routes"
                                                                   : "this server requires 'Authorization: Bearer <token>' on /v1 routes"));
     }
@@ -281,7 +282,7 @@ struct HttpService::Impl : JobRoutes {
   // --api-keys: one of the clients' keys; --auth-token: the shared token (constant-time
   // comparisons: timing does not reveal how many leading bytes matched).
   bool authorized(const std::string& header) const {
-    if (client_keys().enabled()) return client_keys().client(header) != nullptr;
+    if (jobs.client_keys().enabled()) return jobs.client_keys().client(header) != nullptr;
     const std::string token = bearer_token(header);
     return !token.empty() && equal_secrets(token, config.auth_token);
   }
@@ -382,100 +383,6 @@ struct HttpService::Impl : JobRoutes {
               {"remote", req.remote_addr}});
   }
 
-  // ---------------------------------------------------------------- handlers
-  void healthz(Context& ctx) { set_json(ctx.res, {{"status", "ok"}}); }
-
-  void readyz(Context& ctx) {
-    if (queue.draining()) {
-      Problem p = make_problem(ProblemType::Draining, "the server is shutting down");
-      p.retry_after_s = 5;
-      throw HttpError(p);
-    }
-    if (queue.saturated()) {
-      Problem p = make_problem(ProblemType::QueueFull, "the job queue is full");
-      p.retry_after_s = queue.retry_after_s();
-      throw HttpError(p);
-    }
-    if (auto p = store->unavailable()) throw HttpError(*p);
-    set_json(ctx.res, {{"status", "ready"},
-                       {"job_store", store->kind()},
-                       {"queued", queue.queued()},
-                       {"running", queue.running()},
-                       {"capacity", queue.capacity()},
-                       {"workers", queue.workers()}});
-  }
-
-  void metrics_route(Context& ctx) {
-    ctx.res.status = 200;
-    std::string text = metrics.render({queue.queued(), queue.capacity(), queue.running(), queue.workers(),
-                                       queue.draining(), std::max(0, waiting())});
-    store->render_metrics(text);
-    render_connection_metrics(text);
-    ctx.res.set_content(text, "text/plain; version=0.0.4; charset=utf-8");
-  }
-
-  // The connection gate's state and the connections it closed to protect the service.
-  void render_connection_metrics(std::string& out) {
-    const ConnectionGate::Counts c = svr.gate().counts();
-    out += "# HELP mdn_http_connections Client connections: open, waiting for a request (no thread), queued for a thread.\n"
-           "# TYPE mdn_http_connections gauge\n";
-    out += "mdn_http_connections{state=\"open\"} " + std::to_string(c.open) + "\n";
-    out += "mdn_http_connections{state=\"waiting\"} " + std::to_string(c.parked) + "\n";
-    out += "mdn_http_connections{state=\"queued\"} " + std::to_string(c.queued) + "\n";
-    out += "# HELP mdn_http_connections_closed_total Connections closed by the gate: refused at a per-client or total cap, "
-           "evicted while waiting, head not complete in time, no thread in time.\n"
-           "# TYPE mdn_http_connections_closed_total counter\n";
-    const std::pair<const char*, std::int64_t> reasons[] = {{"client_limit", c.refused_client}, {"total_limit", c.refused_total},
-                                                            {"evicted", c.evicted},           {"head_timeout", c.head_timeouts},
-                                                            {"queue_timeout", c.queue_timeouts}};
-    for (const auto& [reason, n] : reasons)
-      out += std::string("mdn_http_connections_closed_total{reason=\"") + reason + "\"} " + std::to_string(n) + "\n";
-  }
-
-  void openapi(Context& ctx) {
-    ctx.res.status = 200;
-    const auto doc = embedded::openapi_yaml();
-    ctx.res.set_content(doc.data(), doc.size(), "application/yaml");
-  }
-
-  void params(Context& ctx) {
-    json specs = json::array();
-    for (const ParamSpec& s : param_specs()) {
-      specs.push_back({{"name", s.name},
-                       {"type", s.integer ? "integer" : "number"},
-                       {"default", s.default_value()},
-                       {"minimum", s.min},
-                       {"maximum", s.max},
-                       {"paper_minimum", s.paper_min},
-                       {"paper_maximum", s.paper_max},
-                       {"unit", s.unit},
-                       {"equation", s.equation},
-                       {"description", s.description}});
-    }
-    set_json(ctx.res, {{"defaults", service::to_json(service::JobParams{})},
-                       {"parameters", specs},
-                       {"schema", json::parse(embedded::params_schema_json())}});
-  }
-
-  void params_schema(Context& ctx) {
-    ctx.res.status = 200;
-    const auto doc = embedded::params_schema_json();
-    ctx.res.set_content(doc.data(), doc.size(), "application/schema+json");
-  }
-
-  void report_schema(Context& ctx) {
-    ctx.res.status = 200;
-    const auto doc = embedded::report_schema_json();
-    ctx.res.set_content(doc.data(), doc.size(), "application/schema+json");
-  }
-
-  // GET / and GET /web/{path}: the web page (web_routes.h), unless --web off.
-  void web_page(Context& ctx) {
-    if (!config.web)
-      throw HttpError(make_problem(ProblemType::NotFound, "no route GET " + ctx.req.path + " (--web off)"));
-    serve_web_file(ctx.req, ctx.res, ctx.req.matches.size() > 1 ? ctx.req.matches[1].str() : "index.html");
-  }
-
   // ---------------------------------------------------------------- state
   const ServerConfig config;
   const std::shared_ptr<const EventLog> log;
@@ -483,7 +390,9 @@ struct HttpService::Impl : JobRoutes {
   Metrics& metrics;
   JobQueue& queue;
   JobStore* store;
+  JobRoutes jobs;        // the job routes (/v1/denoise, /v1/jobs...)
   GatedServer svr;
+  ServiceRoutes service_routes;  // the service's own routes (health, readiness, metrics, contract, page)
   std::vector<Route> routes;
   std::string id_prefix;
   std::atomic<std::uint64_t> request_counter{0};

@@ -43,6 +43,17 @@ thread_local bool t_bytes_left_unread = false;
 
 bool take_bytes_left_unread() { return std::exchange(t_bytes_left_unread, false); }
 
+namespace {
+thread_local httplib::Ranges t_request_ranges;
+}  // namespace
+
+void take_request_ranges(httplib::Request& req) {
+  t_request_ranges = std::move(req.ranges);
+  req.ranges.clear();
+}
+
+const httplib::Ranges& request_ranges() { return t_request_ranges; }
+
 // Answers this request, then closes the connection (access_log does it once the response is
 // written, with a lingering close): used when the request body stays unread, or when what
 // follows on the connection cannot be told apart from the rest of an unparseable request.

@@ -35,6 +35,12 @@ void replace_header(httplib::Response& res, const std::string& key, const std::s
 void close_after_response(const httplib::Request& req, httplib::Response& res);
 // Whether close_after_response was called for this thread's current request; clears the flag.
 bool take_bytes_left_unread();
+// The byte ranges of this thread's current request. GatedServer's request setup moves them out
+// of the request (take_request_ranges) before routing, so cpp-httplib never slices an answer by
+// itself: the result download applies a single range (job_resource.cpp), every other answer
+// ignores them, and no handler has to change a const request.
+void take_request_ranges(httplib::Request& req);
+const httplib::Ranges& request_ranges();
 // A header value must not carry CR/LF (response splitting) nor other control characters.
 std::string header_safe(std::string_view text);
 std::string format_ms(double ms);  // "%.3f"

@@ -24,7 +24,7 @@
 
 #include "core/io/document.h"
 #include "server/http/problem.h"
-#include "server/job_runner.h"
+#include "service/job_runner.h"
 
 namespace mdn::http {
 

@@ -6,9 +6,9 @@
 #include <vector>
 
 #include "server/http/content_coding.h"
-#include "server/job_json.h"
-#include "server/output_files.h"
-#include "server/params_json.h"
+#include "service/job_json.h"
+#include "service/output_files.h"
+#include "service/params_json.h"
 
 namespace mdn::http {
 
@@ -52,16 +52,28 @@ std::string server_timing(const JobSnapshot& s) {
 void write_result(Context& ctx, const JobSnapshot& s) {
   const service::JobOutput& out = *s.output;
   httplib::Response& res = ctx.res;
-  // A single byte range of a result is honoured (resumable downloads); httplib slices it.
-  if (ctx.req.ranges.size() == 1) {
-    const auto [first, last] = ctx.req.ranges.front();
+  // A single byte range of a result is honoured (resumable downloads): offset and length as
+  // cpp-httplib computes them (a suffix range counts from the end, an open one runs to it),
+  // the last byte clamped to the result's (RFC 9110, 14.1.2).
+  const httplib::Ranges& ranges = request_ranges();
+  std::size_t offset = 0, length = out.bytes.size();
+  if (ranges.size() == 1) {
+    auto [first, last] = ranges.front();
     const auto size = std::int64_t(out.bytes.size());
     const bool ok = (first >= 0 && first < size && (last < 0 || last >= first)) || (first < 0 && last > 0);
     if (!ok) {
       replace_header(res, "Content-Range", "bytes */" + std::to_string(size));
       throw HttpError(make_problem(ProblemType::RangeNotSatisfiable, "the result has " + std::to_string(size) + " bytes"));
     }
+    if (first < 0) {
+      first = std::max<std::int64_t>(0, size - last);
+      last = size - 1;
+    }
+    if (last < 0 || last >= size) last = size - 1;
+    offset = std::size_t(first);
+    length = std::size_t(last - first + 1);
     res.status = 206;
+    res.set_header("Content-Range", "bytes " + std::to_string(first) + "-" + std::to_string(last) + "/" + std::to_string(size));
   } else {
     res.status = 200;
   }
@@ -78,9 +90,13 @@ void write_result(Context& ctx, const JobSnapshot& s) {
     res.set_header("Content-Encoding", "gzip");
   }
   res.set_header("Vary", "Accept-Encoding");
-  res.set_content_provider(body->size(), out.media_type,
-                           [body](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
-                             return sink.write(body->data() + offset, length);
+  if (res.status == 200) {
+    offset = 0;
+    length = body->size();  // gzipped or not
+  }
+  res.set_content_provider(length, out.media_type,
+                           [body, offset](std::size_t at, std::size_t n, httplib::DataSink& sink) {
+                             return sink.write(body->data() + offset + at, n);
                            });
   res.set_header("Content-Disposition", "attachment; filename=\"" + service::output_file_name({}, out.format) + "\"");
   res.set_header("X-Denoise-Params", service::to_json(out.effective).dump());

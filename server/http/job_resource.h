@@ -1,6 +1,6 @@
 // What the job routes answer: a job's JSON resource (GET /v1/jobs/{id}), a finished job's
 // result with its headers (GET /v1/jobs/{id}/result, POST /v1/denoise), the per-surface reports
-// and the Server-Timing header, all over the one JSON view of the output (server/job_json.h).
+// and the Server-Timing header, all over the one JSON view of the output (service/job_json.h).
 #pragma once
 
 #include <string>

@@ -11,7 +11,7 @@
 #include "server/http/connection_probe.h"
 #include "server/http/job_resource.h"
 #include "server/http/problem.h"
-#include "server/params_json.h"
+#include "service/params_json.h"
 
 namespace mdn::http {
 namespace {

@@ -1,7 +1,7 @@
 // The job routes: POST /v1/denoise (synchronous: the answer is the result), POST /v1/jobs
 // (asynchronous, with Idempotency-Key), GET and DELETE /v1/jobs/{id} (GET with ?wait=: a long
 // poll), GET /v1/jobs/{id}/result. The handlers of http_server.cpp's route table; the server
-// inherits them (its table names them as its own).
+// holds them as one of its parts (composition: its table names which part answers).
 //
 // Thread-safety contract: the handlers run on the HTTP threads, any number at once; the queue,
 // the store and the body reader are thread-safe, and the count of long polls waiting is an atomic.

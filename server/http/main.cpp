@@ -66,10 +66,98 @@ bool wait_for_signal(const sigset_t& set, double timeout_s) {
   }
 }
 
+using namespace mdn::http;
+
+void log_listening(const EventLog& log, const ServerConfig& config, int port) {
+  log.info("listening", {{"host", config.host},
+                         {"port", port},
+                         {"workers", config.effective_workers()},
+                         {"threads_per_job", config.threads_per_job},
+                         {"queue_capacity", config.queue_capacity},
+                         {"job_store", config.queue ? "redis" : "memory"},
+                         {"io_threads", config.effective_io_threads()},
+                         {"max_body", config.max_body_bytes},
+                         {"auth", !config.auth_token.empty()}});
+}
+
+// The ids of the jobs a drain waits for (queued and running).
+nlohmann::json unfinished_ids(HttpService& service) {
+  nlohmann::json ids = nlohmann::json::array();
+  for (const auto& job : service.queue().unfinished()) ids.push_back(job.id);
+  return ids;
+}
+
+// Every job the drain gives up on is named (with the Redis store, unfinished jobs stay in Redis
+// for another replica).
+void log_abandoned(const EventLog& log, HttpService& service) {
+  const auto abandoned = service.queue().unfinished();
+  log.warn("drain_incomplete", {{"queued", service.queue().queued()},
+                                {"running", service.queue().running()},
+                                {"abandoned", abandoned.size()},
+                                {"still_running", unfinished_ids(service)}});
+  for (const auto& job : abandoned)
+    log.warn("job_abandoned", {{"job_id", job.id}, {"state", std::string(to_string(job.state))}, {"async", job.asynchronous}});
+}
+
+// The drain after the first signal: within --drain-grace; a second signal cuts it short (the
+// watchdog then bounds the stop). True if every accepted job ended.
+bool drain(HttpService& service, const ServerConfig& config, const EventLog& log, const sigset_t& signals,
+           ExitWatchdog& watchdog) {
+  // What the drain waits for, and what it does not: finished results nobody downloaded yet
+  // (with the memory store they go with the process).
+  log.info("draining", {{"grace_s", config.drain_grace_s},
+                        {"queued", service.queue().queued()},
+                        {"running", service.queue().running()},
+                        {"waiting_for", unfinished_ids(service)},
+                        {"results_not_downloaded", service.queue().unfetched_results()}});
+  service.begin_drain();
+  // Drain on a helper thread so a second signal can still cut the grace period short.
+  std::atomic<bool> drained_done{false};
+  bool drained = false;
+  std::thread drainer([&] {
+    drained = service.wait_drained(Clock::now() + std::chrono::milliseconds(std::int64_t(config.drain_grace_s * 1000)));
+    drained_done = true;
+  });
+  while (!drained_done) {
+    if (wait_for_signal(signals, 0.1)) {
+      log.warn("forced_stop", {{"queued", service.queue().queued()}, {"running", service.queue().running()}});
+      watchdog.arm(kStopBound);
+      service.stop();
+    }
+  }
+  drainer.join();
+  if (!drained) log_abandoned(log, service);
+  return drained;
+}
+
+// Serves until a signal, drains, stops. The exit code: 0 after a clean drain, 1 otherwise.
+int serve_until_signal(const ServerConfig& config, const std::shared_ptr<const EventLog>& log, const sigset_t& signals,
+                       ExitWatchdog& watchdog) {
+  HttpService service(config, log, make_service_parts(config, log));
+  const int port = service.bind();
+  if (!config.port_file.empty()) write_port_file(config.port_file, port);
+  log_listening(*log, config, port);
+  bool serve_ok = true;
+  const pthread_t main_thread = pthread_self();
+  std::atomic<bool> stopping{false};
+  std::thread server([&] {
+    serve_ok = service.serve();
+    // Listening failed on its own: wake the main thread as a signal would.
+    if (!stopping) pthread_kill(main_thread, SIGTERM);
+  });
+  wait_for_signal(signals, -1);
+  stopping = true;
+  const bool drained = drain(service, config, *log, signals, watchdog);
+  watchdog.arm(kStopBound);
+  service.stop();
+  server.join();
+  log->info("stopped", {{"drained", drained}});
+  return serve_ok && drained ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  using namespace mdn::http;
   ParsedCommandLine parsed;
   try {
     parsed = parse_command_line(std::vector<std::string>(argv + 1, argv + argc), [](const char* name) {
@@ -107,75 +195,7 @@ int main(int argc, char** argv) {
     std::_Exit(1);
   });
   try {
-    HttpService service(config, log, make_service_parts(config, log));
-    const int port = service.bind();
-    if (!config.port_file.empty()) write_port_file(config.port_file, port);
-    log->info("listening", {{"host", config.host},
-                            {"port", port},
-                            {"workers", config.effective_workers()},
-                            {"threads_per_job", config.threads_per_job},
-                            {"queue_capacity", config.queue_capacity},
-                            {"job_store", config.queue ? "redis" : "memory"},
-                            {"io_threads", config.effective_io_threads()},
-                            {"max_body", config.max_body_bytes},
-                            {"auth", !config.auth_token.empty()}});
-    bool serve_ok = true;
-    const pthread_t main_thread = pthread_self();
-    std::atomic<bool> stopping{false};
-    std::thread server([&] {
-      serve_ok = service.serve();
-      // Listening failed on its own: wake the main thread as a signal would.
-      if (!stopping) pthread_kill(main_thread, SIGTERM);
-    });
-
-    wait_for_signal(signals, -1);
-    stopping = true;
-    // What the drain waits for (queued and running jobs, by id), and what it does not: finished
-    // results nobody downloaded yet (with the memory store they go with the process).
-    auto waiting_for = [&service] {
-      nlohmann::json ids = nlohmann::json::array();
-      for (const auto& job : service.queue().unfinished()) ids.push_back(job.id);
-      return ids;
-    };
-    log->info("draining", {{"grace_s", config.drain_grace_s},
-                           {"queued", service.queue().queued()},
-                           {"running", service.queue().running()},
-                           {"waiting_for", waiting_for()},
-                           {"results_not_downloaded", service.queue().unfetched_results()}});
-    service.begin_drain();
-    // Drain on a helper thread so a second signal can still cut the grace period short.
-    std::atomic<bool> drained_done{false};
-    bool drained = false;
-    std::thread drainer([&] {
-      drained = service.wait_drained(Clock::now() + std::chrono::milliseconds(std::int64_t(config.drain_grace_s * 1000)));
-      drained_done = true;
-    });
-    while (!drained_done) {
-      if (wait_for_signal(signals, 0.1)) {
-        log->warn("forced_stop", {{"queued", service.queue().queued()}, {"running", service.queue().running()}});
-        watchdog.arm(kStopBound);
-        service.stop();
-      }
-    }
-    drainer.join();
-    if (!drained) {
-      // Every job the drain gives up on is named (with the Redis store, unfinished jobs stay
-      // in Redis for another replica); the exit code says the drain was incomplete.
-      const auto abandoned = service.queue().unfinished();
-      nlohmann::json ids = nlohmann::json::array();
-      for (const auto& job : abandoned) ids.push_back(job.id);
-      log->warn("drain_incomplete", {{"queued", service.queue().queued()},
-                                     {"running", service.queue().running()},
-                                     {"abandoned", abandoned.size()},
-                                     {"still_running", ids}});
-      for (const auto& job : abandoned)
-        log->warn("job_abandoned", {{"job_id", job.id}, {"state", std::string(to_string(job.state))}, {"async", job.asynchronous}});
-    }
-    watchdog.arm(kStopBound);
-    service.stop();
-    server.join();
-    log->info("stopped", {{"drained", drained}});
-    if (!serve_ok || !drained) return 1;
+    return serve_until_signal(config, log, signals, watchdog);
   } catch (const BindError& e) {
     log->error("cannot_listen", {{"host", config.host}, {"port", config.port}, {"detail", e.what()}});
     return kExitCannotListen;
@@ -183,5 +203,4 @@ int main(int argc, char** argv) {
     log->error("fatal", {{"detail", e.what()}});
     return 1;
   }
-  return 0;
 }

@@ -7,7 +7,7 @@
 #include <utility>
 
 #include "server/http/connection_gate.h"
-#include "server/params_json.h"
+#include "service/params_json.h"
 
 namespace mdn::http {
 

@@ -12,7 +12,7 @@
 // The core headers (Eigen) before httplib.h: its <resolv.h> defines a macro `_res` that breaks
 // Eigen's parameter names.
 #include "core/io/document.h"
-#include "server/job_runner.h"
+#include "service/job_runner.h"
 #include "server/http/metrics.h"
 #include "server/http/problem.h"
 #include "server/http/http_support.h"

@@ -47,7 +47,7 @@ export class ParamForm {
   constructor(params, schema, containers) {
     this.schema = schema;
     this.specs = new Map(params.parameters.map((p) => [p.name, p]));
-    // The fields auto mode chooses are the ones its defaults leave out (server/params_json.h).
+    // The fields auto mode chooses are the ones its defaults leave out (service/params_json.h).
     this.autoChosen = new Set(Object.keys(this.schema.properties)
       .filter((name) => name !== 'output' && !(name in params.defaults)));
     this.rows = new Map();  // path -> {control, kind, prop, row}

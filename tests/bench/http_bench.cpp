@@ -28,7 +28,7 @@
 #include "core/noise.h"
 #include "server/http/http_server.h"
 #include "bench_stats.h"
-#include "server/job_runner.h"
+#include "service/job_runner.h"
 
 // After Eigen: <httplib.h> pulls in <resolv.h>, whose `_res` macro breaks Eigen's headers.
 #include <httplib.h>
@@ -66,8 +66,8 @@ std::string noisy_fandisk_glb(const fs::path& data) {
   mesh.V = mdn::add_noise(mesh, noise);
   mdn::io::EncodeOptions options;
   options.format = mdn::io::Format::Glb;
-  options.draco = true;
-  return doc->encode(options);
+  options.compression = mdn::io::Compression::Draco;
+  return doc->encode(options).bytes;
 }
 
 struct Server {

@@ -335,7 +335,7 @@ int main(int argc, char** argv) {
   }
   mdn::io::EncodeOptions encode;
   encode.format = *input_format;
-  const std::string body = mdn::io::decode(mdn::test::off_text(mesh), mdn::io::Format::Off)->encode(encode);
+  const std::string body = mdn::io::decode(mdn::test::off_text(mesh), mdn::io::Format::Off)->encode(encode).bytes;
   std::printf("input: noisy icosphere, %lld faces, %s %zu bytes; %u hardware threads\n",
               static_cast<long long>(mesh.F.rows()), format.c_str(), body.size(), std::thread::hardware_concurrency());
   Redis redis(fsync);

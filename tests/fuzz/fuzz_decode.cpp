@@ -78,10 +78,9 @@ io::EncodeOptions fuzzed_options(std::string_view bytes, const io::Limits& limit
   options.color_bits = b[4] % 33;
   options.generic_bits = b[5] % 33;
   options.compression_level = b[6] % 12;  // 0..11
-  constexpr std::optional<io::Compression> kModes[] = {std::nullopt, io::Compression::AsInput, io::Compression::None,
-                                                       io::Compression::Draco, io::Compression::Meshopt};
+  constexpr io::Compression kModes[] = {io::Compression::AsInput, io::Compression::None, io::Compression::Draco,
+                                        io::Compression::Meshopt};
   options.compression = kModes[b[7] % std::size(kModes)];
-  options.draco = b[7] & 0x80;
   options.max_memory_bytes = limits.max_decoded_bytes;
   return options;
 }
@@ -105,7 +104,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::string out;
     // The job's validation step first (settings, memory), then the encoder, as run_job does.
     if (!client_error_or_ok([&] { io::check_encode(*doc, options, limits); }, "check_encode")) continue;
-    if (!client_error_or_ok([&] { out = doc->encode(options); }, "encode")) continue;
+    if (!client_error_or_ok([&] { out = doc->encode(options).bytes; }, "encode")) continue;
     // What we write must read back (without limits smaller than what we accepted).
     std::unique_ptr<io::MeshDocument> again;
     try {
@@ -113,7 +112,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     } catch (const std::exception& e) {
       std::fprintf(stderr, "to %s, compression %s, bits position %d normal %d texcoord %d color %d generic %d, level %d\n",
                    std::string(io::to_string(target)).c_str(),
-                   options.compression ? std::string(io::to_string(*options.compression)).c_str() : options.draco ? "(draco)" : "(none)",
+                   std::string(io::to_string(options.compression)).c_str(),
                    options.position_bits, options.normal_bits, options.texcoord_bits, options.color_bits, options.generic_bits,
                    options.compression_level);
       finding("our output does not decode", e.what());

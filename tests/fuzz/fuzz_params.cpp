@@ -9,7 +9,7 @@
 #include <string>
 
 #include "core/errors.h"
-#include "server/params_json.h"
+#include "service/params_json.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

@@ -28,9 +28,9 @@ void write(const fs::path& dir, const std::string& bytes) {
 std::string encode(const std::string& off, io::Format format, bool draco, int position_bits = 16) {
   io::EncodeOptions options;
   options.format = format;
-  options.draco = draco;
+  options.compression = draco ? mdn::io::Compression::Draco : mdn::io::Compression::None;
   options.position_bits = position_bits;
-  return io::decode(off, io::Format::Off)->encode(options);
+  return io::decode(off, io::Format::Off)->encode(options).bytes;
 }
 
 }  // namespace
@@ -80,11 +80,11 @@ int main(int argc, char** argv) {
   for (const auto variant : {test_io::Variant::Plain, test_io::Variant::Quantized, test_io::Variant::Sparse}) {
     const std::string glb = test_io::sphere_scene_glb(fixture, variant);
     write(out / "glb", glb);
-    write(out / "glb", io::decode(glb, io::Format::Glb)->encode({}));  // its Draco output
+    write(out / "glb", io::decode(glb, io::Format::Glb)->encode({}).bytes);  // its Draco output
     io::EncodeOptions gltf;
     gltf.format = io::Format::Gltf;
-    gltf.draco = false;
-    write(out / "gltf", io::decode(glb, io::Format::Glb)->encode(gltf));
+    gltf.compression = mdn::io::Compression::None;
+    write(out / "gltf", io::decode(glb, io::Format::Glb)->encode(gltf).bytes);
   }
   write(out / "glb", test_io::strip_and_fan_glb(3));
   // EXT_meshopt_compression (every mode and filter, KHR_mesh_quantization positions).

@@ -35,7 +35,7 @@ using nlohmann::json;
 
 std::string binary() {
   const char* dir = std::getenv("MDN_BUILD_DIR");
-  return dir ? std::string(dir) + "/server/meshdenoise" : std::string();
+  return dir ? std::string(dir) + "/cli/meshdenoise" : std::string();
 }
 
 std::string read_text(const fs::path& path) {

@@ -7,7 +7,7 @@
 
 #include "http_fixture.h"
 
-#include "server/params_json.h"
+#include "service/params_json.h"
 
 namespace mdn::test {
 namespace {
@@ -132,6 +132,46 @@ TEST_F(HttpApi, AsynchronousJobEqualsCliOutputAndReportsProgress) {
   ASSERT_TRUE(del);
   EXPECT_EQ(del->status, 204);
   expect_problem(c->Get(location), 404);
+}
+
+// A result download honours one byte range: a suffix range counts from the end, an open one
+// runs to it, a last byte past the end is clamped to the result's, a first byte past it is a
+// 416 that names the size; an error answer is never sliced by a Range header.
+TEST_F(HttpApi, ResultByteRangesAsRfc9110Says) {
+  ServerProcess server({"--workers", "1"});
+  ASSERT_TRUE(server.started()) << server.log();
+  const std::string noisy = noisy_sphere_off(2, 3);
+  auto c = server.client();
+  auto r = c->Post("/v1/jobs?params=%7B%22mode%22%3A%22none%22%7D", noisy, "model/x-off");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 202) << r->body;
+  const std::string location = r->get_header_value("Location");
+  ASSERT_EQ(wait_job(*c, parse_json(r->body)["id"]).value("state", ""), "succeeded");
+  auto full = c->Get(location + "/result");
+  ASSERT_TRUE(full && full->status == 200);
+  const std::string bytes = full->body;
+  const std::string size = std::to_string(bytes.size());
+  const struct {
+    std::string range, body, content_range;
+  } cases[] = {
+      {"bytes=0-9", bytes.substr(0, 10), "bytes 0-9/" + size},
+      {"bytes=-5", bytes.substr(bytes.size() - 5), "bytes " + std::to_string(bytes.size() - 5) + "-" + std::to_string(bytes.size() - 1) + "/" + size},
+      {"bytes=10-", bytes.substr(10), "bytes 10-" + std::to_string(bytes.size() - 1) + "/" + size},
+      {"bytes=3-99999999", bytes.substr(3), "bytes 3-" + std::to_string(bytes.size() - 1) + "/" + size},
+  };
+  for (const auto& k : cases) {
+    auto part = c->Get(location + "/result", {{"Range", k.range}});
+    ASSERT_TRUE(part);
+    EXPECT_EQ(part->status, 206) << k.range;
+    EXPECT_EQ(part->body, k.body) << k.range;
+    EXPECT_EQ(part->get_header_value("Content-Range"), k.content_range) << k.range;
+  }
+  auto beyond = c->Get(location + "/result", {{"Range", "bytes=" + size + "-"}});
+  expect_problem(beyond, 416);
+  EXPECT_EQ(beyond->get_header_value("Content-Range"), "bytes */" + size);
+  // An error answer with a Range header: the whole problem document, not a slice of it.
+  const json missing = expect_problem(c->Get("/v1/jobs/0123456789abcdef0123456789abcdef/result", {{"Range", "bytes=0-3"}}), 404);
+  EXPECT_EQ(missing.value("status", 0), 404);
 }
 
 TEST_F(HttpApi, GlbRoundTripEqualsCli) {

@@ -58,7 +58,7 @@ inline std::string source_dir() {
   return dir ? dir : MDN_DEFAULT_SOURCE_DIR;
 }
 inline std::string server_binary() { return build_dir() + "/server/http/meshdenoise-server"; }
-inline std::string cli_binary() { return build_dir() + "/server/meshdenoise"; }
+inline std::string cli_binary() { return build_dir() + "/cli/meshdenoise"; }
 
 inline std::string read_file(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);

@@ -1,5 +1,5 @@
 // The contract in proto/ against the code and the running server:
-//  - params.schema.json agrees with core's param_specs() and server/params_json (names,
+//  - params.schema.json agrees with core's param_specs() and service/params_json (names,
 //    types, ranges, defaults, enumerations); its examples are accepted and its counter-examples
 //    refused by an independent validator (python3-jsonschema), by job_params_from_json and by
 //    the running server;
@@ -13,8 +13,8 @@
 #include "http_fixture.h"
 #include "core/params.h"
 #include "server/http/http_server.h"
-#include "server/job_timings.h"
-#include "server/params_json.h"
+#include "service/job_timings.h"
+#include "service/params_json.h"
 
 namespace mdn::test {
 namespace {
@@ -51,7 +51,7 @@ TEST(Proto, ParamsSchemaAgreesWithCoreParamSpecs) {
     EXPECT_DOUBLE_EQ(p.at("maximum").get<double>(), spec.max);
     EXPECT_DOUBLE_EQ(p.at("default").get<double>(), spec.default_value());
   }
-  // Exactly the fields server/params_json reads and writes, with its defaults (manual mode
+  // Exactly the fields service/params_json reads and writes, with its defaults (manual mode
   // echoes every field; auto mode leaves out the ones the rule chooses).
   service::JobParams manual;
   manual.denoise.mode = ParamMode::Manual;

@@ -593,7 +593,7 @@ TEST_F(RedisQueue, JobsADrainAbandonsStayInRedisForAnotherReplica) {
   RedisServer redis;
   auto a = replica(redis, {"--workers", "1", "--drain-grace", "0.2"});
   // One job long enough to be running when the signal comes, two small ones queued behind it.
-  std::vector<std::string> ids{post_job(*a, noisy_sphere_off(4, 14), kMediumParams)};
+  std::vector<std::string> ids{post_job(*a, noisy_sphere_off(5, 14), kMediumParams)};
   for (int i = 0; i < 2; ++i) ids.push_back(post_job(*a, noisy_sphere_off(1, 15 + std::uint64_t(i)), kSmallParams));
   ASSERT_EQ(wait_state(*a, ids[0], {"running", "succeeded"}).value("state", ""), "running");
   a->signal(SIGTERM);

@@ -32,8 +32,8 @@ std::string grid_in(Format format) {
   if (format == Format::Off) return off;
   EncodeOptions options;
   options.format = format;
-  options.draco = format == Format::Drc;
-  return decode(off, Format::Off)->encode(options);
+  options.compression = format == Format::Drc ? mdn::io::Compression::Draco : mdn::io::Compression::None;
+  return decode(off, Format::Off)->encode(options).bytes;
 }
 
 class DecoderCancel : public ::testing::TestWithParam<Format> {};
@@ -76,10 +76,10 @@ TEST(EncoderCancel, SameFormatAndDracoWritersStopWhenAsked) {
     EncodeOptions options;
     CountingCancel stop(1);
     options.cancel = &stop;
-    EXPECT_THROW(doc->encode(options), CancelledError);
+    EXPECT_THROW(doc->encode(options).bytes, CancelledError);
     CountingCancel never(0);
     options.cancel = &never;
-    EXPECT_FALSE(doc->encode(options).empty());
+    EXPECT_FALSE(doc->encode(options).bytes.empty());
   }
 }
 

@@ -30,7 +30,7 @@ std::string grid_as(Format format) {
   if (format == Format::Off) return off;
   EncodeOptions options;
   options.format = format;
-  return decode(off, Format::Off)->encode(options);
+  return decode(off, Format::Off)->encode(options).bytes;
 }
 
 // Every input format, every output format, positions a denoiser could return for extreme
@@ -49,11 +49,11 @@ TEST(EncodeCheck, EveryResultDecodesAgainOrIsRefused) {
           for (TriMesh& s : doc->surfaces()) s.V(1, 0) = value, s.V(2, 1) = -value;
           EncodeOptions options;
           options.format = out;
-          options.draco = draco;
+          options.compression = draco ? mdn::io::Compression::Draco : mdn::io::Compression::None;
           std::string result;
           try {
             check_encode(*doc, options, Limits{});
-            result = doc->encode(options);
+            result = doc->encode(options).bytes;
           } catch (const UnsupportedError&) {
             ++refused;
             continue;
@@ -75,7 +75,7 @@ TEST(EncodeCheck, DracoAtEveryLevelReadsBackWithAnUnusedPoint) {
       EncodeOptions options;
       options.format = out;
       options.compression_level = level;
-      EXPECT_NO_THROW(decode(doc->encode(options), out)) << to_string(out) << " level " << level;
+      EXPECT_NO_THROW(decode(doc->encode(options).bytes, out)) << to_string(out) << " level " << level;
     }
 }
 
@@ -98,9 +98,9 @@ TEST(EncodeCheck, PlyRefusesACoordinateItsPropertyCannotHold) {
     }
     auto doc = decode(ply, Format::Ply);
     doc->surfaces()[0].V(0, 0) = 4e38;  // what a denoiser may move a vertex at 3e38 to
-    EXPECT_THROW(doc->encode(EncodeOptions{}), UnsupportedError) << encoding;
+    EXPECT_THROW(doc->encode(EncodeOptions{}).bytes, UnsupportedError) << encoding;
     doc->surfaces()[0].V(0, 0) = 3.3e38;
-    EXPECT_NO_THROW(decode(doc->encode(EncodeOptions{}), Format::Ply)) << encoding;
+    EXPECT_NO_THROW(decode(doc->encode(EncodeOptions{}).bytes, Format::Ply)) << encoding;
   }
 }
 
@@ -139,15 +139,15 @@ TEST(EncodeCheck, QuantisedAttributesPastDracosGridAreRefused) {
       EncodeOptions options;
       options.*field = bits;
       options.max_memory_bytes = std::int64_t{1} << 40;  // the value check, not the memory one
-      EXPECT_THROW(doc->encode(options), UnsupportedError) << semantic << " " << bits;
+      EXPECT_THROW(doc->encode(options).bytes, UnsupportedError) << semantic << " " << bits;
     }
     auto doc = decode(glb, Format::Glb);
-    EXPECT_NO_THROW(decode(doc->encode(EncodeOptions{}), Format::Glb)) << semantic;  // 0 bits: lossless
+    EXPECT_NO_THROW(decode(doc->encode(EncodeOptions{}).bytes, Format::Glb)) << semantic;  // 0 bits: lossless
     // Ordinary values quantise as before.
     auto small = decode(quad_with(semantic, components, 0.75f), Format::Glb);
     EncodeOptions options;
     options.*field = 12;
-    EXPECT_NO_THROW(decode(small->encode(options), Format::Glb)) << semantic;
+    EXPECT_NO_THROW(decode(small->encode(options).bytes, Format::Glb)) << semantic;
   }
 }
 
@@ -170,7 +170,7 @@ TEST(EncodeCheck, QuantisationBitsAreBoundedByTheMemoryLimit) {
     EXPECT_NE(what.find("at most 25 bits"), std::string::npos) << what;
   }
   big.max_memory_bytes = Limits{}.max_decoded_bytes;
-  EXPECT_THROW(doc->encode(big), UnsupportedError);  // the encoder checks it again
+  EXPECT_THROW(doc->encode(big).bytes, UnsupportedError);  // the encoder checks it again
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(2));
 
   auto off = decode("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", Format::Off);
@@ -181,10 +181,10 @@ TEST(EncodeCheck, QuantisationBitsAreBoundedByTheMemoryLimit) {
   positions.format = Format::Ply;  // no Draco: the bits cost nothing
   EXPECT_NO_THROW(check_encode(*off, positions, Limits{}));
   positions.format = Format::Glb;
-  positions.draco = false;
+  positions.compression = mdn::io::Compression::None;
   EXPECT_NO_THROW(check_encode(*off, positions, Limits{}));
   // Within the limit, Draco writes it.
-  positions.draco = true;
+  positions.compression = mdn::io::Compression::Draco;
   positions.position_bits = 20;
   EXPECT_NO_THROW(check_encode(*off, positions, Limits{}));
   // Settings out of range are a parameter error.

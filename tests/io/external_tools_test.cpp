@@ -60,11 +60,11 @@ TEST(ExternalTools, GlbAndGltfOutputsValidateAndLoad) {
     for (Eigen::Index i = 0; i < s.V.rows(); ++i) s.V.row(i) = s.V.row(i).normalized();
     for (const auto& [draco, format] : {std::pair{true, Format::Glb}, {false, Format::Glb}, {true, Format::Gltf}, {false, Format::Gltf}}) {
       EncodeOptions options;
-      options.draco = draco;
+      options.compression = draco ? mdn::io::Compression::Draco : mdn::io::Compression::None;
       options.format = format;
       options.texcoord_bits = 0;  // lossless UVs: compared bit for bit below
       const std::string name = std::string("out") + (draco ? "-draco" : "") + (format == Format::Glb ? ".glb" : ".gltf");
-      const Json out = check(doc->encode(options), name);
+      const Json out = check(doc->encode(options).bytes, name);
       ASSERT_TRUE(out.is_object()) << name;
       EXPECT_EQ(out["errors"], 0) << name << ": " << out["messages"];
       const bool listed = std::find(out["extensionsUsed"].begin(), out["extensionsUsed"].end(), "KHR_draco_mesh_compression") !=
@@ -88,19 +88,19 @@ TEST(ExternalTools, StripsAndDracoInputsValidate) {
   auto strips = decode(test_io::strip_and_fan_glb(6), Format::Glb);
   for (bool draco : {false, true}) {
     EncodeOptions options;
-    options.draco = draco;
-    const Json out = check(strips->encode(options), draco ? "strips-draco.glb" : "strips.glb");
+    options.compression = draco ? mdn::io::Compression::Draco : mdn::io::Compression::None;
+    const Json out = check(strips->encode(options).bytes, draco ? "strips-draco.glb" : "strips.glb");
     ASSERT_TRUE(out.is_object());
     EXPECT_EQ(out["errors"], 0) << out["messages"];
   }
   // Draco in (our own output), uncompressed and Draco out again.
   const auto f = test_io::make_sphere();
   auto first = decode(test_io::sphere_scene_glb(f), Format::Glb);
-  auto doc = decode(first->encode({}), Format::Glb);
+  auto doc = decode(first->encode({}).bytes, Format::Glb);
   for (bool draco : {false, true}) {
     EncodeOptions options;
-    options.draco = draco;
-    const Json out = check(doc->encode(options), draco ? "redraco.glb" : "undraco.glb");
+    options.compression = draco ? mdn::io::Compression::Draco : mdn::io::Compression::None;
+    const Json out = check(doc->encode(options).bytes, draco ? "redraco.glb" : "undraco.glb");
     ASSERT_TRUE(out.is_object());
     EXPECT_EQ(out["errors"], 0) << out["messages"];
   }
@@ -118,7 +118,7 @@ TEST(ExternalTools, DrcOutputDecodesWithDracoDecoder) {
   auto doc = decode(off, Format::Off);
   EncodeOptions options;
   options.format = Format::Drc;
-  const std::string drc = doc->encode(options);
+  const std::string drc = doc->encode(options).bytes;
   const fs::path dir = test_io::temp_dir();
   test_io::write_file(dir / "sphere.drc", drc);
   std::string output;
@@ -130,7 +130,7 @@ TEST(ExternalTools, DrcOutputDecodesWithDracoDecoder) {
   ASSERT_EQ(test_io::run_command("draco_encoder -i '" + (dir / "sphere.ply").string() + "' -o '" + (dir / "again.drc").string() + "'", &output), 0) << output;
   auto again = decode(test_io::read_file(dir / "again.drc"), Format::Drc);
   EXPECT_EQ(again->surfaces()[0].F.rows(), m.F.rows());
-  EXPECT_EQ(sniff_format(again->encode({})), Format::Drc);
+  EXPECT_EQ(sniff_format(again->encode({}).bytes), Format::Drc);
 }
 
 }  // namespace

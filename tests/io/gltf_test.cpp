@@ -73,9 +73,9 @@ TEST_P(GltfOutputs, DenoisedGeometryComesBackEverythingElseUnchanged) {
   // Stand-in for the denoiser: the clean position of each welded vertex.
   for (Eigen::Index i = 0; i < s.V.rows(); ++i) s.V.row(i) = s.V.row(i).normalized();
   EncodeOptions options;
-  options.draco = GetParam();
-  const std::string out = doc->encode(options);
-  EXPECT_EQ(out, doc->encode(options));  // deterministic
+  options.compression = GetParam() ? mdn::io::Compression::Draco : mdn::io::Compression::None;
+  const std::string out = doc->encode(options).bytes;
+  EXPECT_EQ(out, doc->encode(options).bytes);  // deterministic
   EXPECT_EQ(sniff_format(out), Format::Glb);
   const Json in_json = glb_json(input), out_json = glb_json(out);
   expect_non_geometry_equal(in_json, out_json);
@@ -106,8 +106,8 @@ TEST(Gltf, UvsSurviveUncompressedBitForBit) {
   auto doc = decode(input, Format::Glb);
   doc->surfaces()[0].V *= 1.01;
   EncodeOptions options;
-  options.draco = false;
-  const std::string out = doc->encode(options);
+  options.compression = mdn::io::Compression::None;
+  const std::string out = doc->encode(options).bytes;
   const Json j = glb_json(out);
   // The UV accessor and its bytes are unchanged.
   const int uv = j["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"];
@@ -130,8 +130,8 @@ TEST(Gltf, QuantizedSparseAndStripInputsDecode) {
   for (float v : f.noisy) scaled.push_back(std::round(std::clamp(v / 1.2f, -1.0f, 1.0f) * 32767) / 32767.0f);
   EXPECT_LT(max_distance_to(quantized->surfaces()[0], scaled), 1e-6);
   EncodeOptions plain;
-  plain.draco = false;
-  auto requantized = decode(quantized->encode(plain), Format::Glb);
+  plain.compression = mdn::io::Compression::None;
+  auto requantized = decode(quantized->encode(plain).bytes, Format::Glb);
   EXPECT_EQ(requantized->surfaces()[0].F, quantized->surfaces()[0].F);
 
   auto sparse = decode(test_io::sphere_scene_glb(f, test_io::Variant::Sparse), Format::Glb);
@@ -140,7 +140,7 @@ TEST(Gltf, QuantizedSparseAndStripInputsDecode) {
   for (int i = 0; i < f.vertices(); ++i)
     for (int k = 0; k < 3; ++k) expected.push_back((i % 2 == 0 ? f.noisy : f.clean)[static_cast<std::size_t>(i * 3 + k)]);
   EXPECT_LT(max_distance_to(sparse->surfaces()[0], expected), 1e-6);
-  const std::string sparse_out = sparse->encode(plain);
+  const std::string sparse_out = sparse->encode(plain).bytes;
   EXPECT_EQ(glb_json(sparse_out).dump().find("\"sparse\""), std::string::npos);
 
   auto strips = decode(test_io::strip_and_fan_glb(6), Format::Glb);
@@ -152,8 +152,8 @@ TEST(Gltf, QuantizedSparseAndStripInputsDecode) {
   for (Eigen::Index i = 1; i < N.rows(); ++i) EXPECT_GT(N.row(i).dot(N.row(0)), 0.9);
   for (bool draco : {false, true}) {
     EncodeOptions options;
-    options.draco = draco;
-    auto again = decode(strips->encode(options), Format::Glb);
+    options.compression = draco ? mdn::io::Compression::Draco : mdn::io::Compression::None;
+    auto again = decode(strips->encode(options).bytes, Format::Glb);
     EXPECT_EQ(again->surfaces()[0].F.rows(), 12);
   }
 }
@@ -161,13 +161,13 @@ TEST(Gltf, QuantizedSparseAndStripInputsDecode) {
 TEST(Gltf, DracoInputRoundTripsAndGltfContainerToo) {
   const auto f = test_io::make_sphere();
   auto doc = decode(test_io::sphere_scene_glb(f), Format::Glb);
-  const std::string draco = doc->encode({});
+  const std::string draco = doc->encode({}).bytes;
   auto from_draco = decode(draco, Format::Glb);
   EXPECT_EQ(from_draco->surfaces()[0].V.rows(), doc->surfaces()[0].V.rows());
   EncodeOptions options;
-  options.draco = false;
+  options.compression = mdn::io::Compression::None;
   options.format = Format::Gltf;
-  const std::string gltf = from_draco->encode(options);
+  const std::string gltf = from_draco->encode(options).bytes;
   EXPECT_EQ(sniff_format(gltf), Format::Gltf);
   EXPECT_EQ(gltf.find("KHR_draco_mesh_compression"), std::string::npos);
   auto from_gltf = decode(gltf, Format::Gltf);
@@ -184,8 +184,8 @@ TEST(Gltf, PlainSurfacesConvertToGlb) {
   for (bool draco : {false, true}) {
     EncodeOptions options;
     options.format = Format::Glb;
-    options.draco = draco;
-    auto back = decode(doc->encode(options), Format::Glb);
+    options.compression = draco ? mdn::io::Compression::Draco : mdn::io::Compression::None;
+    auto back = decode(doc->encode(options).bytes, Format::Glb);
     EXPECT_EQ(back->surfaces()[0].V.rows(), 16);
     EXPECT_EQ(back->surfaces()[0].F.rows(), 18);
   }
@@ -265,7 +265,7 @@ TEST(Gltf, MalformedAndUnsafeInputsGetTypedErrors) {
   EXPECT_THROW(decode(good, Format::Glb, tiny_bytes), LimitError);
   // Garbage Draco payload.
   auto doc = decode(good, Format::Glb);
-  std::string draco = doc->encode({});
+  std::string draco = doc->encode({}).bytes;
   Json dj = glb_json(draco);
   std::uint32_t json_len;
   std::memcpy(&json_len, draco.data() + 12, 4);

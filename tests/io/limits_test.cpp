@@ -35,7 +35,7 @@ bool mentions(const std::string& text, const std::string& part) { return text.fi
 std::string encode_as(std::string_view off, Format format) {
   EncodeOptions options;
   options.format = format;
-  return decode(off, Format::Off)->encode(options);
+  return decode(off, Format::Off)->encode(options).bytes;
 }
 
 // ---- encoders ----
@@ -64,8 +64,8 @@ TEST(EncoderInput, OnlyDegenerateTrianglesAreRefusedForDraco) {
     EXPECT_TRUE(mentions(message_of<UnsupportedError>([&] { encode_as(degenerate, f); }), "degenerate")) << to_string(f);
   EncodeOptions plain;
   plain.format = Format::Glb;
-  plain.draco = false;
-  EXPECT_NO_THROW(decode(degenerate, Format::Off)->encode(plain));
+  plain.compression = mdn::io::Compression::None;
+  EXPECT_NO_THROW(decode(degenerate, Format::Off)->encode(plain).bytes);
   // One good triangle among degenerate ones: Draco drops the others.
   EXPECT_NO_THROW(encode_as("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 0 1\n3 0 1 2\n", Format::Drc));
 }
@@ -101,7 +101,7 @@ TEST(PlyLimits, AsciiValuesMustFitTheirDeclaredType) {
   EXPECT_TRUE(mentions(message_of<FormatError>([&] { decode(ply, Format::Ply); }), "does not fit"));
   std::string in_range = ply;
   in_range.replace(in_range.find("300"), 3, "255");
-  EXPECT_NO_THROW(decode(in_range, Format::Ply)->encode({}));
+  EXPECT_NO_THROW(decode(in_range, Format::Ply)->encode({}).bytes);
   std::string float_overflow = in_range;
   float_overflow.replace(float_overflow.find("0 0 0 255"), 1, "1e300");
   EXPECT_THROW(decode(float_overflow, Format::Ply), FormatError);
@@ -175,8 +175,8 @@ TEST(DracoLimits, APositionOfTypeBoolIsAFormatError) {
 std::string small_gltf() {
   EncodeOptions options;
   options.format = Format::Gltf;
-  options.draco = false;
-  return decode(test::off_text(test_io::sphere(4, 6)), Format::Off)->encode(options);
+  options.compression = mdn::io::Compression::None;
+  return decode(test::off_text(test_io::sphere(4, 6)), Format::Off)->encode(options).bytes;
 }
 
 TEST(GltfLimits, DeepJsonIsRefusedBeforeTinygltfWalksIt) {
@@ -228,7 +228,7 @@ TEST(GltfLimits, JsonOfTheWrongShapeIsAFormatError) {
                                                  {"/extensionsUsed", Json::array({3})},
                                                  {"/nodes/0/extensions", 1},
                                                  {"/scene", "0"}}) {
-    const std::string m = message_of<FormatError>([&] { decode(with(pointer, value), Format::Gltf)->encode({}); });
+    const std::string m = message_of<FormatError>([&] { decode(with(pointer, value), Format::Gltf)->encode({}).bytes; });
     EXPECT_TRUE(mentions(m, "glTF")) << pointer << ": " << m;
   }
 }

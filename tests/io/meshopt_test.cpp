@@ -112,8 +112,8 @@ TEST(Meshopt, OutputFollowsTheInputAndDropsTheExtension) {
   as_input.compression = Compression::AsInput;
   // Meshopt is not written yet: as the input's, the output is uncompressed, and the same bytes
   // as the uncompressed source's output.
-  const std::string out = compressed->encode(as_input);
-  EXPECT_EQ(out, plain->encode(as_input));
+  const std::string out = compressed->encode(as_input).bytes;
+  EXPECT_EQ(out, plain->encode(as_input).bytes);
   const Glb g = split(out);
   EXPECT_EQ(g.json.dump().find("EXT_meshopt_compression"), std::string::npos);
   EXPECT_EQ(g.json.dump().find("KHR_draco_mesh_compression"), std::string::npos);
@@ -121,19 +121,19 @@ TEST(Meshopt, OutputFollowsTheInputAndDropsTheExtension) {
   // Positions are written as float32.
   EXPECT_LT((decode(out, Format::Glb)->surfaces()[0].V - compressed->surfaces()[0].V).cwiseAbs().maxCoeff(), 1e-7);
   // Today's default (compression unset, draco = true) still writes Draco; draco = false none.
-  EXPECT_NE(split(compressed->encode({})).json.dump().find("KHR_draco_mesh_compression"), std::string::npos);
+  EXPECT_NE(split(compressed->encode({}).bytes).json.dump().find("KHR_draco_mesh_compression"), std::string::npos);
   EncodeOptions no_draco;
-  no_draco.draco = false;
-  EXPECT_EQ(compressed->encode(no_draco), out);
+  no_draco.compression = mdn::io::Compression::None;
+  EXPECT_EQ(compressed->encode(no_draco).bytes, out);
   EncodeOptions meshopt;
   meshopt.compression = Compression::Meshopt;
-  EXPECT_THROW(compressed->encode(meshopt), UnsupportedError);
+  EXPECT_THROW(compressed->encode(meshopt).bytes, UnsupportedError);
 }
 
 TEST(Compression, ResolvedInOnePlace) {
   EncodeOptions o;
   EXPECT_EQ(resolve_compression(o, Compression::None), Compression::Draco);  // unset: `draco`
-  o.draco = false;
+  o.compression = mdn::io::Compression::None;
   EXPECT_EQ(resolve_compression(o, Compression::Draco), Compression::None);
   o.compression = Compression::AsInput;
   EXPECT_EQ(resolve_compression(o, Compression::Draco), Compression::Draco);
@@ -148,11 +148,11 @@ TEST(Compression, ResolvedInOnePlace) {
   EXPECT_EQ(compression_from_string("gzip"), std::nullopt);
   // Draco in -> Draco out when following the input.
   const auto plain = decode(test_io::meshopt_sphere_glb(fixture(), false), Format::Glb);
-  const auto draco = decode(plain->encode({}), Format::Glb);
+  const auto draco = decode(plain->encode({}).bytes, Format::Glb);
   EXPECT_EQ(draco->compression(), Compression::Draco);
   EncodeOptions as_input;
   as_input.compression = Compression::AsInput;
-  EXPECT_NE(split(draco->encode(as_input)).json.dump().find("KHR_draco_mesh_compression"), std::string::npos);
+  EXPECT_NE(split(draco->encode(as_input).bytes).json.dump().find("KHR_draco_mesh_compression"), std::string::npos);
 }
 
 template <class Error>

@@ -90,7 +90,7 @@ TEST(Stl, BinaryRoundTripKeepsHeaderAttributesAndRecomputesNormals) {
   auto doc = decode(input, Format::Stl);
   Vertices moved = test_io::jitter(doc->surfaces()[0].V, 0.01);
   doc->surfaces()[0].V = moved;
-  const std::string out = doc->encode({});
+  const std::string out = doc->encode({}).bytes;
   ASSERT_EQ(out.size(), input.size());
   EXPECT_EQ(out.substr(0, 84), input.substr(0, 84));
   auto back = decode(out, Format::Stl);
@@ -114,22 +114,22 @@ TEST(Stl, BinaryRoundTripKeepsHeaderAttributesAndRecomputesNormals) {
 TEST(Stl, AsciiStaysAsciiAndOtherContainersWork) {
   const TriMesh m = grid(3);
   auto doc = decode(ascii_stl(m, "bracket"), Format::Stl);
-  const std::string out = doc->encode({});
+  const std::string out = doc->encode({}).bytes;
   EXPECT_EQ(out.substr(0, 14), "solid bracket\n");
   EXPECT_NE(out.find("endsolid bracket"), std::string::npos);
   auto back = decode(out, Format::Stl);
   // Written as float32 (STL's precision) in shortest text: the second round trip is exact.
   EXPECT_LT((back->surfaces()[0].V - doc->surfaces()[0].V).cwiseAbs().maxCoeff(), 1e-7);
-  EXPECT_EQ(back->encode({}), out);
+  EXPECT_EQ(back->encode({}).bytes, out);
   EXPECT_EQ(back->surfaces()[0].F, doc->surfaces()[0].F);
   // To another container and from another container (binary STL).
   EncodeOptions to_ply;
   to_ply.format = Format::Ply;
-  EXPECT_EQ(decode(doc->encode(to_ply), Format::Ply)->surfaces()[0].F, doc->surfaces()[0].F);
+  EXPECT_EQ(decode(doc->encode(to_ply).bytes, Format::Ply)->surfaces()[0].F, doc->surfaces()[0].F);
   EncodeOptions to_stl;
   to_stl.format = Format::Stl;
-  auto ply = decode(doc->encode(to_ply), Format::Ply);
-  const std::string stl = ply->encode(to_stl);
+  auto ply = decode(doc->encode(to_ply).bytes, Format::Ply);
+  const std::string stl = ply->encode(to_stl).bytes;
   EXPECT_EQ(stl.size(), 84 + 50 * std::size_t(m.F.rows()));
   EXPECT_EQ(decode(stl, Format::Stl)->surfaces()[0].F, doc->surfaces()[0].F);
   // Several solids in one ASCII file make one surface, in order.
@@ -201,7 +201,7 @@ TEST(StlHostile, MutantsDecodeOrRaiseTypedErrors) {
         const TriMesh& s = doc->surfaces()[0];
         ASSERT_TRUE(s.V.allFinite()) << "mutant " << i;
         ASSERT_TRUE(s.F.size() == 0 || (s.F.minCoeff() >= 0 && s.F.maxCoeff() < s.V.rows())) << "mutant " << i;
-        decode(doc->encode({}), Format::Stl);
+        decode(doc->encode({}).bytes, Format::Stl);
         ++decoded;
       } catch (const FormatError&) {
       } catch (const LimitError&) {

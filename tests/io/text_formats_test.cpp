@@ -51,8 +51,8 @@ TEST(Off, RoundTripIsExactAndDeterministic) {
   EXPECT_TRUE(doc->surfaces()[0].V.isApprox(m.V));
   Vertices moved = test_io::jitter(m.V, 0.01);
   doc->surfaces()[0].V = moved;
-  const std::string out = doc->encode({});
-  EXPECT_EQ(out, doc->encode({}));
+  const std::string out = doc->encode({}).bytes;
+  EXPECT_EQ(out, doc->encode({}).bytes);
   auto back = decode(out, Format::Off);
   EXPECT_EQ(back->surfaces()[0].V, moved);  // shortest round-trip text: bit-exact
   EXPECT_EQ(back->surfaces()[0].F, m.F);
@@ -62,7 +62,7 @@ TEST(Off, KeepsColoursAndRecomputesNoffNormals) {
   const std::string coff = "COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n3 0 1 2 9 9 9\n";
   auto doc = decode(coff, Format::Off);
   doc->surfaces()[0].V(0, 2) = 0.5;
-  const std::string out = doc->encode({});
+  const std::string out = doc->encode({}).bytes;
   EXPECT_NE(out.find("COFF\n"), std::string::npos);
   EXPECT_NE(out.find("0 0 0.5 255 0 0 255\n"), std::string::npos);
   EXPECT_NE(out.find("1 0 0 0 255 0 255\n"), std::string::npos);
@@ -70,7 +70,7 @@ TEST(Off, KeepsColoursAndRecomputesNoffNormals) {
 
   const std::string noff = "NOFF 3 1 0\n0 0 0 9 9 9\n1 0 0 9 9 9\n0 1 0 9 9 9\n3 0 1 2\n";
   auto doc2 = decode(noff, Format::Off);
-  const std::string out2 = doc2->encode({});
+  const std::string out2 = doc2->encode({}).bytes;
   EXPECT_NE(out2.find("0 0 0 0 0 1\n"), std::string::npos) << out2;
   EXPECT_EQ(out2.find('9'), std::string::npos);
   EXPECT_FALSE(doc2->notes().empty());
@@ -108,7 +108,7 @@ TEST(Obj, KeepsEverythingButPositionsAndNormals) {
   EXPECT_EQ(s.F.row(1), Eigen::RowVector3i(0, 2, 3));
   s.V(1, 0) = 2.0;  // tilts nothing (stays in z=0) but moves vertex 2
   s.V(3, 2) = 1.0;  // lifts vertex 4: face 2 tilts
-  const std::string out = doc->encode({});
+  const std::string out = doc->encode({}).bytes;
   EXPECT_NE(out.find("v 2 0 0 0.5 0.25 0.125\n"), std::string::npos) << out;  // colour kept
   EXPECT_NE(out.find("v 0 1 1\n"), std::string::npos);
   for (const char* kept : {"# test\nmtllib m.mtl\no quad\n", "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n", "usemtl red\ns off\n",
@@ -182,17 +182,17 @@ TEST_P(PlyEncodings, RoundTripKeepsHeaderAndExtraProperties) {
   ASSERT_EQ(s.F, grid(2).F);
   // Unchanged positions give back the input byte for byte (ascii: same shortest text).
   if (GetParam() != "ascii") {
-    EXPECT_EQ(doc->encode({}), input);
+    EXPECT_EQ(doc->encode({}).bytes, input);
   }
   s.V(4, 2) = 0.25;
-  const std::string out = doc->encode({});
+  const std::string out = doc->encode({}).bytes;
   EXPECT_EQ(out.substr(0, out.find("end_header")), input.substr(0, input.find("end_header")));
   EXPECT_EQ(out.size(), GetParam() == "ascii" ? out.size() : input.size());
   auto back = decode(out, Format::Ply);
   EXPECT_EQ(back->surfaces()[0].V(4, 2), 0.25);
   EXPECT_EQ(back->surfaces()[0].F, s.F);
   // Round trip of the round trip is a fixed point: colours and face quality survived.
-  EXPECT_EQ(back->encode({}), out);
+  EXPECT_EQ(back->encode({}).bytes, out);
 }
 
 INSTANTIATE_TEST_SUITE_P(All, PlyEncodings,
@@ -200,7 +200,7 @@ INSTANTIATE_TEST_SUITE_P(All, PlyEncodings,
 
 TEST(Ply, AsciiColoursSurvive) {
   auto doc = decode(ply_text("ascii"), Format::Ply);
-  const std::string out = doc->encode({});
+  const std::string out = doc->encode({}).bytes;
   EXPECT_NE(out.find(" 80 7 200\n"), std::string::npos) << out;  // vertex 8's colour
   EXPECT_NE(out.find(" 1007\n"), std::string::npos);             // last face's quality
 }
@@ -237,7 +237,7 @@ TEST(Conversion, SurfaceSurvivesEveryTextFormat) {
   for (Format target : {Format::Off, Format::Obj, Format::Ply}) {
     EncodeOptions options;
     options.format = target;
-    const std::string bytes = doc->encode(options);
+    const std::string bytes = doc->encode(options).bytes;
     EXPECT_EQ(sniff_format(bytes), target);
     auto back = decode(bytes, target);
     EXPECT_EQ(back->surfaces()[0].F, m.F);
@@ -248,7 +248,7 @@ TEST(Conversion, SurfaceSurvivesEveryTextFormat) {
 TEST(Conversion, ChangedVertexCountIsRefused) {
   auto doc = decode(off_text(grid(2)), Format::Off);
   doc->surfaces()[0].V.conservativeResize(3, 3);
-  EXPECT_THROW(doc->encode({}), InvalidMeshError);
+  EXPECT_THROW(doc->encode({}).bytes, InvalidMeshError);
 }
 
 }  // namespace

@@ -81,14 +81,14 @@ TEST(ThreeLoader, GlbAndGltfOutputsLoadInGltfLoaderWithDraco) {
   std::vector<Output> outputs;
   for (const auto& [draco, format] : {std::pair{true, Format::Glb}, {false, Format::Glb}, {true, Format::Gltf}, {false, Format::Gltf}}) {
     EncodeOptions options;
-    options.draco = draco;
+    options.compression = draco ? mdn::io::Compression::Draco : mdn::io::Compression::None;
     options.format = format;
     outputs.push_back({std::string("out") + (draco ? "-draco" : "") + (format == Format::Glb ? ".glb" : ".gltf"), options, draco});
   }
   const fs::path dir = test_io::temp_dir();
   std::string command = "cd '" + tools.string() + "' && node check_three.mjs '" + dir.string() + "'";
   for (const auto& out : outputs) {
-    test_io::write_file(dir / out.name, doc->encode(out.options));
+    test_io::write_file(dir / out.name, doc->encode(out.options).bytes);
     command += " '" + out.name + "'";
   }
 

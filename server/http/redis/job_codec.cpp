@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "server/job_json.h"
+#include "service/job_json.h"
 
 namespace mdn::http::redis {
 
@@ -30,7 +30,7 @@ std::optional<Problem> problem_from_text(const std::string& text) {
 }
 
 // The summary of a result that every replica needs to answer for it (all but the bytes): the
-// job's JSON view (server/job_json.h), reports as rendered, exactly what the memory store shows.
+// job's JSON view (service/job_json.h), reports as rendered, exactly what the memory store shows.
 std::string output_text(const service::JobOutput& o) { return service::output_to_json(o).dump(); }
 
 // The output (without bytes) and the rendered reports of a stored summary.

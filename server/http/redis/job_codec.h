@@ -1,5 +1,5 @@
 // The job codec: a job's Redis hash <-> JobSnapshot, and the stored forms of its error (a
-// problem as JSON) and of its output summary (server/job_json.h). Pure functions of their
+// problem as JSON) and of its output summary (service/job_json.h). Pure functions of their
 // arguments (but now_ms, the wall clock), no Redis needed: tests/server/http/redis_job_codec_test.cpp.
 //
 // Hash fields read: state, stage, fraction, cancel, input_bytes, attempts, created_ms,

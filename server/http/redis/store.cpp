@@ -19,7 +19,7 @@
 #include "server/http/redis/shared.h"
 #include "server/http/redis/worker_slots.h"
 #include "server/http/secure_random.h"
-#include "server/params_json.h"
+#include "service/params_json.h"
 
 namespace mdn::http {
 namespace {

@@ -7,7 +7,7 @@
 
 #include "server/http/problem.h"
 #include "server/http/redis/job_codec.h"
-#include "server/params_json.h"
+#include "service/params_json.h"
 
 namespace mdn::http::redis {
 
@@ -289,6 +289,57 @@ void WorkerSlots::run_taken(std::unique_ptr<Connection>& c, Taken t) {
   process(c, std::move(t));
 }
 
+// Runs while the job does: see watch() in worker_slots.h.
+WorkerSlots::RunEnd WorkerSlots::watch(std::unique_ptr<Connection>& conn, const Taken& e, const std::shared_ptr<Job>& job,
+                                       bool& cancel_by_user) {
+  RunEnd end = RunEnd::Finished;
+  std::string last_stage;
+  double last_fraction = -1;
+  // Every 200 ms a read-only check (cancel flag, still ours); a heartbeat with the progress
+  // (a write: it resets the entry's idle time) when the stage changes and at least every
+  // quarter of the idle threshold (at most every second).
+  const auto beat_every = std::chrono::milliseconds(std::clamp<std::int64_t>(reclaim_idle_ms_ / 4, 100, 1000));
+  auto last_beat = Clock::now();
+  while (!job->wait_for(200ms)) {
+    if (stopping_ && end == RunEnd::Finished) {
+      end = RunEnd::Released;
+      queue_.cancel(job);
+    }
+    if (end != RunEnd::Finished || cancel_by_user) continue;
+    const JobSnapshot s = job->snapshot();
+    const bool changed = s.stage != last_stage || std::abs(s.fraction - last_fraction) >= 0.01;
+    const bool due = s.stage != last_stage || Clock::now() - last_beat >= beat_every;
+    char fraction[32];
+    std::snprintf(fraction, sizeof fraction, "%.4f", s.fraction);
+    try {
+      reconnect(conn, pool_);
+      Reply b = conn->checked(views(due ? BeatArgs{keys_.job(e.job_id), keys_.stream, keys_.consumer, changed ? s.stage : "",
+                                                   fraction, e.entry_id, Keys::kGroup}
+                                              .to_argv()
+                                        : CheckArgs{keys_.job(e.job_id), keys_.consumer}.to_argv()));
+      if (due) {
+        last_beat = Clock::now();
+        last_stage = s.stage;
+        last_fraction = s.fraction;
+      }
+      const std::string_view v = str(b.get());
+      if (v == "cancel") {
+        cancel_by_user = true;
+        queue_.cancel(job);
+      } else if (v == "lost") {
+        end = RunEnd::Lost;
+        queue_.cancel(job);
+      }
+    } catch (const RedisDown& ex) {
+      conn.reset();
+      monitor_.mark_down(ex.what());  // the job goes on; its result waits for Redis below
+    } catch (const RedisReplyError& ex) {
+      if (log_) log_->warn("heartbeat_failed", {{"job_id", e.job_id}, {"detail", ex.what()}});
+    }
+  }
+  return end;
+}
+
 // Runs a started job on the slot's connection `conn` (re-made when it breaks).
 void WorkerSlots::process(std::unique_ptr<Connection>& conn, Taken t) {
   const Taken& e = t;
@@ -312,7 +363,6 @@ void WorkerSlots::process(std::unique_ptr<Connection>& conn, Taken t) {
   input.bytes = std::move(t.input);
   const std::string& format = e.format;
   const std::string& params = e.params;
-  std::unique_ptr<Connection>& beat = conn;
   std::optional<Problem> error;
   try {
     input.format = io::format_from_string(format).value_or(io::Format::Off);
@@ -323,61 +373,18 @@ void WorkerSlots::process(std::unique_ptr<Connection>& conn, Taken t) {
   JobState state = JobState::Failed;
   std::string result, summary;
   std::int64_t result_bytes = 0;
-  enum class End { Finished, Lost, Released } end = End::Finished;
+  RunEnd end = RunEnd::Finished;
   if (!error) {
     auto job = e.early ? e.early : queue_.run_external(e.job_id, std::move(input));
     bool cancel_by_user = false;
-    std::string last_stage;
-    double last_fraction = -1;
-    // Every 200 ms a read-only check (cancel flag, still ours); a heartbeat with the progress
-    // (a write: it resets the entry's idle time) when the stage changes and at least every
-    // quarter of the idle threshold (at most every second).
-    const auto beat_every = std::chrono::milliseconds(std::clamp<std::int64_t>(reclaim_idle_ms_ / 4, 100, 1000));
-    auto last_beat = Clock::now();
-    while (!job->wait_for(200ms)) {
-      if (stopping_ && end == End::Finished) {
-        end = End::Released;
-        queue_.cancel(job);
-      }
-      if (end != End::Finished || cancel_by_user) continue;
-      const JobSnapshot s = job->snapshot();
-      const bool changed = s.stage != last_stage || std::abs(s.fraction - last_fraction) >= 0.01;
-      const bool due = s.stage != last_stage || Clock::now() - last_beat >= beat_every;
-      char fraction[32];
-      std::snprintf(fraction, sizeof fraction, "%.4f", s.fraction);
-      try {
-        reconnect(beat, pool_);
-        Reply b = beat->checked(views(due ? BeatArgs{keys_.job(e.job_id), keys_.stream, keys_.consumer, changed ? s.stage : "",
-                                                     fraction, e.entry_id, Keys::kGroup}
-                                                .to_argv()
-                                          : CheckArgs{keys_.job(e.job_id), keys_.consumer}.to_argv()));
-        if (due) {
-          last_beat = Clock::now();
-          last_stage = s.stage;
-          last_fraction = s.fraction;
-        }
-        const std::string_view v = str(b.get());
-        if (v == "cancel") {
-          cancel_by_user = true;
-          queue_.cancel(job);
-        } else if (v == "lost") {
-          end = End::Lost;
-          queue_.cancel(job);
-        }
-      } catch (const RedisDown& ex) {
-        beat.reset();
-        monitor_.mark_down(ex.what());  // the job goes on; its result waits for Redis below
-      } catch (const RedisReplyError& ex) {
-        if (log_) log_->warn("heartbeat_failed", {{"job_id", e.job_id}, {"detail", ex.what()}});
-      }
-    }
+    end = watch(conn, e, job, cancel_by_user);
     const JobSnapshot s = job->snapshot();
     state = s.state;
     error = s.error;
     if (state == JobState::Cancelled && cancel_by_user)
       error = make_problem(ProblemType::Cancelled, "cancelled by DELETE while running");
-    else if (state == JobState::Cancelled && end == End::Finished)  // cancelled by this replica's stop
-      end = End::Released;
+    else if (state == JobState::Cancelled && end == RunEnd::Finished)  // cancelled by this replica's stop
+      end = RunEnd::Released;
     if (state == JobState::Succeeded) {
       result_bytes = std::int64_t(s.output->bytes.size());
       if (result_bytes > config_.queue_max_result_bytes) {
@@ -391,12 +398,12 @@ void WorkerSlots::process(std::unique_ptr<Connection>& conn, Taken t) {
       }
     }
   }
-  if (end == End::Lost) {
+  if (end == RunEnd::Lost) {
     if (log_) log_->warn("job_lost", {{"job_id", e.job_id}, {"detail", "another replica took the job over"}});
     return;
   }
   std::unique_ptr<Connection>& fin = conn;
-  if (end == End::Released) {
+  if (end == RunEnd::Released) {
     release(fin, e);
     return;
   }

@@ -108,6 +108,13 @@ class WorkerSlots {
   Taken next_job(Connection& c, std::string& last_id);
   void run_taken(std::unique_ptr<Connection>& c, Taken t);
   void process(std::unique_ptr<Connection>& conn, Taken t);
+  // How a run ended for this replica: finished here, lost to another replica, or released
+  // (this replica stops: the job goes back to the stream).
+  enum class RunEnd { Finished, Lost, Released };
+  // Waits for `job`, with a read-only check every 200 ms and heartbeats carrying its progress;
+  // cancels it when the user DELETEs it (`cancel_by_user`), another replica took it over or
+  // this replica stops.
+  RunEnd watch(std::unique_ptr<Connection>& conn, const Taken& e, const std::shared_ptr<Job>& job, bool& cancel_by_user);
   void release(std::unique_ptr<Connection>& c, const Taken& e);
   void finisher_loop();
   template <class F>

@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "server/job_json.h"
+#include "service/job_json.h"
 #include "support/shapes.h"
 
 namespace mdn::http::redis {

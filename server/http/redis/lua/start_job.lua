@@ -1,6 +1,6 @@
--- Starting a job, shared by kTake and kStart. KEYS: stream.  ARGV: consumer, now_ms,
+-- Starting a job, shared by take.lua and start.lua (prepended to both by store.cpp). KEYS: stream.  ARGV: consumer, now_ms,
 -- max_attempts, (unused), group, exhausted problem, cancelled problem, ttl_ms, lost-input
--- problem, job key prefix, (kStart: entry id, job id).
+-- problem, job key prefix, (start.lua: entry id, job id).
 -- Returns {outcome, attempt, previous owner, input, format, params, entry id, job id}.
 local function start_job(entry, jid, want_input)
   local hash = ARGV[10] .. jid

@@ -1,0 +1,140 @@
+#include "cli/files.h"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <iterator>
+
+#include "cli/options.h"
+#include "service/output_files.h"
+
+namespace mdn::cli {
+namespace {
+
+std::string read_stdin() {
+  std::string bytes;
+  char buffer[1 << 16];
+  for (;;) {
+    const ssize_t n = ::read(STDIN_FILENO, buffer, sizeof buffer);
+    if (n == 0) return bytes;
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw FileError(std::string("cannot read standard input: ") + std::strerror(errno));
+    }
+    bytes.append(buffer, static_cast<std::size_t>(n));
+  }
+}
+
+void write_bytes(const std::string& path, const std::string& bytes, const std::string& shown) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) throw FileError("cannot write " + shown + ": " + std::strerror(errno));
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  out.close();
+  if (!out) throw FileError("cannot write " + shown + ": " + std::strerror(errno));
+}
+
+}  // namespace
+
+std::string read_file(const std::string& path) {
+  if (path == kStdio) return read_stdin();
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw FileError("cannot read " + path + ": it is a directory");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw FileError("cannot read " + path + ": " + std::strerror(errno));
+  try {
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) throw FileError("cannot read " + path + ": " + std::strerror(errno));
+    return bytes;
+  } catch (const std::ios_base::failure& e) {  // libstdc++ throws from underflow on read errors
+    throw FileError("cannot read " + path + ": " + e.what());
+  }
+}
+
+void write_file(const std::string& path, const std::string& bytes) {
+  namespace fs = std::filesystem;
+  if (path == kStdio) {
+    std::cout.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    std::cout.flush();
+    if (!std::cout) throw FileError("cannot write standard output");
+    return;
+  }
+  std::error_code ec;
+  const fs::file_status status = fs::symlink_status(path, ec);
+  if (fs::exists(status) && !fs::is_regular_file(status)) {
+    if (fs::is_directory(status)) throw FileError("cannot write " + path + ": it is a directory");
+    write_bytes(path, bytes, path);
+    return;
+  }
+  const std::string partial = path + ".partial-" + std::to_string(::getpid());
+  try {
+    write_bytes(partial, bytes, path);
+    fs::rename(partial, path);
+  } catch (const fs::filesystem_error& e) {
+    fs::remove(partial, ec);
+    throw FileError("cannot write " + path + ": " + e.code().message());
+  } catch (...) {
+    fs::remove(partial, ec);
+    throw;
+  }
+}
+
+std::string json_argument(const std::string& option, const std::string& value) {
+  const auto first = value.find_first_not_of(" \t\r\n");
+  if (first != std::string::npos && value[first] == '{') return value;
+  try {
+    return read_file(value);
+  } catch (const FileError& e) {
+    throw UsageError(option + ": not inline JSON, and " + e.what());
+  }
+}
+
+std::optional<std::string> resource_dir(const std::string& path, io::Format format) {
+  if (format != io::Format::Gltf || path == kStdio) return std::nullopt;
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  return parent.empty() ? std::string(".") : parent.string();
+}
+
+bool same_file(const std::string& a, const std::string& b) {
+  namespace fs = std::filesystem;
+  if (a == kStdio || b == kStdio) return false;
+  std::error_code ec;
+  if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec);
+  auto key = [](const std::string& path) {
+    std::error_code error;
+    const fs::path canonical = fs::weakly_canonical(fs::absolute(path), error);
+    return error ? fs::absolute(path).lexically_normal() : canonical;
+  };
+  return key(a) == key(b);
+}
+
+void check_not_input(const std::string& in_path, const std::string& out_path, bool in_place, const std::string& where) {
+  if (in_place || !same_file(in_path, out_path)) return;
+  throw UsageError(where + out_path + " is the input " + in_path +
+                   ": it would be overwritten; give --in-place to replace it (written to a temporary file, then "
+                   "renamed), or choose another output");
+}
+
+void write_output(const std::string& in_path, const std::string& in_bytes, io::Format in_format,
+                  const std::string& out_path, std::string out_bytes, io::Format out_format) {
+  namespace fs = std::filesystem;
+  const bool data_beside =
+      out_path != kStdio && in_path != kStdio && in_format == io::Format::Gltf && service::has_external_uris(in_bytes);
+  if (out_path != kStdio) {
+    const fs::path folder = fs::path(out_path).parent_path();
+    std::error_code ec;
+    if (!folder.empty() && !fs::is_directory(folder)) {
+      fs::create_directories(folder, ec);
+      if (!fs::is_directory(folder))
+        throw FileError("cannot create the folder " + folder.string() + " for " + out_path + ": " +
+                        (ec ? ec.message() : std::string("it is not a directory")));
+    }
+  }
+  for (auto& file : service::output_files(std::move(out_bytes), out_format, out_path, data_beside))
+    write_file(file.path, file.bytes);
+}
+
+}  // namespace mdn::cli
