@@ -64,122 +64,146 @@ const std::vector<std::string>& descriptor_names() {
   return names;
 }
 
+namespace {
+
+// What the descriptors read (decision 33): the surface itself, or patches of it with the
+// faces and vertices near the cut left out of the statistics.
+struct Read {
+  std::optional<SurfaceSample> sample;
+  const Vertices* P;
+  const Triangles* F;
+  const Topology* topo;
+  std::vector<std::int32_t> inner;  // the sample's scored vertices (empty: all)
+
+  Read(const Vertices& P0, const Triangles& F0, const Topology& topo0, std::int64_t max_faces) : P(&P0), F(&F0), topo(&topo0) {
+    if (F0.rows() <= max_faces) return;
+    sample = sample_surface(P0, F0, topo0, max_faces, 16, kMargin);
+    P = &sample->P;
+    F = &sample->F;
+    topo = &sample->topo;
+    inner = sample->scored_vertices;
+  }
+  bool scored(std::int64_t f) const { return !sample || sample->scored[static_cast<std::size_t>(f)] != 0; }
+  std::int64_t vertex_count() const { return sample ? static_cast<std::int64_t>(inner.size()) : P->rows(); }
+  std::int32_t vertex(std::int64_t k) const { return sample ? inner[static_cast<std::size_t>(k)] : static_cast<std::int32_t>(k); }
+};
+
+// Per scored face: the angle to its ring's mean normal (noise with no recorruption), the same
+// after one more mean filter (what survives smoothing: features), the triangle's smallest angle.
+struct FaceReadings {
+  std::vector<double> dev, dev2, min_angle, dihedral, edges;
+};
+
+FaceReadings read_faces(const Read& r, Executor& executor) {
+  const Vertices& P = *r.P;
+  const Triangles& F = *r.F;
+  const Vertices N = face_normals(P, F);
+  const Eigen::VectorXd A = face_areas(P, F);
+  Vertices M(F.rows(), 3);  // mean-filtered normals (every face: the second filter reads neighbours)
+  executor.parallel_for(F.rows(), [&](std::int64_t b, std::int64_t e) {
+    for (std::int64_t f = b; f < e; ++f) M.row(f) = ring_mean(*r.topo, N, A, f).transpose();
+  });
+  std::vector<std::int32_t> faces;
+  for (std::int64_t f = 0; f < F.rows(); ++f)
+    if (r.scored(f)) faces.push_back(static_cast<std::int32_t>(f));
+  FaceReadings out;
+  out.dev.resize(faces.size());
+  out.dev2.resize(faces.size());
+  out.min_angle.resize(faces.size());
+  executor.parallel_for(static_cast<std::int64_t>(faces.size()), [&](std::int64_t b, std::int64_t e) {
+    for (std::int64_t k = b; k < e; ++k) {
+      const std::int64_t f = faces[static_cast<std::size_t>(k)];
+      const auto i = static_cast<std::size_t>(k);
+      out.dev[i] = angle(N.row(f).transpose(), M.row(f).transpose());
+      out.dev2[i] = angle(M.row(f).transpose(), ring_mean(*r.topo, M, A, f));
+      double smallest = M_PI;
+      for (int c = 0; c < 3; ++c) {
+        const Vec3 a = P.row(F(f, c)).transpose(), b2 = P.row(F(f, (c + 1) % 3)).transpose(), c2 = P.row(F(f, (c + 2) % 3)).transpose();
+        const Vec3 u = b2 - a, w = c2 - a;
+        if (u.norm() > 0 && w.norm() > 0) smallest = std::min(smallest, angle(u, w));
+      }
+      out.min_angle[i] = smallest;
+    }
+  });
+  // Dihedral angles over the interior edges between scored faces; the scored faces' edges.
+  const Topology& topo = *r.topo;
+  for (std::int64_t e = 0; e < topo.num_interior_edges(); ++e)
+    if (r.scored(topo.edge_faces(e, 0)) && r.scored(topo.edge_faces(e, 1)))
+      out.dihedral.push_back(angle(N.row(topo.edge_faces(e, 0)).transpose(), N.row(topo.edge_faces(e, 1)).transpose()));
+  out.edges.reserve(3 * faces.size());
+  for (const std::int32_t f : faces)
+    for (int c = 0; c < 3; ++c) out.edges.push_back((P.row(F(f, c)) - P.row(F(f, (c + 1) % 3))).norm());
+  return out;
+}
+
+// Decision 26's values, in the order of descriptor_names(). Scale-like readings enter as
+// logarithms (they span decades from clean to 0.8 l of noise); shares and angles as they are.
+std::vector<double> values_of(std::int64_t faces, double boundary_share, const NoiseEstimate& noise, const InputMeasures& m,
+                              const FaceReadings& r) {
+  const auto lg = [](double x) { return std::log(std::max(x, 0.0) + 1e-4); };
+  const double emean = mean(r.edges);
+  double evar = 0;
+  for (const double x : r.edges) evar += (x - emean) * (x - emean);
+  evar = r.edges.empty() ? 0 : evar / static_cast<double>(r.edges.size());
+  const double p10 = quantile(r.edges, 0.1), p90 = quantile(r.edges, 0.9);
+  const double dev_median = quantile(r.dev, 0.5), dih_median = quantile(r.dihedral, 0.5);
+  const double deg = M_PI / 180;
+  return {std::log10(std::max<double>(1, static_cast<double>(faces))),
+          lg(noise.sigma_edges),
+          lg(noise.edge_length > 0 ? noise.gaussian_sigma / noise.edge_length : 0),
+          lg(noise.one_pass_edges),
+          lg(m.noise),
+          std::log(std::max(1.0, m.tail)),
+          m.feature_share,
+          lg(m.smooth_residual),
+          std::log(std::max(1.0, m.smooth_tail)),
+          std::log(std::max(1.0, m.cluster_area_ratio)),
+          lg(mean(r.dev)),
+          lg(dev_median),
+          lg(quantile(r.dev, 0.9)),
+          lg(quantile(r.dev, 0.99)),
+          lg(quantile(r.dev2, 0.5)),
+          lg(quantile(r.dev2, 0.9)),
+          lg(dih_median),
+          lg(quantile(r.dihedral, 0.75)),
+          lg(quantile(r.dihedral, 0.9)),
+          lg(quantile(r.dihedral, 0.99)),
+          share_above(r.dihedral, 20 * deg),
+          share_above(r.dihedral, 60 * deg),
+          share_above(r.dihedral, 130 * deg),
+          emean > 0 ? std::sqrt(evar) / emean : 0,
+          p10 > 0 && p90 > 0 ? std::log(p90 / p10) : 0,
+          quantile(r.min_angle, 0.5),
+          1 - share_above(r.min_angle, 10 * deg),
+          boundary_share,
+          dih_median > 0 ? std::log(std::max(dev_median, 1e-6) / dih_median) : 0,
+          // Decision 33: exactly flat neighbours (a clean CAD surface's planes; noise of 0.05 l
+          // already tilts them by degrees) and the low tails.
+          1 - share_above(r.dihedral, 0.01 * deg),
+          lg(quantile(r.dihedral, 0.1)),
+          lg(quantile(r.dev, 0.1))};
+}
+
+}  // namespace
+
 Descriptors describe_input(const Vertices& P, const Triangles& F, const Topology& topo, Executor& executor,
                            std::int64_t max_faces) {
   const auto t0 = std::chrono::steady_clock::now();
   Descriptors d;
-  const std::int64_t nf = F.rows();
-
-  // Decision 33: a surface of more than max_faces faces is read on patches of it (the sample
-  // of decision 21, with a margin as deep as the smoothing below), its cut left out of the
-  // statistics; a smaller one whole.
-  std::optional<SurfaceSample> sample;
-  if (nf > max_faces) sample = sample_surface(P, F, topo, max_faces, 16, kMargin);
-  const Vertices& SP = sample ? sample->P : P;
-  const Triangles& SF = sample ? sample->F : F;
-  const Topology& ST = sample ? sample->topo : topo;
-  const std::vector<std::int32_t> inner = sample ? sample->scored_vertices : std::vector<std::int32_t>{};
-  const auto scored = [&](std::int64_t f) { return !sample || sample->scored[static_cast<std::size_t>(f)] != 0; };
-
-  // The noise's quick reading (decision 33) at up to kNoiseVertices vertices, a fixed stride.
-  const std::int64_t nv = sample ? static_cast<std::int64_t>(inner.size()) : SP.rows();
+  // Decision 33: a surface of more than max_faces faces is read on patches of it (the sample of
+  // decision 21, with a margin as deep as measure_input's smoothing), its cut left out of the
+  // statistics; a smaller one whole. The noise's quick reading takes kNoiseVertices of a stride.
+  const Read r(P, F, topo, max_faces);
   std::vector<std::int32_t> where;
-  const std::int64_t vstride = (nv + kNoiseVertices - 1) / kNoiseVertices;
-  for (std::int64_t k = 0; k < nv; k += std::max<std::int64_t>(1, vstride))
-    where.push_back(sample ? inner[static_cast<std::size_t>(k)] : static_cast<std::int32_t>(k));
-  d.noise = estimate_noise_quick(SP, SF, ST, where, &executor);
-  d.measures = measure_input(SP, SF, ST, DenoiseParams{}, &executor, inner);
-
-  // Per face: the angle to its ring's mean normal (noise with no recorruption), the same after
-  // one more mean filter (what survives smoothing: features), and the shape of the triangle.
-  const Vertices N = face_normals(SP, SF);
-  const Eigen::VectorXd A = face_areas(SP, SF);
-  const std::int64_t sf = SF.rows();
-  Vertices M(sf, 3);  // mean-filtered normals (every face: the second filter reads neighbours)
-  executor.parallel_for(sf, [&](std::int64_t b, std::int64_t e) {
-    for (std::int64_t f = b; f < e; ++f) M.row(f) = ring_mean(ST, N, A, f).transpose();
-  });
-  std::vector<std::int32_t> faces;
-  for (std::int64_t f = 0; f < sf; ++f)
-    if (scored(f)) faces.push_back(static_cast<std::int32_t>(f));
-  const auto ns = static_cast<std::int64_t>(faces.size());
-  std::vector<double> dev(static_cast<std::size_t>(ns)), dev2(static_cast<std::size_t>(ns)), min_angle(static_cast<std::size_t>(ns));
-  executor.parallel_for(ns, [&](std::int64_t b, std::int64_t e) {
-    for (std::int64_t k = b; k < e; ++k) {
-      const std::int64_t f = faces[static_cast<std::size_t>(k)];
-      const auto i = static_cast<std::size_t>(k);
-      dev[i] = angle(N.row(f).transpose(), M.row(f).transpose());
-      dev2[i] = angle(M.row(f).transpose(), ring_mean(ST, M, A, f));
-      double smallest = M_PI;
-      for (int c = 0; c < 3; ++c) {
-        const Vec3 a = SP.row(SF(f, c)).transpose(), b2 = SP.row(SF(f, (c + 1) % 3)).transpose(), c2 = SP.row(SF(f, (c + 2) % 3)).transpose();
-        const Vec3 u = b2 - a, w = c2 - a;
-        if (u.norm() > 0 && w.norm() > 0) smallest = std::min(smallest, angle(u, w));
-      }
-      min_angle[i] = smallest;
-    }
-  });
-
-  // Dihedral angles over the interior edges between scored faces.
-  std::vector<double> dihedral;
-  for (std::int64_t e = 0; e < ST.num_interior_edges(); ++e)
-    if (scored(ST.edge_faces(e, 0)) && scored(ST.edge_faces(e, 1)))
-      dihedral.push_back(angle(N.row(ST.edge_faces(e, 0)).transpose(), N.row(ST.edge_faces(e, 1)).transpose()));
-
-  // Edge lengths of the scored faces (each face's three edges).
-  std::vector<double> edges;
-  edges.reserve(static_cast<std::size_t>(3 * ns));
-  for (const std::int32_t f : faces)
-    for (int c = 0; c < 3; ++c) edges.push_back((SP.row(SF(f, c)) - SP.row(SF(f, (c + 1) % 3))).norm());
-  const double emean = mean(edges);
-  double evar = 0;
-  for (const double x : edges) evar += (x - emean) * (x - emean);
-  evar = edges.empty() ? 0 : evar / static_cast<double>(edges.size());
-  const double p10 = quantile(edges, 0.1), p90 = quantile(edges, 0.9);
-
+  const std::int64_t nv = r.vertex_count();
+  const std::int64_t stride = std::max<std::int64_t>(1, (nv + kNoiseVertices - 1) / kNoiseVertices);
+  for (std::int64_t k = 0; k < nv; k += stride) where.push_back(r.vertex(k));
+  d.noise = estimate_noise_quick(*r.P, *r.F, *r.topo, where, &executor);
+  d.measures = measure_input(*r.P, *r.F, *r.topo, DenoiseParams{}, &executor, r.inner);
   // The boundary's share is the whole surface's (the sample's cut is not a boundary).
-  const std::int64_t ne = topo.num_interior_edges();
-  const double edges_total = static_cast<double>(ne + topo.boundary_edges.rows() + topo.nonmanifold_edges.rows());
-  const double dev_median = quantile(dev, 0.5), dih_median = quantile(dihedral, 0.5);
-  const double deg = M_PI / 180;
-  const InputMeasures& m = d.measures;
-  // Scale-like readings enter as logarithms (they span decades from clean to 0.8 l of noise);
-  // shares and angles as they are.
-  const auto lg = [](double x) { return std::log(std::max(x, 0.0) + 1e-4); };
-  d.values = {std::log10(std::max<double>(1, static_cast<double>(nf))),
-              lg(d.noise.sigma_edges),
-              lg(d.noise.edge_length > 0 ? d.noise.gaussian_sigma / d.noise.edge_length : 0),
-              lg(d.noise.one_pass_edges),
-              lg(m.noise),
-              std::log(std::max(1.0, m.tail)),
-              m.feature_share,
-              lg(m.smooth_residual),
-              std::log(std::max(1.0, m.smooth_tail)),
-              std::log(std::max(1.0, m.cluster_area_ratio)),
-              lg(mean(dev)),
-              lg(dev_median),
-              lg(quantile(dev, 0.9)),
-              lg(quantile(dev, 0.99)),
-              lg(quantile(dev2, 0.5)),
-              lg(quantile(dev2, 0.9)),
-              lg(dih_median),
-              lg(quantile(dihedral, 0.75)),
-              lg(quantile(dihedral, 0.9)),
-              lg(quantile(dihedral, 0.99)),
-              share_above(dihedral, 20 * deg),
-              share_above(dihedral, 60 * deg),
-              share_above(dihedral, 130 * deg),
-              emean > 0 ? std::sqrt(evar) / emean : 0,
-              p10 > 0 && p90 > 0 ? std::log(p90 / p10) : 0,
-              quantile(min_angle, 0.5),
-              1 - share_above(min_angle, 10 * deg),
-              edges_total > 0 ? static_cast<double>(topo.boundary_edges.rows()) / edges_total : 0,
-              dih_median > 0 ? std::log(std::max(dev_median, 1e-6) / dih_median) : 0,
-              // Decision 33: exactly flat neighbours (a clean CAD surface's planes; noise of
-              // 0.05 l already tilts them by degrees) and the low tails.
-              1 - share_above(dihedral, 0.01 * deg),
-              lg(quantile(dihedral, 0.1)),
-              lg(quantile(dev, 0.1))};
+  const double edges = static_cast<double>(topo.num_interior_edges() + topo.boundary_edges.rows() + topo.nonmanifold_edges.rows());
+  const double boundary_share = edges > 0 ? static_cast<double>(topo.boundary_edges.rows()) / edges : 0;
+  d.values = values_of(F.rows(), boundary_share, d.noise, d.measures, read_faces(r, executor));
   d.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return d;
 }

@@ -219,6 +219,73 @@ NoiseEstimate finish(const std::optional<Reading>& best, const std::optional<Rea
   return est;
 }
 
+// W, the fits' prediction weights, as compressed rows (a vertex without a fit has none and no
+// defined error), and r = (I - W) h of every vertex.
+struct FitOperator {
+  std::vector<std::size_t> offsets;
+  std::vector<std::int32_t> columns;
+  std::vector<double> weights, r;
+
+  // Row i of (I - W) applied to x; NaN propagates from undefined neighbours.
+  double apply(std::size_t i, const std::vector<double>& x) const {
+    if (offsets[i] == offsets[i + 1]) return std::nan("");
+    double y = x[i];
+    for (std::size_t a = offsets[i]; a < offsets[i + 1]; ++a) y -= weights[a] * x[static_cast<std::size_t>(columns[a])];
+    return y;
+  }
+};
+
+FitOperator fit_operator(const Vertices& P, const Topology& topo, const Vertices& N, LocalFit fit, double l, Executor& ex) {
+  std::vector<VertexFit> fits(static_cast<std::size_t>(P.rows()));
+  ex.parallel_for(P.rows(), [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t v = begin; v < end; ++v) fit_vertex(P, topo, N, fit, l, static_cast<std::int32_t>(v), fits[static_cast<std::size_t>(v)]);
+  });
+  FitOperator W;
+  W.offsets.assign(fits.size() + 1, 0);
+  for (std::size_t v = 0; v < fits.size(); ++v) W.offsets[v + 1] = W.offsets[v] + fits[v].ring.size();
+  W.columns.resize(W.offsets.back());
+  W.weights.resize(W.offsets.back());
+  W.r.resize(fits.size());
+  for (std::size_t v = 0; v < fits.size(); ++v) {
+    std::copy(fits[v].ring.begin(), fits[v].ring.end(), W.columns.begin() + static_cast<std::ptrdiff_t>(W.offsets[v]));
+    std::copy(fits[v].w.begin(), fits[v].w.end(), W.weights.begin() + static_cast<std::ptrdiff_t>(W.offsets[v]));
+    W.r[v] = fits[v].ring.empty() ? std::nan("") : fits[v].r;
+  }
+  return W;
+}
+
+// The squared norm of row i of (I - W)^passes. `coefficient` and `in_row` are a dense scratch
+// of the vertex count, zero on entry and on return.
+double row_norm2(const FitOperator& W, std::size_t i, int passes, std::vector<double>& coefficient, std::vector<std::uint8_t>& in_row) {
+  std::vector<std::int32_t> row{static_cast<std::int32_t>(i)}, previous;
+  std::vector<double> previous_c;
+  coefficient[i] = 1;
+  in_row[i] = 1;
+  for (int pass = 0; pass < passes; ++pass) {  // row <- row (I - W)
+    previous = row;
+    previous_c.resize(previous.size());
+    for (std::size_t q = 0; q < previous.size(); ++q) previous_c[q] = coefficient[static_cast<std::size_t>(previous[q])];
+    for (std::size_t q = 0; q < previous.size(); ++q) {
+      const auto v = static_cast<std::size_t>(previous[q]);
+      for (std::size_t b = W.offsets[v]; b < W.offsets[v + 1]; ++b) {
+        const auto u = static_cast<std::size_t>(W.columns[b]);
+        if (!in_row[u]) {
+          in_row[u] = 1;
+          row.push_back(W.columns[b]);
+        }
+        coefficient[u] -= previous_c[q] * W.weights[b];
+      }
+    }
+  }
+  double norm2 = 0;
+  for (const std::int32_t v : row) {
+    norm2 += coefficient[static_cast<std::size_t>(v)] * coefficient[static_cast<std::size_t>(v)];
+    coefficient[static_cast<std::size_t>(v)] = 0;
+    in_row[static_cast<std::size_t>(v)] = 0;
+  }
+  return norm2;
+}
+
 }  // namespace
 
 std::vector<double> local_fit_residuals(const Vertices& P, const Topology& topo, const Vertices& N, LocalFit fit,
@@ -229,7 +296,7 @@ std::vector<double> local_fit_residuals(const Vertices& P, const Topology& topo,
   const double l = std::max(topo.mean_edge_length(P), 1e-300);
   const std::int64_t n = vertices.empty() ? P.rows() : static_cast<std::int64_t>(vertices.size());
   const auto vertex = [&](std::int64_t k) {
-    return vertices.empty() ? static_cast<std::int32_t>(k) : vertices[static_cast<std::size_t>(k)];
+    return static_cast<std::size_t>(vertices.empty() ? static_cast<std::int32_t>(k) : vertices[static_cast<std::size_t>(k)]);
   };
   std::vector<double> out(static_cast<std::size_t>(n), std::nan(""));
   if (fit.passes <= 1) {
@@ -237,7 +304,7 @@ std::vector<double> local_fit_residuals(const Vertices& P, const Topology& topo,
       VertexFit f;
       f.weights = false;
       for (std::int64_t k = begin; k < end; ++k) {
-        fit_vertex(P, topo, N, fit, l, vertex(k), f);
+        fit_vertex(P, topo, N, fit, l, static_cast<std::int32_t>(vertex(k)), f);
         if (!f.ring.empty()) out[static_cast<std::size_t>(k)] = f.r * f.r / (1 + f.w2);
       }
     });
@@ -247,80 +314,31 @@ std::vector<double> local_fit_residuals(const Vertices& P, const Topology& topo,
   // the vertices asked for r_passes^2 over the squared norm of its row of (I - W)^passes (its
   // variance under white noise). The shape's share of r_1 varies slowly over the surface and
   // each pass removes most of it.
-  std::vector<VertexFit> fits(static_cast<std::size_t>(P.rows()));
-  ex.parallel_for(P.rows(), [&](std::int64_t begin, std::int64_t end) {
-    for (std::int64_t v = begin; v < end; ++v) fit_vertex(P, topo, N, fit, l, static_cast<std::int32_t>(v), fits[static_cast<std::size_t>(v)]);
-  });
-  // W as compressed rows (a vertex without a fit has none and no defined error).
-  const double undefined = std::nan("");
-  std::vector<std::size_t> offsets(fits.size() + 1, 0);
-  for (std::size_t v = 0; v < fits.size(); ++v) offsets[v + 1] = offsets[v] + fits[v].ring.size();
-  std::vector<std::int32_t> columns(offsets.back());
-  std::vector<double> weights(offsets.back()), r(fits.size()), next(fits.size());
-  for (std::size_t v = 0; v < fits.size(); ++v) {
-    std::copy(fits[v].ring.begin(), fits[v].ring.end(), columns.begin() + static_cast<std::ptrdiff_t>(offsets[v]));
-    std::copy(fits[v].w.begin(), fits[v].w.end(), weights.begin() + static_cast<std::ptrdiff_t>(offsets[v]));
-    r[v] = fits[v].ring.empty() ? undefined : fits[v].r;
-  }
-  fits = {};
+  const FitOperator W = fit_operator(P, topo, N, fit, l, ex);
+  std::vector<double> r = W.r, next(r.size());
   if (first_pass) {
-    first_pass->assign(static_cast<std::size_t>(n), undefined);
+    first_pass->assign(static_cast<std::size_t>(n), std::nan(""));
     for (std::int64_t k = 0; k < n; ++k) {
-      const auto i = static_cast<std::size_t>(vertex(k));
+      const std::size_t i = vertex(k);
       double w2 = 0;
-      for (std::size_t a = offsets[i]; a < offsets[i + 1]; ++a) w2 += weights[a] * weights[a];
-      if (offsets[i] < offsets[i + 1]) (*first_pass)[static_cast<std::size_t>(k)] = r[i] * r[i] / (1 + w2);
+      for (std::size_t a = W.offsets[i]; a < W.offsets[i + 1]; ++a) w2 += W.weights[a] * W.weights[a];
+      if (W.offsets[i] < W.offsets[i + 1]) (*first_pass)[static_cast<std::size_t>(k)] = r[i] * r[i] / (1 + w2);
     }
   }
-  const auto apply = [&](std::size_t i, const std::vector<double>& x) {
-    if (offsets[i] == offsets[i + 1]) return undefined;
-    double y = x[i];
-    for (std::size_t a = offsets[i]; a < offsets[i + 1]; ++a) y -= weights[a] * x[static_cast<std::size_t>(columns[a])];
-    return y;  // NaN propagates from undefined neighbours
-  };
   for (int pass = 2; pass < fit.passes; ++pass) {
     ex.parallel_for(P.rows(), [&](std::int64_t begin, std::int64_t end) {
-      for (std::int64_t v = begin; v < end; ++v) next[static_cast<std::size_t>(v)] = apply(static_cast<std::size_t>(v), r);
+      for (std::int64_t v = begin; v < end; ++v) next[static_cast<std::size_t>(v)] = W.apply(static_cast<std::size_t>(v), r);
     });
     r.swap(next);
   }
   ex.parallel_for(n, [&](std::int64_t begin, std::int64_t end) {
-    // A row of (I - W)^p: its vertices and a dense scratch of their coefficients.
-    std::vector<std::int32_t> row, previous;
     std::vector<double> coefficient(static_cast<std::size_t>(P.rows()), 0.0);
     std::vector<std::uint8_t> in_row(static_cast<std::size_t>(P.rows()), 0);
-    std::vector<double> previous_c;
     for (std::int64_t k = begin; k < end; ++k) {
-      const auto i = static_cast<std::size_t>(vertex(k));
-      const double y = apply(i, r);
+      const double y = W.apply(vertex(k), r);
       if (std::isnan(y)) continue;
-      row.assign(1, static_cast<std::int32_t>(i));
-      coefficient[i] = 1;
-      in_row[i] = 1;
-      for (int pass = 0; pass < fit.passes; ++pass) {  // row <- row (I - W)
-        previous = row;
-        previous_c.resize(previous.size());
-        for (std::size_t q = 0; q < previous.size(); ++q) previous_c[q] = coefficient[static_cast<std::size_t>(previous[q])];
-        for (std::size_t q = 0; q < previous.size(); ++q) {
-          const auto v = static_cast<std::size_t>(previous[q]);
-          const double c = previous_c[q];
-          for (std::size_t b = offsets[v]; b < offsets[v + 1]; ++b) {
-            const auto u = static_cast<std::size_t>(columns[b]);
-            if (!in_row[u]) {
-              in_row[u] = 1;
-              row.push_back(columns[b]);
-            }
-            coefficient[u] -= c * weights[b];
-          }
-        }
-      }
-      double norm2 = 0;
-      for (const std::int32_t v : row) {
-        norm2 += coefficient[static_cast<std::size_t>(v)] * coefficient[static_cast<std::size_t>(v)];
-        coefficient[static_cast<std::size_t>(v)] = 0;
-        in_row[static_cast<std::size_t>(v)] = 0;
-      }
-      if (norm2 > 0) out[static_cast<std::size_t>(k)] = y * y / norm2;
+      if (const double norm2 = row_norm2(W, vertex(k), fit.passes, coefficient, in_row); norm2 > 0)
+        out[static_cast<std::size_t>(k)] = y * y / norm2;
     }
   });
   return out;

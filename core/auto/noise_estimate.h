@@ -1,5 +1,5 @@
-// Noise level of a noisy surface from the surface alone, no ground truth (ParamMode::Auto
-// scores its candidates on recorrupted copies and needs it; core/README.md, decision 19).
+// Noise level of a noisy surface from the surface alone, no ground truth (ParamMode::Search
+// scores its candidates on recorrupted copies and needs it; docs/design/decisions.md, decision 19).
 #pragma once
 
 #include <vector>

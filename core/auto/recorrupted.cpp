@@ -89,6 +89,48 @@ double RecorruptedScorer::score(const DenoiseParams& params, double* residual, i
   return total / used;
 }
 
+namespace {
+
+// Decision 24: a candidate that takes more off y1 than the noise can explain removes shape,
+// where the noise is low enough for the input to be a clean surface read as noisy.
+bool takes_shape(const SelectionOptions& options, const NoiseEstimate& estimate, double residual, double noise) {
+  const bool low = options.guard_below <= 0 || noise < options.guard_below * estimate.edge_length;
+  return options.remove_at_most > 0 && low && residual > options.remove_at_most * noise;
+}
+
+// Decision 22: the ground-truth search's coordinate descent (core/auto/tune.h), started from the
+// pick and driven by the recorrupted score of the same draws; its result joins the candidates.
+void descend_from_pick(Selection& sel, const SurfaceSample& sample, RecorruptedScorer& scorer, const DenoiseParams& requested,
+                       const SelectionOptions& options, Executor& executor, ProgressObserver* progress) {
+  TuneProblem problem{sample.F, sample.topo, {}, [&](int t, const Vertices& V) { return scorer.score_positions(t, V); },
+                      fold_ratio(sample.P, sample.F, sample.topo, requested.fold_angle)};
+  for (int d = 0; d < scorer.draws(); ++d) problem.inputs.push_back(scorer.input(d));
+  TuneOptions tune;
+  tune.progress = progress;
+  // Pinned fields keep the caller's value: their grid lists hold that value alone.
+  const DenoiseParams& r = requested;
+  if (r.is_pinned(AutoField::RegionMode)) tune.grid.region_mode = {r.region_mode};
+  if (r.is_pinned(AutoField::Alpha)) tune.grid.alpha = {r.alpha};
+  if (r.is_pinned(AutoField::SigmaTheta)) tune.grid.sigma_theta = {r.sigma_theta};
+  if (r.is_pinned(AutoField::NAniso)) tune.grid.n_aniso = {r.n_aniso};
+  if (r.is_pinned(AutoField::SigmaGamma)) tune.grid.sigma_gamma = {r.sigma_gamma};
+  if (r.is_pinned(AutoField::NNormal)) tune.grid.n_normal = {r.n_normal};
+  if (r.is_pinned(AutoField::NVertex)) tune.grid.n_vertex = {r.n_vertex};
+  const Descent d = descend(problem, sel.candidates[static_cast<std::size_t>(sel.chosen)].params, tune, executor);
+  DenoiseParams best = d.best;
+  best.pinned = requested.pinned;
+  sel.evaluations += d.evaluations;
+  ScoredCandidate found_by_search{"search", best, 0, scorer.draws()};
+  found_by_search.score = scorer.score(best, &found_by_search.residual);
+  // Decision 24 holds for the search's result too.
+  found_by_search.eligible = !takes_shape(options, sel.noise, found_by_search.residual, sel.noise.sigma);
+  sel.candidates.push_back(found_by_search);
+  if (found_by_search.eligible && found_by_search.score < sel.candidates[static_cast<std::size_t>(sel.chosen)].score)
+    sel.chosen = static_cast<int>(sel.candidates.size() - 1);
+}
+
+}  // namespace
+
 Selection select_parameters(const Vertices& P, const Triangles& F, const Topology& topo, const DenoiseParams& requested,
                             std::vector<ScoredCandidate> candidates, Executor& executor, ProgressObserver* progress,
                             const SelectionOptions& options) {
@@ -99,12 +141,7 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
   const Vertices normals = smoothed_normals(sample.P, sample.F, sample.topo, &executor);
   sel.noise = estimate_noise(sample.P, sample.F, sample.topo, normals, sample.scored_vertices, &executor);
   sel.candidates = std::move(candidates);
-  // Decision 24: a candidate that takes more off y1 than the noise can explain removes shape,
-  // where the noise is low enough for the input to be a clean surface read as noisy.
-  const auto removes_shape = [&](double residual, double noise) {
-    const bool low = options.guard_below <= 0 || noise < options.guard_below * sel.noise.edge_length;
-    return options.remove_at_most > 0 && low && residual > options.remove_at_most * noise;
-  };
+  const auto removes_shape = [&](double residual, double noise) { return takes_shape(options, sel.noise, residual, noise); };
   const auto score_all = [&](RecorruptedScorer& scorer, double noise) {
     // Decision 21: every candidate on the first draw; the best `refine` of them on the others.
     const int draws = scorer.draws();
@@ -159,36 +196,7 @@ Selection select_parameters(const Vertices& P, const Triangles& F, const Topolog
                                                   options, executor, progress);
     score_all(*scoring, found);
   }
-  RecorruptedScorer& scorer = *scoring;
-  if (requested.mode == ParamMode::Search) {
-    // Decision 22: the ground-truth search's coordinate descent (core/auto/tune.h), started from the
-    // pick and driven by the recorrupted score of the same draws.
-    TuneProblem problem{sample.F, sample.topo, {}, [&](int t, const Vertices& V) { return scorer.score_positions(t, V); },
-                        fold_ratio(sample.P, sample.F, sample.topo, requested.fold_angle)};
-    for (int d = 0; d < scorer.draws(); ++d) problem.inputs.push_back(scorer.input(d));
-    TuneOptions tune;
-    tune.progress = progress;
-    // Pinned fields keep the caller's value: their grid lists hold that value alone.
-    const DenoiseParams& r = requested;
-    if (r.is_pinned(AutoField::RegionMode)) tune.grid.region_mode = {r.region_mode};
-    if (r.is_pinned(AutoField::Alpha)) tune.grid.alpha = {r.alpha};
-    if (r.is_pinned(AutoField::SigmaTheta)) tune.grid.sigma_theta = {r.sigma_theta};
-    if (r.is_pinned(AutoField::NAniso)) tune.grid.n_aniso = {r.n_aniso};
-    if (r.is_pinned(AutoField::SigmaGamma)) tune.grid.sigma_gamma = {r.sigma_gamma};
-    if (r.is_pinned(AutoField::NNormal)) tune.grid.n_normal = {r.n_normal};
-    if (r.is_pinned(AutoField::NVertex)) tune.grid.n_vertex = {r.n_vertex};
-    const Descent d = descend(problem, sel.candidates[static_cast<std::size_t>(sel.chosen)].params, tune, executor);
-    DenoiseParams best = d.best;
-    best.pinned = requested.pinned;
-    sel.evaluations += d.evaluations;
-    ScoredCandidate found_by_search{"search", best, 0, scorer.draws()};
-    found_by_search.score = scorer.score(best, &found_by_search.residual);
-    // Decision 24 holds for the search's result too.
-    found_by_search.eligible = !removes_shape(found_by_search.residual, sel.noise.sigma);
-    sel.candidates.push_back(found_by_search);
-    if (found_by_search.eligible && found_by_search.score < sel.candidates[static_cast<std::size_t>(sel.chosen)].score)
-      sel.chosen = static_cast<int>(sel.candidates.size() - 1);
-  }
+  if (requested.mode == ParamMode::Search) descend_from_pick(sel, sample, *scoring, requested, options, executor, progress);
   return sel;
 }
 

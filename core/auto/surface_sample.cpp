@@ -18,52 +18,86 @@ std::uint32_t spread_bits(std::uint32_t x) {
   return x;
 }
 
+// Which faces the sample takes: `patches` patches of about max_faces / patches faces each,
+// grown breadth-first over vertex-sharing faces from seeds spread evenly along a Morton order
+// of the face centroids.
+std::vector<std::uint8_t> patch_faces(const Vertices& P, const Triangles& F, const Topology& topo, std::int64_t max_faces, int patches) {
+  const std::int64_t nf = F.rows();
+  std::vector<std::uint8_t> take(static_cast<std::size_t>(nf), 0);
+  const Vertices C = face_centroids(P, F);
+  const Eigen::RowVector3d lo = C.colwise().minCoeff();
+  const double extent = std::max((C.colwise().maxCoeff() - lo).maxCoeff(), 1e-300);
+  std::vector<std::pair<std::uint32_t, std::int32_t>> order(static_cast<std::size_t>(nf));
+  for (std::int64_t f = 0; f < nf; ++f) {
+    std::uint32_t code = 0;
+    for (int a = 0; a < 3; ++a) code |= spread_bits(static_cast<std::uint32_t>((C(f, a) - lo[a]) / extent * 1023.0)) << a;
+    order[static_cast<std::size_t>(f)] = {code, static_cast<std::int32_t>(f)};
+  }
+  std::sort(order.begin(), order.end());
+  const std::int64_t per_patch = std::max<std::int64_t>(1, max_faces / patches);
+  std::deque<std::int32_t> queue;
+  for (int k = 0; k < patches; ++k) {
+    const auto seed = order[static_cast<std::size_t>((2 * k + 1) * nf / (2 * patches))].second;
+    if (take[static_cast<std::size_t>(seed)]) continue;
+    std::int64_t grown = 0;
+    queue.assign(1, seed);
+    take[static_cast<std::size_t>(seed)] = 1;
+    ++grown;
+    while (!queue.empty() && grown < per_patch) {
+      const std::int32_t f = queue.front();
+      queue.pop_front();
+      for (auto a = topo.ff_offsets[static_cast<std::size_t>(f)]; a < topo.ff_offsets[static_cast<std::size_t>(f) + 1] && grown < per_patch; ++a) {
+        const std::int32_t g = topo.ff_faces[static_cast<std::size_t>(a)];
+        if (take[static_cast<std::size_t>(g)]) continue;
+        take[static_cast<std::size_t>(g)] = 1;
+        ++grown;
+        queue.push_back(g);
+      }
+    }
+  }
+  return take;
+}
+
+// Each sampled vertex's distance in rings from the cut, capped at `margin` (a vertex is on the
+// cut if one of its surface faces was left out).
+std::vector<int> cut_depth(const SurfaceSample& s, const Topology& topo, const std::vector<std::uint8_t>& take, int margin) {
+  const auto nv = static_cast<std::int32_t>(s.vertex.size());
+  std::vector<int> depth(static_cast<std::size_t>(nv), margin);
+  if (s.whole) return depth;
+  std::vector<std::int32_t> frontier;
+  for (std::int32_t v = 0; v < nv; ++v) {
+    const std::int32_t g = s.vertex[static_cast<std::size_t>(v)];
+    for (auto a = topo.vf_offsets[static_cast<std::size_t>(g)]; a < topo.vf_offsets[static_cast<std::size_t>(g) + 1]; ++a)
+      if (!take[static_cast<std::size_t>(topo.vf_faces[static_cast<std::size_t>(a)])]) {
+        depth[static_cast<std::size_t>(v)] = 0;
+        frontier.push_back(v);
+        break;
+      }
+  }
+  for (int d = 1; d < margin; ++d) {
+    std::vector<std::int32_t> next;
+    for (const std::int32_t v : frontier)
+      for (auto a = s.topo.vv_offsets[static_cast<std::size_t>(v)]; a < s.topo.vv_offsets[static_cast<std::size_t>(v) + 1]; ++a) {
+        const std::int32_t w = s.topo.vv_vertices[static_cast<std::size_t>(a)];
+        if (depth[static_cast<std::size_t>(w)] > d) {
+          depth[static_cast<std::size_t>(w)] = d;
+          next.push_back(w);
+        }
+      }
+    frontier.swap(next);
+  }
+  return depth;
+}
+
 }  // namespace
 
 SurfaceSample sample_surface(const Vertices& P, const Triangles& F, const Topology& topo, std::int64_t max_faces,
                              int patches, int margin) {
   SurfaceSample s;
   const std::int64_t nf = F.rows();
-  std::vector<std::uint8_t> take(static_cast<std::size_t>(nf), 0);
-  if (nf <= max_faces) {
-    std::fill(take.begin(), take.end(), 1);
-  } else {
-    s.whole = false;
-    patches = std::max(1, patches);
-    // Seeds spread over the surface: evenly spaced along the Morton order of the centroids.
-    const Vertices C = face_centroids(P, F);
-    const Eigen::RowVector3d lo = C.colwise().minCoeff();
-    const double extent = std::max((C.colwise().maxCoeff() - lo).maxCoeff(), 1e-300);
-    std::vector<std::pair<std::uint32_t, std::int32_t>> order(static_cast<std::size_t>(nf));
-    for (std::int64_t f = 0; f < nf; ++f) {
-      std::uint32_t code = 0;
-      for (int a = 0; a < 3; ++a)
-        code |= spread_bits(static_cast<std::uint32_t>((C(f, a) - lo[a]) / extent * 1023.0)) << a;
-      order[static_cast<std::size_t>(f)] = {code, static_cast<std::int32_t>(f)};
-    }
-    std::sort(order.begin(), order.end());
-    const std::int64_t per_patch = std::max<std::int64_t>(1, max_faces / patches);
-    std::deque<std::int32_t> queue;
-    for (int k = 0; k < patches; ++k) {
-      const auto seed = order[static_cast<std::size_t>((2 * k + 1) * nf / (2 * patches))].second;
-      if (take[static_cast<std::size_t>(seed)]) continue;
-      std::int64_t grown = 0;
-      queue.assign(1, seed);
-      take[static_cast<std::size_t>(seed)] = 1;
-      ++grown;
-      while (!queue.empty() && grown < per_patch) {
-        const std::int32_t f = queue.front();
-        queue.pop_front();
-        for (auto a = topo.ff_offsets[static_cast<std::size_t>(f)]; a < topo.ff_offsets[static_cast<std::size_t>(f) + 1] && grown < per_patch; ++a) {
-          const std::int32_t g = topo.ff_faces[static_cast<std::size_t>(a)];
-          if (take[static_cast<std::size_t>(g)]) continue;
-          take[static_cast<std::size_t>(g)] = 1;
-          ++grown;
-          queue.push_back(g);
-        }
-      }
-    }
-  }
+  s.whole = nf <= max_faces;
+  const std::vector<std::uint8_t> take =
+      s.whole ? std::vector<std::uint8_t>(static_cast<std::size_t>(nf), 1) : patch_faces(P, F, topo, max_faces, std::max(1, patches));
 
   // The sample's vertices, in the surface's order, and its faces.
   std::vector<std::int32_t> local(static_cast<std::size_t>(P.rows()), -1);
@@ -88,35 +122,9 @@ SurfaceSample sample_surface(const Vertices& P, const Triangles& F, const Topolo
     }
   s.topo = Topology::build(s.F, static_cast<std::int32_t>(s.vertex.size()));
 
-  // Distance in rings from the cut: a sampled vertex is on the cut if one of its faces was left out.
-  const std::int32_t nv = static_cast<std::int32_t>(s.vertex.size());
-  std::vector<int> depth(static_cast<std::size_t>(nv), margin);
-  std::vector<std::int32_t> frontier;
-  if (!s.whole) {
-    for (std::int32_t v = 0; v < nv; ++v) {
-      const std::int32_t g = s.vertex[static_cast<std::size_t>(v)];
-      for (auto a = topo.vf_offsets[static_cast<std::size_t>(g)]; a < topo.vf_offsets[static_cast<std::size_t>(g) + 1]; ++a)
-        if (!take[static_cast<std::size_t>(topo.vf_faces[static_cast<std::size_t>(a)])]) {
-          depth[static_cast<std::size_t>(v)] = 0;
-          frontier.push_back(v);
-          break;
-        }
-    }
-    for (int d = 1; d < margin; ++d) {
-      std::vector<std::int32_t> next;
-      for (const std::int32_t v : frontier)
-        for (auto a = s.topo.vv_offsets[static_cast<std::size_t>(v)]; a < s.topo.vv_offsets[static_cast<std::size_t>(v) + 1]; ++a) {
-          const std::int32_t w = s.topo.vv_vertices[static_cast<std::size_t>(a)];
-          if (depth[static_cast<std::size_t>(w)] > d) {
-            depth[static_cast<std::size_t>(w)] = d;
-            next.push_back(w);
-          }
-        }
-      frontier.swap(next);
-    }
-  }
+  const std::vector<int> depth = cut_depth(s, topo, take, margin);
   s.scored.assign(static_cast<std::size_t>(faces), 0);
-  std::vector<std::uint8_t> used(static_cast<std::size_t>(nv), 0);
+  std::vector<std::uint8_t> used(s.vertex.size(), 0);
   for (std::int64_t f = 0; f < faces; ++f) {
     bool ok = true;
     for (int c = 0; c < 3; ++c) ok = ok && depth[static_cast<std::size_t>(s.F(f, c))] >= margin;
@@ -124,8 +132,8 @@ SurfaceSample sample_surface(const Vertices& P, const Triangles& F, const Topolo
     s.scored[static_cast<std::size_t>(f)] = 1;
     for (int c = 0; c < 3; ++c) used[static_cast<std::size_t>(s.F(f, c))] = 1;
   }
-  for (std::int32_t v = 0; v < nv; ++v)
-    if (used[static_cast<std::size_t>(v)]) s.scored_vertices.push_back(v);
+  for (std::size_t v = 0; v < used.size(); ++v)
+    if (used[v]) s.scored_vertices.push_back(static_cast<std::int32_t>(v));
   return s;
 }
 

@@ -1,5 +1,5 @@
-// A bounded piece of a surface for scoring parameters (ParamMode::Auto and Search score
-// candidates there, then run the winner once on the whole surface; core/README.md, decision 21).
+// A bounded piece of a surface (Search scores its candidates there and Auto reads the descriptors
+// of a large surface there; docs/design/decisions.md, decisions 21 and 33).
 #pragma once
 
 #include <cstdint>
