@@ -4,6 +4,8 @@
 
 #include <functional>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "core/mesh.h"
 #include "core/normal_filter.h"
@@ -45,6 +47,7 @@ struct DenoiseReport {
   ParamMode mode = ParamMode::Manual;     // as requested
   DenoiseParams params;                   // what ran (Auto: the model's choice, pinned fields kept)
   std::shared_ptr<const ParameterChoice> choice;  // ParamMode::Auto / Search only (core/auto/choice.h)
+  std::vector<std::string> notes;  // what the caller should know (e.g. faces whose winding was set aside, decision 34)
   StageTimings timings;
 };
 

@@ -51,7 +51,7 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
 
   const RunOptions options{.threads = input.threads < 1 ? 1 : input.threads, .progress = progress};
   start = Clock::now();
-  std::vector<std::string> choice_notes;
+  std::vector<std::string> run_notes;
   for (TriMesh& surface : document->surfaces()) {
     DenoiseResult result = denoise(surface, input.params.denoise, options);
     // denoise() keeps the connectivity; only positions go back into the document.
@@ -59,8 +59,9 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
     out.vertices += surface.num_vertices();
     out.faces += surface.num_faces();
     add_stage_timings(out.timings, result.report.timings);
+    run_notes.insert(run_notes.end(), result.report.notes.begin(), result.report.notes.end());
     if (result.report.choice)  // e.g. the fallback outside the parameter model's range (core/auto/choose.h)
-      for (const std::string& note : result.report.choice->notes) choice_notes.push_back(note);
+      for (const std::string& note : result.report.choice->notes) run_notes.push_back(note);
     out.reports.push_back(result.report);
   }
   out.timings.denoise_ms = ms_since(start);
@@ -76,7 +77,7 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
   if (is_gltf(out.format)) out.effective.output.compression = out.compression;
   out.timings.encode_ms = ms_since(start);
   out.notes = document->notes();
-  out.notes.insert(out.notes.end(), choice_notes.begin(), choice_notes.end());
+  out.notes.insert(out.notes.end(), run_notes.begin(), run_notes.end());
   out.placements = document->placements();
   out.surfaces = std::move(document->surfaces());  // the document is done with them
   return out;

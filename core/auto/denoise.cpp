@@ -1,12 +1,17 @@
 #include "core/auto/denoise.h"
 
 #include <memory>
+#include <string>
+#include <utility>
 
 #include "core/auto/choose.h"
+#include "core/orient.h"
 
 namespace mdn {
 
-DenoiseResult denoise(const TriMesh& input, const DenoiseParams& params, const RunOptions& options) {
+namespace {
+
+DenoiseResult run(const TriMesh& input, const DenoiseParams& params, const RunOptions& options) {
   return run_pipeline(input, params, options,
                       [&params](const Vertices& P, const Triangles& F, const Topology& topo, double box_scale, Executor& executor,
                                 ProgressObserver* progress, DenoiseReport& report) {
@@ -16,6 +21,25 @@ DenoiseResult denoise(const TriMesh& input, const DenoiseParams& params, const R
                         report.choice = std::move(choice);
                         return chosen;
                       });
+}
+
+}  // namespace
+
+DenoiseResult denoise(const TriMesh& input, const DenoiseParams& params, const RunOptions& options) {
+  // Decision 34: faces wound against their neighbours are filtered turned to their piece's
+  // winding; the result keeps the input's faces as they were.
+  const std::vector<std::int32_t> turn =
+      input.V.rows() > 0 && input.F.rows() > 0 && input.F.minCoeff() >= 0 && input.F.maxCoeff() < input.V.rows()
+          ? faces_to_turn(input.F, static_cast<std::int32_t>(input.V.rows()))
+          : std::vector<std::int32_t>{};  // an invalid mesh is the pipeline's to refuse
+  if (turn.empty()) return run(input, params, options);
+  TriMesh wound = input;
+  for (const std::int32_t f : turn) std::swap(wound.F(f, 1), wound.F(f, 2));
+  DenoiseResult result = run(wound, params, options);
+  result.mesh.F = input.F;
+  result.report.notes.push_back(std::to_string(turn.size()) + " of " + std::to_string(input.F.rows()) +
+                                " faces are wound against their neighbours; they were filtered turned to match (decision 34)");
+  return result;
 }
 
 }  // namespace mdn

@@ -62,6 +62,21 @@ TEST(JobRunner, OffInOffOutDenoises) {
   EXPECT_LT(after, before / 4) << "before " << before << " after " << after;
 }
 
+// Decision 34: faces wound against their neighbours are filtered turned, written back as they
+// came, and the job's notes say so.
+TEST(JobRunner, MixedWindingIsDenoisedLikeTheConsistentMeshAndNamedInTheNotes) {
+  const NoisySphere s;
+  TriMesh mixed = s.noisy;
+  for (std::int64_t f = 0; f < mixed.F.rows(); f += 4) std::swap(mixed.F(f, 1), mixed.F(f, 2));
+  const JobOutput consistent = run_job(off_job(s.noisy), io::Limits{}), out = run_job(off_job(mixed), io::Limits{});
+  const TriMesh a = decode_single(consistent.bytes, io::Format::Off), b = decode_single(out.bytes, io::Format::Off);
+  EXPECT_EQ(b.F, mixed.F);
+  EXPECT_TRUE(a.V == b.V);
+  EXPECT_TRUE(consistent.notes.empty());
+  ASSERT_EQ(out.notes.size(), 1u);
+  EXPECT_NE(out.notes[0].find("wound against their neighbours"), std::string::npos) << out.notes[0];
+}
+
 TEST(JobRunner, SameBytesWhateverTheThreadCount) {
   const NoisySphere s;
   const JobOutput one = run_job(off_job(s.noisy, 1), io::Limits{});
