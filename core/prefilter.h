@@ -30,6 +30,8 @@ class ShapingSolver {
   Vertices solve(const Vertices& P, double alpha, const Eigen::VectorXd& weights);
   // CG iterations of the last solve (0 for LDLT).
   int last_iterations() const;
+  // The threads given at construction (nullptr: serial).
+  Executor* executor() const;
 
  private:
   struct Impl;
