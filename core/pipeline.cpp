@@ -109,8 +109,8 @@ DenoiseResult run_pipeline(const TriMesh& input, const DenoiseParams& requested,
   const LocalityOrder order = LocalityOrder::of(input, options.order);  // decision 16, undone at the end
   const Triangles& F = order.faces();
   Vertices P = box.apply(order.to_order(input.V));
-  const Topology topo = Topology::build(F, static_cast<std::int32_t>(P.rows()));
-  report.fold_ratio = fold_ratio(P, F, topo, requested.fold_angle);  // on the noisy input (decision 5)
+  const Topology topo = Topology::build(F, static_cast<std::int32_t>(P.rows()), &executor);
+  report.fold_ratio = fold_ratio(P, F, topo, requested.fold_angle, &executor);  // on the noisy input (decision 5)
   times.setup_ms = ms_since(t0);
 
   // ParamMode::Auto / Search: the parameters per input (core/auto/choose.h).

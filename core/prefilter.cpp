@@ -340,10 +340,11 @@ Vertices anisotropic_prefilter(const Vertices& P, const Triangles& F, const Topo
   return current;
 }
 
-double fold_ratio(const Vertices& P, const Triangles& F, const Topology& topo, double fold_angle_deg) {
+double fold_ratio(const Vertices& P, const Triangles& F, const Topology& topo, double fold_angle_deg, Executor* executor) {
   const auto E = topo.num_interior_edges();
   if (E == 0) return 0;
-  const Vertices N = face_normals(P, F);
+  Vertices N;
+  face_normals(P, F, N, executor);
   const double cos_fold = std::cos(fold_angle_deg * kDegToRad);
   std::int64_t folded = 0;
   for (Eigen::Index e = 0; e < E; ++e) {

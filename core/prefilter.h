@@ -56,7 +56,8 @@ Vertices anisotropic_prefilter(const Vertices& P, const Triangles& F, const Topo
 
 // Sec. 4.2: fraction of interior manifold edges whose two face normals make an angle
 // greater than fold_angle_deg.
-double fold_ratio(const Vertices& P, const Triangles& F, const Topology& topo, double fold_angle_deg);
+double fold_ratio(const Vertices& P, const Triangles& F, const Topology& topo, double fold_angle_deg,
+                  Executor* executor = nullptr);
 
 struct FaceClusters {
   std::vector<std::int32_t> label;   // #F cluster index in [0, K)

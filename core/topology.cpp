@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <array>
+#include <functional>
 #include <numeric>
+
+#include "core/parallel.h"
 
 namespace mdn {
 namespace {
@@ -23,7 +26,7 @@ std::vector<std::int32_t> offsets_from_counts(const std::vector<std::int32_t>& c
 
 }  // namespace
 
-Topology Topology::build(const Triangles& F, std::int32_t num_vertices) {
+Topology Topology::build(const Triangles& F, std::int32_t num_vertices, Executor* executor) {
   Topology t;
   t.num_vertices = num_vertices;
   t.num_faces = static_cast<std::int32_t>(F.rows());
@@ -130,27 +133,44 @@ Topology Topology::build(const Triangles& F, std::int32_t num_vertices) {
   }
 
   // --- Face -> vertex-adjacent faces N(i), itself excluded (core/README.md, decision 9). ---
+  // Per face: the faces of its three vertices, sorted, duplicates and itself dropped. Two
+  // passes over the faces (count, then fill at the counted offsets), each parallel over chunks
+  // of faces when an executor is given (decision 28); the lists do not depend on it.
   t.ff_offsets.assign(static_cast<std::size_t>(t.num_faces) + 1, 0);
-  t.ff_faces.reserve(static_cast<std::size_t>(t.num_faces) * 13);
-  std::vector<std::int32_t> scratch, seen(static_cast<std::size_t>(t.num_faces), -1);
-  for (std::int32_t f = 0; f < t.num_faces; ++f) {
+  auto gather = [&](std::int32_t f, std::int32_t* out, std::vector<std::int32_t>& scratch) {
     scratch.clear();
-    seen[static_cast<std::size_t>(f)] = f;  // excludes f itself
     for (int k = 0; k < 3; ++k) {
+      if (!distinct(f, k)) continue;
       const auto v = static_cast<std::size_t>(F(f, k));
       for (std::int32_t s = t.vf_offsets[v]; s < t.vf_offsets[v + 1]; ++s) {
         const std::int32_t g = t.vf_faces[static_cast<std::size_t>(s)];
-        if (seen[static_cast<std::size_t>(g)] != f) {
-          seen[static_cast<std::size_t>(g)] = f;
-          scratch.push_back(g);
-        }
+        if (g != f) scratch.push_back(g);
       }
     }
     std::sort(scratch.begin(), scratch.end());
-    t.ff_faces.insert(t.ff_faces.end(), scratch.begin(), scratch.end());
-    t.ff_offsets[static_cast<std::size_t>(f) + 1] = static_cast<std::int32_t>(t.ff_faces.size());
-  }
-  t.ff_faces.shrink_to_fit();
+    const auto last = std::unique(scratch.begin(), scratch.end());
+    const auto count = static_cast<std::int32_t>(last - scratch.begin());
+    if (out) std::copy(scratch.begin(), last, out);
+    return count;
+  };
+  auto over_faces = [&](const std::function<void(std::int64_t, std::int64_t)>& body) {
+    if (executor)
+      executor->parallel_for(t.num_faces, 8192, body);
+    else
+      body(0, t.num_faces);
+  };
+  over_faces([&](std::int64_t begin, std::int64_t end) {
+    std::vector<std::int32_t> scratch;
+    for (std::int64_t f = begin; f < end; ++f)
+      t.ff_offsets[static_cast<std::size_t>(f) + 1] = gather(static_cast<std::int32_t>(f), nullptr, scratch);
+  });
+  std::partial_sum(t.ff_offsets.begin(), t.ff_offsets.end(), t.ff_offsets.begin());
+  t.ff_faces.resize(static_cast<std::size_t>(t.ff_offsets.back()));
+  over_faces([&](std::int64_t begin, std::int64_t end) {
+    std::vector<std::int32_t> scratch;
+    for (std::int64_t f = begin; f < end; ++f)
+      gather(static_cast<std::int32_t>(f), t.ff_faces.data() + t.ff_offsets[static_cast<std::size_t>(f)], scratch);
+  });
   return t;
 }
 
