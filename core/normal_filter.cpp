@@ -1,7 +1,6 @@
 #include "core/normal_filter.h"
 
 #include <algorithm>
-#include <vector>
 #include <cmath>
 #include <numbers>
 
@@ -24,7 +23,7 @@ constexpr std::int64_t kGrain = 4096;
 // and picked at run time. Without FMA contraction (-ffp-contract=off) both versions do the
 // same IEEE operations, so the weights are identical on every x86-64 machine.
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__) && !defined(__SANITIZE_ADDRESS__)
-__attribute__((target_clones("avx512f", "avx2", "default")))
+__attribute__((target_clones("avx2", "default")))
 #endif
 void range_weights(const double* x, double* range, std::int64_t n, double sw, bool l1_median) {
   if (l1_median) {
@@ -80,69 +79,88 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
   });
 
   // The range part, phi((1 - cos gamma_ij) / (1 - cos sigma_gamma)) / ||n_i - n_j||, is
-  // evaluated per neighbour entry, in the pass that uses it (decision 30): a face's entries are
-  // gathered into a small block, weighted there (branch-free, vectorised) and summed while the
-  // block is in L1. It is symmetric, and its two evaluations (i, j) and (j, i) are the same IEEE
-  // operations on the same operands (products commute, the sums keep their order), so the
-  // weights are those of decision 17's once-per-pair evaluation bit for bit; the pass no longer
-  // writes a range per pair nor reads one back through a pair index (about 250 of the 400 bytes
-  // a face cost per iteration).
+  // symmetric in i and j: evaluate it once per unordered pair (half the exp and sqrt calls).
+  // N(i) is sorted, so the pairs (i, j > i) are the tail of i's list, from upper[i] on; pairs
+  // are numbered along those tails in face order (face i's from pair_start[i]), and
+  // pair_of[k] maps CSR entry k (face i -> neighbour j) to its pair. N(j) contains i because
+  // vertex adjacency is symmetric. No pair list is stored: the pair pass walks the tails.
+  std::vector<std::int32_t> upper(static_cast<std::size_t>(nf)), pair_start(static_cast<std::size_t>(nf) + 1, 0);
+  for (std::int64_t i = 0; i < nf; ++i) {
+    const auto b = topo.ff_faces.begin() + topo.ff_offsets[static_cast<std::size_t>(i)];
+    const auto e = topo.ff_faces.begin() + topo.ff_offsets[static_cast<std::size_t>(i) + 1];
+    const auto u = std::upper_bound(b, e, static_cast<std::int32_t>(i));
+    upper[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(u - topo.ff_faces.begin());
+    pair_start[static_cast<std::size_t>(i) + 1] = pair_start[static_cast<std::size_t>(i)] + static_cast<std::int32_t>(e - u);
+  }
+  std::vector<std::int32_t> pair_of(entries);
+  ex.parallel_for(nf, kGrain, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t i = begin; i < end; ++i) {
+      const auto iu = static_cast<std::size_t>(i);
+      for (std::int32_t k = topo.ff_offsets[iu]; k < upper[iu]; ++k) {  // j < i: the pair is in j's tail
+        const auto j = static_cast<std::size_t>(topo.ff_faces[static_cast<std::size_t>(k)]);
+        const auto jt = topo.ff_faces.begin() + upper[j];
+        const auto je = topo.ff_faces.begin() + topo.ff_offsets[j + 1];
+        pair_of[static_cast<std::size_t>(k)] = pair_start[j] + static_cast<std::int32_t>(std::lower_bound(jt, je, static_cast<std::int32_t>(i)) - jt);
+      }
+      for (std::int32_t k = upper[iu]; k < topo.ff_offsets[iu + 1]; ++k) pair_of[static_cast<std::size_t>(k)] = pair_start[iu] + (k - upper[iu]);
+    }
+  });
+  const auto num_pairs = static_cast<std::int64_t>(pair_start.back());
+  std::vector<double> range(static_cast<std::size_t>(num_pairs));
+
   // Eq. 7 typo: both denominators mean 1 - cos(sigma_gamma) (core/README.md, decision 8).
   const double inv_range = 1.0 / (1.0 - std::cos(s.sigma_gamma_deg * std::numbers::pi / 180.0));
   Vertices next(nf, 3);
   if (s.on_iteration) s.on_iteration(0, current);
-  const std::int32_t* offsets = topo.ff_offsets.data();
-  const std::int32_t* neighbours = topo.ff_faces.data();
   for (int it = 0; it < s.iterations; ++it) {
     checkpoint(progress, Stage::NormalFilter, static_cast<double>(it) / s.iterations);
-    // Eq. 7: one Jacobi step of the weighted L1-median, all faces from the previous iterate.
     ex.parallel_for(nf, kGrain, [&](std::int64_t begin, std::int64_t end) {
       const double* n = current.data();  // row-major #F x 3
-      constexpr std::int32_t kBlock = 512;  // entries per block: x and range stay in L1
-      double x[kBlock], range[kBlock];
-      std::vector<double> x_big, range_big;  // a face with more than kBlock neighbours
+      // Blocks of about kBlock pairs: gather (1 - cos gamma_ij) / (1 - cos sigma_gamma) into a
+      // small buffer and ||n_i - n_j||^2 into range, then the weights while both are in L1
+      // (branch-free, vectorised).
+      constexpr std::int32_t kBlock = 512;
+      std::vector<double> x(kBlock);
       for (std::int64_t i = begin; i < end;) {
-        std::int64_t stop = i + 1;  // at least one face, however many neighbours it has
-        while (stop < end && offsets[stop + 1] - offsets[i] <= kBlock) ++stop;
-        const std::int32_t k0 = offsets[i], count = offsets[stop] - k0;
-        double* xb = x;
-        double* rb = range;
-        if (count > kBlock) {
-          x_big.resize(static_cast<std::size_t>(count));
-          range_big.resize(static_cast<std::size_t>(count));
-          xb = x_big.data();
-          rb = range_big.data();
-        }
-        for (std::int64_t f = i; f < stop; ++f) {
-          const double* ni = n + 3 * f;
-          for (std::int32_t k = offsets[f]; k < offsets[f + 1]; ++k) {
-            const double* nj = n + 3 * neighbours[k];
+        std::int64_t stop = i + 1;  // at least one face, however many pairs it has
+        while (stop < end && pair_start[static_cast<std::size_t>(stop) + 1] - pair_start[static_cast<std::size_t>(i)] <= kBlock) ++stop;
+        const std::int32_t q0 = pair_start[static_cast<std::size_t>(i)];
+        const std::int32_t count = pair_start[static_cast<std::size_t>(stop)] - q0;
+        if (static_cast<std::size_t>(count) > x.size()) x.resize(static_cast<std::size_t>(count));
+        for (std::int32_t q = q0; i < stop; ++i) {
+          const double* ni = n + 3 * i;
+          for (std::int32_t k = upper[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k, ++q) {
+            const double* nj = n + 3 * topo.ff_faces[static_cast<std::size_t>(k)];
             const double dx = ni[0] - nj[0], dy = ni[1] - nj[1], dz = ni[2] - nj[2];
-            xb[k - k0] = (1.0 - (ni[0] * nj[0] + ni[1] * nj[1] + ni[2] * nj[2])) * inv_range;
-            rb[k - k0] = dx * dx + dy * dy + dz * dz;
+            x[static_cast<std::size_t>(q - q0)] = (1.0 - (ni[0] * nj[0] + ni[1] * nj[1] + ni[2] * nj[2])) * inv_range;
+            range[static_cast<std::size_t>(q)] = dx * dx + dy * dy + dz * dz;
           }
         }
-        range_weights(xb, rb, count, s.bilateral_switch, s.l1_median);
-        for (; i < stop; ++i) {
-          if (current.row(i).squaredNorm() == 0) {  // degenerate face: nothing to filter
-            next.row(i).setZero();
-            continue;
-          }
-          double sx = 0, sy = 0, sz = 0;
-          for (std::int32_t k = offsets[i]; k < offsets[i + 1]; ++k) {
-            const double w = spatial[static_cast<std::size_t>(k)] * rb[k - k0];
-            const double* nj = n + 3 * neighbours[k];
-            sx += w * nj[0];
-            sy += w * nj[1];
-            sz += w * nj[2];
-          }
-          const Eigen::RowVector3d sum(sx, sy, sz);
-          const double len = sum.norm();
-          if (len > 0)
-            next.row(i) = sum / len;
-          else
-            next.row(i) = current.row(i);  // no usable neighbour (isolated or all degenerate)
+        range_weights(x.data(), range.data() + q0, count, s.bilateral_switch, s.l1_median);
+      }
+    });
+    // Eq. 7: one Jacobi step of the weighted L1-median, all faces from the previous iterate.
+    ex.parallel_for(nf, kGrain, [&](std::int64_t begin, std::int64_t end) {
+      for (std::int64_t i = begin; i < end; ++i) {
+        if (current.row(i).squaredNorm() == 0) {  // degenerate face: nothing to filter
+          next.row(i).setZero();
+          continue;
         }
+        const double* n = current.data();
+        double sx = 0, sy = 0, sz = 0;
+        for (std::int32_t k = topo.ff_offsets[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k) {
+          const double w = spatial[static_cast<std::size_t>(k)] * range[static_cast<std::size_t>(pair_of[static_cast<std::size_t>(k)])];
+          const double* nj = n + 3 * topo.ff_faces[static_cast<std::size_t>(k)];
+          sx += w * nj[0];
+          sy += w * nj[1];
+          sz += w * nj[2];
+        }
+        const Eigen::RowVector3d sum(sx, sy, sz);
+        const double len = sum.norm();
+        if (len > 0)
+          next.row(i) = sum / len;
+        else
+          next.row(i) = current.row(i);  // no usable neighbour (isolated or all degenerate)
       }
     });
     current.swap(next);
