@@ -30,6 +30,7 @@ Vertices prefilter_stage(const Vertices& input, const Triangles& F, const Topolo
   ShapingSolver solver(topo, params.solver, params.cg_tolerance, &executor);
   Vertices P = solver.solve(input, params.alpha, {});
   times.initial_ms = ms_since(t0);
+  solver.release_buffers();  // not held through Sec. 4.2's K-means and Eq. 2 (peak memory)
 
   // Sec. 4.2: irregular-sampling detection and the region-based pre-filter (Eq. 2).
   t0 = Clock::now();

@@ -278,6 +278,12 @@ Vertices ShapingSolver::solve(const Vertices& P, double alpha, const Eigen::Vect
 }
 int ShapingSolver::last_iterations() const { return impl_->last_iterations; }
 Executor* ShapingSolver::executor() const { return impl_->executor; }
+void ShapingSolver::release_buffers() {
+  impl_->r_buf = Vertices();
+  impl_->p_buf = Vertices();
+  impl_->Ap_buf = Vertices();
+  impl_->inv_diag_buf = Eigen::VectorXd();
+}
 
 // Eq. 1: argmin sum ||p~_i - p_i||^2 + alpha sum_e ||S(e)||^2  <=>  (I + alpha D^T D) P~ = P.
 Vertices initial_prefilter(const Vertices& P, const Topology& topo, double alpha, LinearSolver kind) {

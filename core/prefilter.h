@@ -32,6 +32,10 @@ class ShapingSolver {
   int last_iterations() const;
   // The threads given at construction (nullptr: serial).
   Executor* executor() const;
+  // Frees the CG work vectors kept between solves (decision 29); the next solve allocates them
+  // again. The pipeline calls it before Eq. 2, whose factorisation would otherwise hold its
+  // peak on top of them.
+  void release_buffers();
 
  private:
   struct Impl;

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <functional>
 #include <numeric>
 
 #include "core/parallel.h"
@@ -133,44 +132,49 @@ Topology Topology::build(const Triangles& F, std::int32_t num_vertices, Executor
   }
 
   // --- Face -> vertex-adjacent faces N(i), itself excluded (core/README.md, decision 9). ---
-  // Per face: the faces of its three vertices, sorted, duplicates and itself dropped. Two
-  // passes over the faces (count, then fill at the counted offsets), each parallel over chunks
-  // of faces when an executor is given (decision 28); the lists do not depend on it.
+  // One pass over the faces, split into one contiguous range per thread when an executor is
+  // given (decision 28): each range gathers its lists (a `seen` mark per face, so no sort of
+  // duplicates) into its own buffer, then the buffers are concatenated in order. The lists do
+  // not depend on the split.
   t.ff_offsets.assign(static_cast<std::size_t>(t.num_faces) + 1, 0);
-  auto gather = [&](std::int32_t f, std::int32_t* out, std::vector<std::int32_t>& scratch) {
-    scratch.clear();
-    for (int k = 0; k < 3; ++k) {
-      if (!distinct(f, k)) continue;
-      const auto v = static_cast<std::size_t>(F(f, k));
-      for (std::int32_t s = t.vf_offsets[v]; s < t.vf_offsets[v + 1]; ++s) {
-        const std::int32_t g = t.vf_faces[static_cast<std::size_t>(s)];
-        if (g != f) scratch.push_back(g);
+  const int parts = executor ? std::max(1, executor->threads()) : 1;
+  std::vector<std::vector<std::int32_t>> lists(static_cast<std::size_t>(parts));
+  auto gather = [&](std::int64_t begin, std::int64_t end, std::vector<std::int32_t>& out) {
+    out.reserve(static_cast<std::size_t>(end - begin) * 13);
+    std::vector<std::int32_t> seen(static_cast<std::size_t>(t.num_faces), -1);
+    for (std::int64_t ff = begin; ff < end; ++ff) {
+      const auto f = static_cast<std::int32_t>(ff);
+      const auto first = static_cast<std::ptrdiff_t>(out.size());
+      seen[static_cast<std::size_t>(f)] = f;  // excludes f itself
+      for (int k = 0; k < 3; ++k) {
+        const auto v = static_cast<std::size_t>(F(f, k));
+        for (std::int32_t s = t.vf_offsets[v]; s < t.vf_offsets[v + 1]; ++s) {
+          const std::int32_t g = t.vf_faces[static_cast<std::size_t>(s)];
+          if (seen[static_cast<std::size_t>(g)] != f) {
+            seen[static_cast<std::size_t>(g)] = f;
+            out.push_back(g);
+          }
+        }
       }
+      std::sort(out.begin() + first, out.end());
+      t.ff_offsets[static_cast<std::size_t>(f) + 1] = static_cast<std::int32_t>(out.size() - static_cast<std::size_t>(first));
     }
-    std::sort(scratch.begin(), scratch.end());
-    const auto last = std::unique(scratch.begin(), scratch.end());
-    const auto count = static_cast<std::int32_t>(last - scratch.begin());
-    if (out) std::copy(scratch.begin(), last, out);
-    return count;
   };
-  auto over_faces = [&](const std::function<void(std::int64_t, std::int64_t)>& body) {
-    if (executor)
-      executor->parallel_for(t.num_faces, 8192, body);
-    else
-      body(0, t.num_faces);
-  };
-  over_faces([&](std::int64_t begin, std::int64_t end) {
-    std::vector<std::int32_t> scratch;
-    for (std::int64_t f = begin; f < end; ++f)
-      t.ff_offsets[static_cast<std::size_t>(f) + 1] = gather(static_cast<std::int32_t>(f), nullptr, scratch);
-  });
+  if (parts > 1 && t.num_faces >= 2 * parts) {
+    executor->parallel_for(t.num_faces, [&](std::int64_t begin, std::int64_t end) {
+      // parallel_for(n, fn) cuts [0, n) into exactly threads() ranges: find ours by its start.
+      const auto part = static_cast<std::size_t>((begin * parts) / t.num_faces);
+      gather(begin, end, lists[std::min(part, lists.size() - 1)]);
+    });
+  } else {
+    gather(0, t.num_faces, lists[0]);
+  }
   std::partial_sum(t.ff_offsets.begin(), t.ff_offsets.end(), t.ff_offsets.begin());
-  t.ff_faces.resize(static_cast<std::size_t>(t.ff_offsets.back()));
-  over_faces([&](std::int64_t begin, std::int64_t end) {
-    std::vector<std::int32_t> scratch;
-    for (std::int64_t f = begin; f < end; ++f)
-      gather(static_cast<std::int32_t>(f), t.ff_faces.data() + t.ff_offsets[static_cast<std::size_t>(f)], scratch);
-  });
+  t.ff_faces.reserve(static_cast<std::size_t>(t.ff_offsets.back()));
+  for (auto& list : lists) {
+    t.ff_faces.insert(t.ff_faces.end(), list.begin(), list.end());
+    list = {};
+  }
   return t;
 }
 
