@@ -13,10 +13,6 @@ namespace mdn {
 
 namespace {
 
-// Faces per chunk of a parallel pass, claimed by free threads (decision 28): a chunk's
-// neighbour lists, weights and pair ranges (about 12 entries of 16 bytes per face) stay in L2.
-constexpr std::int64_t kGrain = 4096;
-
 // range[q] <- phi(x[q]) / ||n_i - n_j||, the symmetric factor of omega_ij (Eq. 7), with
 // bilateral weights where ||n_i - n_j|| = sqrt(dist2[q]) < sw; phi(x) = exp(-x^2). On entry
 // range[q] holds ||n_i - n_j||^2. Branch-free so that it vectorises; compiled for AVX2 too
@@ -69,7 +65,7 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
   const std::size_t entries = topo.ff_faces.size();
   std::vector<double> spatial(entries);
   const double inv_sigma_c2 = 1.0 / (sigma_c * sigma_c);
-  ex.parallel_for(nf, kGrain, [&](std::int64_t begin, std::int64_t end) {
+  ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t i = begin; i < end; ++i)
       for (std::int32_t k = topo.ff_offsets[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k) {
         const std::int32_t j = topo.ff_faces[static_cast<std::size_t>(k)];
@@ -93,7 +89,7 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
     pair_start[static_cast<std::size_t>(i) + 1] = pair_start[static_cast<std::size_t>(i)] + static_cast<std::int32_t>(e - u);
   }
   std::vector<std::int32_t> pair_of(entries);
-  ex.parallel_for(nf, kGrain, [&](std::int64_t begin, std::int64_t end) {
+  ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t i = begin; i < end; ++i) {
       const auto iu = static_cast<std::size_t>(i);
       for (std::int32_t k = topo.ff_offsets[iu]; k < upper[iu]; ++k) {  // j < i: the pair is in j's tail
@@ -114,7 +110,7 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
   if (s.on_iteration) s.on_iteration(0, current);
   for (int it = 0; it < s.iterations; ++it) {
     checkpoint(progress, Stage::NormalFilter, static_cast<double>(it) / s.iterations);
-    ex.parallel_for(nf, kGrain, [&](std::int64_t begin, std::int64_t end) {
+    ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
       const double* n = current.data();  // row-major #F x 3
       // Blocks of about kBlock pairs: gather (1 - cos gamma_ij) / (1 - cos sigma_gamma) into a
       // small buffer and ||n_i - n_j||^2 into range, then the weights while both are in L1
@@ -140,7 +136,7 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
       }
     });
     // Eq. 7: one Jacobi step of the weighted L1-median, all faces from the previous iterate.
-    ex.parallel_for(nf, kGrain, [&](std::int64_t begin, std::int64_t end) {
+    ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
       for (std::int64_t i = begin; i < end; ++i) {
         if (current.row(i).squaredNorm() == 0) {  // degenerate face: nothing to filter
           next.row(i).setZero();

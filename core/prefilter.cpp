@@ -53,7 +53,7 @@ struct ShapingSolver::Impl {
   int last_iterations = 0;
   // CG's work vectors, kept across solves: Eq. 1 and every Eq. 3 step allocate nothing
   // (decision 29). z = D^-1 r is not stored: it is formed where it is read, the same product.
-  Vertices r_buf, p_buf, Ap_buf;
+  Vertices s_buf, r_buf, p_buf, Ap_buf;
   Eigen::VectorXd inv_diag_buf;
 
   Impl(const Topology& t, LinearSolver k, double tol, Executor* ex)
@@ -178,26 +178,24 @@ struct ShapingSolver::Impl {
     return Vertices(x);
   }
 
-  // y = A x = x + alpha D^T W D x, one gather per vertex: y_v = x_v + sum over the edges e at v
-  // of coef(v, e) s_e, with s_e = alpha w_e S(e) formed where it is read (decision 29). Each
-  // s_e is computed by each of its four vertices, by the same expression as the edge pass it
-  // replaces, so y is that pass's bit for bit; what goes is the #E x 3 array written and read
-  // back every iteration (72 of the ~340 bytes a face cost per CG iteration at 1.2M faces),
-  // while an edge's indices and weight, read by its four vertices close together in the
-  // locality order (decision 16), come from cache. Returns x . y (column-wise, blocked as dot3).
-  Eigen::Array3d apply(const Vertices& x, double alpha, const Eigen::VectorXd& weights, Vertices& y) const {
-    const std::int32_t* ie = topo->interior_edges.data();  // row-major #E x 4
-    const double* w = weights.size() ? weights.data() : nullptr;
+  // y = A x = x + alpha D^T W D x: s_e = alpha w_e S(e) per edge, then a gather per vertex.
+  // Returns x . y (column-wise, blocked as dot3). Measured and not kept (decision 29): forming
+  // s_e at each of its four vertices instead of storing it (bit-identical) cost 8% more CPU in
+  // the pre-filter at 75k faces and 23% on Fandisk, and saved 3% at 1.2M: the arrays sit in L3
+  // here, and the arithmetic is what the pass pays for.
+  Eigen::Array3d apply(const Vertices& x, double alpha, const Eigen::VectorXd& weights, Vertices& s, Vertices& y) const {
+    const auto E = topo->num_interior_edges();
+    const auto& ie = topo->interior_edges;
+    parallel(E, [&](std::int64_t begin, std::int64_t end) {
+      for (std::int64_t e = begin; e < end; ++e) {
+        const double w = alpha * (weights.size() ? weights(e) : 1.0);
+        s.row(e) = w * (x.row(ie(e, 0)) - x.row(ie(e, 1)) + x.row(ie(e, 2)) - x.row(ie(e, 3)));
+      }
+    });
     return blocked_sums(x.rows(), [&](std::int64_t v, Sums& sum) {
              Eigen::RowVector3d acc = x.row(v);
-             for (std::int32_t k = ve_offsets[static_cast<std::size_t>(v)]; k < ve_offsets[static_cast<std::size_t>(v) + 1]; ++k) {
-               const std::int32_t entry = ve_edges[static_cast<std::size_t>(k)];
-               const Eigen::Index e = edge_of(entry);
-               const std::int32_t* q = ie + 4 * e;
-               const double we = alpha * (w ? w[e] : 1.0);
-               const Eigen::RowVector3d se = we * (x.row(q[0]) - x.row(q[1]) + x.row(q[2]) - x.row(q[3]));
-               acc += coef_of(entry) * se;
-             }
+             for (std::int32_t k = ve_offsets[static_cast<std::size_t>(v)]; k < ve_offsets[static_cast<std::size_t>(v) + 1]; ++k)
+               acc += coef_of(ve_edges[static_cast<std::size_t>(k)]) * s.row(edge_of(ve_edges[static_cast<std::size_t>(k)]));
              y.row(v) = acc;
              sum.col(0) += x.row(v).array().transpose() * acc.array().transpose();
            }).col(0);
@@ -218,11 +216,12 @@ struct ShapingSolver::Impl {
     });
 
     Vertices x = P;  // start from the anchor: A = I + (small) so P is already close
-    Vertices &r = r_buf, &p = p_buf, &Ap = Ap_buf;
+    Vertices &s = s_buf, &r = r_buf, &p = p_buf, &Ap = Ap_buf;
+    s.resize(topo->num_interior_edges(), 3);
     r.resize(n, 3);
     p.resize(n, 3);
     Ap.resize(n, 3);
-    apply(x, alpha, weights, Ap);
+    apply(x, alpha, weights, s, Ap);
     // r = P - A x, z = D^-1 r (= p), and r . z in the same sweep (dot3's blocks and order).
     const Sums rz_rr0 = blocked_sums(n, [&](std::int64_t v, Sums& sum) {
       r.row(v) = P.row(v) - Ap.row(v);
@@ -238,7 +237,7 @@ struct ShapingSolver::Impl {
       const Eigen::Array3d active = (r_norm2 > threshold).cast<double>();
       last_iterations = it;
       if ((active == 0).all()) return x;
-      const Eigen::Array3d pAp = apply(p, alpha, weights, Ap);
+      const Eigen::Array3d pAp = apply(p, alpha, weights, s, Ap);
       const Eigen::Array3d step = active * rz / pAp.max(1e-300);
       const Sums rz_rr = blocked_sums(n, [&](std::int64_t v, Sums& sum) {
         x.row(v) += (step * p.row(v).array().transpose()).transpose().matrix();
@@ -279,6 +278,7 @@ Vertices ShapingSolver::solve(const Vertices& P, double alpha, const Eigen::Vect
 int ShapingSolver::last_iterations() const { return impl_->last_iterations; }
 Executor* ShapingSolver::executor() const { return impl_->executor; }
 void ShapingSolver::release_buffers() {
+  impl_->s_buf = Vertices();
   impl_->r_buf = Vertices();
   impl_->p_buf = Vertices();
   impl_->Ap_buf = Vertices();

@@ -11,9 +11,6 @@ namespace mdn {
 
 namespace {
 
-// Elements per chunk of a parallel pass, claimed by free threads (decision 28).
-constexpr std::int64_t kGrain = 8192;
-
 // True where face f, with positions P, faces away from its target normal n_f.
 bool faces_away(const Vertices& P, const Triangles& F, const Vertices& N, std::int64_t f) {
   const Eigen::RowVector3d a = P.row(F(f, 0)), b = P.row(F(f, 1)), c = P.row(F(f, 2));
@@ -30,7 +27,7 @@ void limit_flips(const Vertices& current, Vertices& next, const Triangles& F, co
   std::fill(step.begin(), step.end(), 1.0);
   // Ends: each round lowers some step, and a step takes at most kRounds + 1 values.
   for (int round = 0;; ++round) {
-    ex.parallel_for(nf, kGrain, [&](std::int64_t begin, std::int64_t end) {
+    ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
       for (std::int64_t f = begin; f < end; ++f)
         flipped[static_cast<std::size_t>(f)] = faces_away(next, F, N, f) && !faces_away(current, F, N, f);
     });
@@ -64,12 +61,12 @@ Vertices vertex_update(const Vertices& V, const Triangles& F, const Topology& to
   if (on_iteration) on_iteration(0, current);
   for (int it = 0; it < iterations; ++it) {
     checkpoint(progress, Stage::VertexUpdate, static_cast<double>(it) / iterations);
-    ex.parallel_for(nf, kGrain, [&](std::int64_t begin, std::int64_t end) {
+    ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
       for (std::int64_t f = begin; f < end; ++f)
         centroid.row(f) = (current.row(F(f, 0)) + current.row(F(f, 1)) + current.row(F(f, 2))) / 3.0;
     });
     // Eq. 8: p_i += 1/|NF(i)| sum_j n_j (n_j . (c_j - p_i)).
-    ex.parallel_for(nv, kGrain, [&](std::int64_t begin, std::int64_t end) {
+    ex.parallel_for(nv, [&](std::int64_t begin, std::int64_t end) {
       for (std::int64_t v = begin; v < end; ++v) {
         const std::int32_t b = topo.vf_offsets[static_cast<std::size_t>(v)], e = topo.vf_offsets[static_cast<std::size_t>(v) + 1];
         const Eigen::RowVector3d p = current.row(v);
