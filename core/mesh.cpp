@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/errors.h"
+#include "core/parallel.h"
 
 namespace mdn {
 
@@ -58,9 +59,9 @@ namespace {
 inline Vec3 row(const Vertices& V, std::int32_t i) { return V.row(i).transpose(); }
 }  // namespace
 
-Vertices face_normals(const Vertices& V, const Triangles& F) {
-  Vertices N(F.rows(), 3);
-  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+namespace {
+void face_normals_range(const Vertices& V, const Triangles& F, Vertices& N, std::int64_t begin, std::int64_t end) {
+  for (Eigen::Index f = begin; f < end; ++f) {
     const Vec3 a = row(V, F(f, 0)), b = row(V, F(f, 1)), c = row(V, F(f, 2));
     const Vec3 n = (b - a).cross(c - a);
     const double len = n.norm();
@@ -70,7 +71,21 @@ Vertices face_normals(const Vertices& V, const Triangles& F) {
     else
       N.row(f).setZero();
   }
+}
+}  // namespace
+
+Vertices face_normals(const Vertices& V, const Triangles& F) {
+  Vertices N(F.rows(), 3);
+  face_normals_range(V, F, N, 0, F.rows());
   return N;
+}
+
+void face_normals(const Vertices& V, const Triangles& F, Vertices& N, Executor* executor) {
+  N.resize(F.rows(), 3);
+  if (executor)
+    executor->parallel_for(F.rows(), 8192, [&](std::int64_t b, std::int64_t e) { face_normals_range(V, F, N, b, e); });
+  else
+    face_normals_range(V, F, N, 0, F.rows());
 }
 
 Eigen::VectorXd face_areas(const Vertices& V, const Triangles& F) {

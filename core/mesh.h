@@ -9,6 +9,8 @@
 
 namespace mdn {
 
+class Executor;
+
 using Vertices = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;      // #V by 3
 // Observes an iterative filter: called with its input (count 0), then after each iteration
 // with the count done so far and the current iterate (positions or normals). Used by the parameter search (core/auto/tune.h),
@@ -42,6 +44,9 @@ TriMesh to_tri_mesh(const PolygonMesh& poly);
 
 // Per-face unit normals (#F by 3). A degenerate (zero-area) face gets the zero vector.
 Vertices face_normals(const Vertices& V, const Triangles& F);
+// The same into N (resized; no allocation when it already has #F rows), over the executor's
+// threads if given: bit for bit the values above.
+void face_normals(const Vertices& V, const Triangles& F, Vertices& N, Executor* executor);
 // Per-face areas (#F).
 Eigen::VectorXd face_areas(const Vertices& V, const Triangles& F);
 // Per-face centroids (#F by 3).

@@ -44,8 +44,10 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
   if (s.iterations <= 0 || nf == 0) return current;
 
   // Areas and centroids are those of the pre-filtered mesh and stay fixed (core/README.md, decision 9).
-  const Eigen::VectorXd area = face_areas(V, F);
-  const Vertices centroid = face_centroids(V, F);
+  // They are read only to set sigma_c and the spatial weights below, then released before the
+  // iterations, where the run's memory peaks (decision 31).
+  Eigen::VectorXd area = face_areas(V, F);
+  Vertices centroid = face_centroids(V, F);
 
   // sigma_c = factor x mean distance between centroids of edge-adjacent faces (Eq. 6).
   double mean_dist = 0;
@@ -73,6 +75,8 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
         spatial[static_cast<std::size_t>(k)] = area(j) * detail::exp_nonpositive(-d2 * inv_sigma_c2);
       }
   });
+  area = Eigen::VectorXd();
+  centroid = Vertices();
 
   // The range part, phi((1 - cos gamma_ij) / (1 - cos sigma_gamma)) / ||n_i - n_j||, is
   // symmetric in i and j: evaluate it once per unordered pair (half the exp and sqrt calls).

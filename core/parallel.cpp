@@ -5,7 +5,7 @@
 namespace mdn {
 
 Executor::Executor(int threads) : threads_(std::max(1, threads)) {
-  for (int i = 1; i < threads_; ++i) workers_.emplace_back([this, i] { worker_loop(i); });
+  for (int i = 1; i < threads_; ++i) workers_.emplace_back([this] { worker_loop(); });
 }
 
 Executor::~Executor() {
@@ -19,7 +19,7 @@ Executor::~Executor() {
 
 namespace {
 // Chunk `index` of `parts` contiguous chunks of [0, n).
-std::pair<std::int64_t, std::int64_t> chunk(std::int64_t n, int parts, int index) {
+std::pair<std::int64_t, std::int64_t> chunk(std::int64_t n, std::int64_t parts, std::int64_t index) {
   const std::int64_t base = n / parts, extra = n % parts;
   const std::int64_t begin = index * base + std::min<std::int64_t>(index, extra);
   return {begin, begin + base + (index < extra ? 1 : 0)};
@@ -32,41 +32,79 @@ void Executor::parallel_for(std::int64_t n, const std::function<void(std::int64_
     fn(0, n);
     return;
   }
+  run(n, threads_, fn);
+}
+
+void Executor::parallel_for(std::int64_t n, std::int64_t grain, const std::function<void(std::int64_t, std::int64_t)>& fn) {
+  if (n <= 0) return;
+  const std::int64_t parts = std::min<std::int64_t>((n + std::max<std::int64_t>(grain, 1) - 1) / std::max<std::int64_t>(grain, 1),
+                                                    64 * static_cast<std::int64_t>(threads_));
+  if (threads_ == 1 || parts <= 1) {
+    fn(0, n);
+    return;
+  }
+  run(n, parts, fn);
+}
+
+// Claims and runs chunks of `generation` until none is left. The CAS fails once a newer
+// generation has started, so a late worker never runs an old task's chunk.
+void Executor::run_chunks(std::uint64_t generation, const Task& fn, std::int64_t n, std::int64_t parts) {
+  std::uint64_t current = next_.load(std::memory_order_relaxed);
+  for (;;) {
+    if ((current >> 32) != (generation & 0xffffffffULL)) return;
+    const auto index = static_cast<std::int64_t>(current & 0xffffffffULL);
+    if (index >= parts) return;
+    if (!next_.compare_exchange_weak(current, current + 1, std::memory_order_acq_rel, std::memory_order_relaxed)) continue;
+    const auto [b, e] = chunk(n, parts, index);
+    fn(b, e);
+    if (done_.fetch_add(1, std::memory_order_acq_rel) + 1 == parts) {
+      std::lock_guard lock(mutex_);
+      done_cv_.notify_one();
+    }
+    current = next_.load(std::memory_order_relaxed);
+  }
+}
+
+void Executor::run(std::int64_t n, std::int64_t parts, const Task& fn) {
+  std::uint64_t generation;
   {
     std::lock_guard lock(mutex_);
     task_ = &fn;
     task_n_ = n;
-    pending_ = threads_ - 1;
-    ++generation_;
+    task_parts_ = parts;
+    generation = ++generation_;
+    done_.store(0, std::memory_order_relaxed);
+    next_.store((generation & 0xffffffffULL) << 32, std::memory_order_release);
   }
   start_cv_.notify_all();
-  const auto [b, e] = chunk(n, threads_, 0);
-  fn(b, e);
-  std::unique_lock lock(mutex_);
-  done_cv_.wait(lock, [this] { return pending_ == 0; });
+  run_chunks(generation, fn, n, parts);
+  // Every chunk is claimed; wait for those still running on workers.
+  if (done_.load(std::memory_order_acquire) != parts) {
+    std::unique_lock lock(mutex_);
+    done_cv_.wait(lock, [&] { return done_.load(std::memory_order_acquire) == parts; });
+  }
+  std::lock_guard lock(mutex_);
   task_ = nullptr;
 }
 
-void Executor::worker_loop(int index) {
+void Executor::worker_loop() {
   std::uint64_t seen = 0;
   for (;;) {
-    const std::function<void(std::int64_t, std::int64_t)>* task;
-    std::int64_t n;
+    std::uint64_t generation;
+    const Task* task;
+    std::int64_t n, parts;
     {
       std::unique_lock lock(mutex_);
       start_cv_.wait(lock, [&] { return stop_ || generation_ != seen; });
       if (stop_) return;
-      seen = generation_;
+      seen = generation = generation_;
       task = task_;
       n = task_n_;
+      parts = task_parts_;
+      if (task == nullptr) continue;  // that task is over
     }
-    const auto [b, e] = chunk(n, threads_, index);
-    (*task)(b, e);
-    {
-      std::lock_guard lock(mutex_);
-      --pending_;
-    }
-    done_cv_.notify_one();
+    // Copied under the lock with its generation: used only if a claim of that generation succeeds.
+    run_chunks(generation, *task, n, parts);
   }
 }
 

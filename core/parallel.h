@@ -1,8 +1,11 @@
-// A small fixed-size thread pool with a blocking, statically partitioned parallel_for.
+// A small fixed-size thread pool with a blocking parallel_for over contiguous chunks.
 // Work is split into contiguous chunks by index, so per-element results never depend on
-// the number of threads (no reductions happen inside parallel_for).
+// the number of threads (no reductions happen inside parallel_for). Chunks are claimed, not
+// assigned (decision 28): the calling thread takes any chunk no worker has started, so a worker
+// that is slow to wake (a busy machine) or to run costs the caller nothing but its share.
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
@@ -22,21 +25,33 @@ class Executor {
 
   int threads() const { return threads_; }
 
-  // Calls fn(begin, end) on disjoint chunks covering [0, n) and waits for all of them.
-  // Not re-entrant: one parallel_for at a time per Executor (the pipeline owns its own).
+  // Calls fn(begin, end) on `threads()` disjoint contiguous chunks covering [0, n) and waits
+  // for all of them (the same chunk boundaries as a static split; callers may keep per-chunk
+  // scratch the size of the input). Not re-entrant: one parallel_for at a time per Executor.
   void parallel_for(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& fn);
+  // The same over chunks of about `grain` elements (at most 64 per thread), claimed in index
+  // order by whichever thread is free: the filters' passes, whose chunks then fit the caches and
+  // balance over cores that other processes share. fn must not keep per-chunk state whose cost
+  // grows with n.
+  void parallel_for(std::int64_t n, std::int64_t grain, const std::function<void(std::int64_t, std::int64_t)>& fn);
 
  private:
-  void worker_loop(int index);
+  using Task = std::function<void(std::int64_t, std::int64_t)>;
+  void run(std::int64_t n, std::int64_t parts, const Task& fn);
+  void run_chunks(std::uint64_t generation, const Task& fn, std::int64_t n, std::int64_t parts);
+  void worker_loop();
 
   int threads_;
   std::vector<std::thread> workers_;
   std::mutex mutex_;
   std::condition_variable start_cv_, done_cv_;
-  const std::function<void(std::int64_t, std::int64_t)>* task_ = nullptr;
-  std::int64_t task_n_ = 0;
+  // The current task; written under mutex_ before generation_ moves, read by workers after.
+  const Task* task_ = nullptr;
+  std::int64_t task_n_ = 0, task_parts_ = 0;
   std::uint64_t generation_ = 0;
-  int pending_ = 0;
+  // (generation << 32) | next chunk: a claim from an earlier generation fails its CAS.
+  std::atomic<std::uint64_t> next_{0};
+  std::atomic<std::int64_t> done_{0};
   bool stop_ = false;
 };
 

@@ -30,6 +30,7 @@ Vertices prefilter_stage(const Vertices& input, const Triangles& F, const Topolo
   ShapingSolver solver(topo, params.solver, params.cg_tolerance, &executor);
   Vertices P = solver.solve(input, params.alpha, {});
   times.initial_ms = ms_since(t0);
+  solver.release_buffers();  // not held through Sec. 4.2's K-means and Eq. 2 (peak memory)
 
   // Sec. 4.2: irregular-sampling detection and the region-based pre-filter (Eq. 2).
   t0 = Clock::now();
@@ -109,8 +110,8 @@ DenoiseResult run_pipeline(const TriMesh& input, const DenoiseParams& requested,
   const LocalityOrder order = LocalityOrder::of(input, options.order);  // decision 16, undone at the end
   const Triangles& F = order.faces();
   Vertices P = box.apply(order.to_order(input.V));
-  const Topology topo = Topology::build(F, static_cast<std::int32_t>(P.rows()));
-  report.fold_ratio = fold_ratio(P, F, topo, requested.fold_angle);  // on the noisy input (decision 5)
+  const Topology topo = Topology::build(F, static_cast<std::int32_t>(P.rows()), &executor);
+  report.fold_ratio = fold_ratio(P, F, topo, requested.fold_angle, &executor);  // on the noisy input (decision 5)
   times.setup_ms = ms_since(t0);
 
   // ParamMode::Auto / Search: the parameters per input (core/auto/choose.h).

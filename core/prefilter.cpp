@@ -51,6 +51,10 @@ struct ShapingSolver::Impl {
   Eigen::SimplicialLDLT<SparseMatrix> ldlt;
   bool analyzed = false;
   int last_iterations = 0;
+  // CG's work vectors, kept across solves: Eq. 1 and every Eq. 3 step allocate nothing
+  // (decision 29). z = D^-1 r is not stored: it is formed where it is read, the same product.
+  Vertices s_buf, r_buf, p_buf, Ap_buf;
+  Eigen::VectorXd inv_diag_buf;
 
   Impl(const Topology& t, LinearSolver k, double tol, Executor* ex)
       : kind(k), cg_tolerance(tol), topo(&t), executor(ex) {
@@ -81,9 +85,12 @@ struct ShapingSolver::Impl {
   // more than it saves (measured on Fandisk: Eq. 1 6.0 ms serial, 7.1 ms on two threads).
   static constexpr std::int64_t kParallelRows = 32768;
 
-  void parallel(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& fn) const {
+  // Chunks of kGrain rows (or edges) claimed by free threads (decision 28): a chunk's vectors
+  // stay in L2, and a core shared with another process takes fewer of them.
+  static constexpr std::int64_t kGrain = 8192;
+  void parallel(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& fn, std::int64_t grain = kGrain) const {
     if (executor && topo->num_vertices >= kParallelRows)
-      executor->parallel_for(n, fn);
+      executor->parallel_for(n, grain, fn);
     else
       fn(0, n);
   }
@@ -99,13 +106,16 @@ struct ShapingSolver::Impl {
   Sums blocked_sums(std::int64_t n, const Body& body) const {
     const std::int64_t blocks = (n + kBlock - 1) / kBlock;
     std::vector<Sums> partial(static_cast<std::size_t>(blocks), Sums::Zero());
-    parallel(blocks, [&](std::int64_t begin, std::int64_t end) {
-      for (std::int64_t blk = begin; blk < end; ++blk) {
-        Sums sum = Sums::Zero();
-        for (std::int64_t i = blk * kBlock; i < std::min(n, (blk + 1) * kBlock); ++i) body(i, sum);
-        partial[static_cast<std::size_t>(blk)] = sum;
-      }
-    });
+    parallel(
+        blocks,
+        [&](std::int64_t begin, std::int64_t end) {
+          for (std::int64_t blk = begin; blk < end; ++blk) {
+            Sums sum = Sums::Zero();
+            for (std::int64_t i = blk * kBlock; i < std::min(n, (blk + 1) * kBlock); ++i) body(i, sum);
+            partial[static_cast<std::size_t>(blk)] = sum;
+          }
+        },
+        kGrain / kBlock);
     Sums total = Sums::Zero();
     for (const auto& p : partial) total += p;
     return total;
@@ -169,7 +179,10 @@ struct ShapingSolver::Impl {
   }
 
   // y = A x = x + alpha D^T W D x: s_e = alpha w_e S(e) per edge, then a gather per vertex.
-  // Returns x . y (column-wise, blocked as dot3).
+  // Returns x . y (column-wise, blocked as dot3). Measured and not kept (decision 29): forming
+  // s_e at each of its four vertices instead of storing it (bit-identical) cost 8% more CPU in
+  // the pre-filter at 75k faces and 23% on Fandisk, and saved 3% at 1.2M: the arrays sit in L3
+  // here, and the arithmetic is what the pass pays for.
   Eigen::Array3d apply(const Vertices& x, double alpha, const Eigen::VectorXd& weights, Vertices& s, Vertices& y) const {
     const auto E = topo->num_interior_edges();
     const auto& ie = topo->interior_edges;
@@ -190,9 +203,9 @@ struct ShapingSolver::Impl {
 
   Vertices solve_cg(const Vertices& P, double alpha, const Eigen::VectorXd& weights) {
     const Eigen::Index n = P.rows();
-    const auto E = topo->num_interior_edges();
     // Jacobi preconditioner: diag(A)_v = 1 + alpha sum_{e containing v} w_e (coefficients +-1).
-    Eigen::VectorXd inv_diag(n);
+    Eigen::VectorXd& inv_diag = inv_diag_buf;
+    inv_diag.resize(n);
     parallel(n, [&](std::int64_t begin, std::int64_t end) {
       for (std::int64_t v = begin; v < end; ++v) {
         double d = 1;
@@ -203,16 +216,20 @@ struct ShapingSolver::Impl {
     });
 
     Vertices x = P;  // start from the anchor: A = I + (small) so P is already close
-    Vertices s(E, 3), r(n, 3), z(n, 3), p(n, 3), Ap(n, 3);
+    Vertices &s = s_buf, &r = r_buf, &p = p_buf, &Ap = Ap_buf;
+    s.resize(topo->num_interior_edges(), 3);
+    r.resize(n, 3);
+    p.resize(n, 3);
+    Ap.resize(n, 3);
     apply(x, alpha, weights, s, Ap);
-    parallel(n, [&](std::int64_t begin, std::int64_t end) {
-      for (std::int64_t v = begin; v < end; ++v) {
-        r.row(v) = P.row(v) - Ap.row(v);
-        z.row(v) = inv_diag(v) * r.row(v);
-      }
+    // r = P - A x, z = D^-1 r (= p), and r . z in the same sweep (dot3's blocks and order).
+    const Sums rz_rr0 = blocked_sums(n, [&](std::int64_t v, Sums& sum) {
+      r.row(v) = P.row(v) - Ap.row(v);
+      p.row(v) = inv_diag(v) * r.row(v);
+      sum.col(0) += r.row(v).array().transpose() * p.row(v).array().transpose();
+      sum.col(1) += r.row(v).array().transpose() * r.row(v).array().transpose();
     });
-    p = z;
-    Eigen::Array3d rz = dot3(r, z), r_norm2 = dot3(r, r);
+    Eigen::Array3d rz = rz_rr0.col(0), r_norm2 = rz_rr0.col(1);
     const Eigen::Array3d threshold = (cg_tolerance * cg_tolerance) * dot3(P, P).max(1e-300);
     const int max_iterations = static_cast<int>(std::max<Eigen::Index>(1000, n));
     for (int it = 0; it < max_iterations; ++it) {
@@ -225,15 +242,17 @@ struct ShapingSolver::Impl {
       const Sums rz_rr = blocked_sums(n, [&](std::int64_t v, Sums& sum) {
         x.row(v) += (step * p.row(v).array().transpose()).transpose().matrix();
         r.row(v) -= (step * Ap.row(v).array().transpose()).transpose().matrix();
-        z.row(v) = inv_diag(v) * r.row(v);
-        sum.col(0) += r.row(v).array().transpose() * z.row(v).array().transpose();
+        const Eigen::Array3d z = inv_diag(v) * r.row(v).array().transpose();
+        sum.col(0) += r.row(v).array().transpose() * z;
         sum.col(1) += r.row(v).array().transpose() * r.row(v).array().transpose();
       });
       const Eigen::Array3d rz_new = rz_rr.col(0);
       const Eigen::Array3d beta = active * rz_new / rz.max(1e-300);
       parallel(n, [&](std::int64_t begin, std::int64_t end) {
-        for (std::int64_t v = begin; v < end; ++v)
-          p.row(v) = (z.row(v).array().transpose() + beta * p.row(v).array().transpose()).transpose().matrix();
+        for (std::int64_t v = begin; v < end; ++v) {
+          const Eigen::Array3d z = inv_diag(v) * r.row(v).array().transpose();
+          p.row(v) = (z + beta * p.row(v).array().transpose()).transpose().matrix();
+        }
       });
       rz = active * rz_new + (1 - active) * rz;
       r_norm2 = rz_rr.col(1);
@@ -257,6 +276,14 @@ Vertices ShapingSolver::solve(const Vertices& P, double alpha, const Eigen::Vect
   return impl_->solve(P, alpha, weights);
 }
 int ShapingSolver::last_iterations() const { return impl_->last_iterations; }
+Executor* ShapingSolver::executor() const { return impl_->executor; }
+void ShapingSolver::release_buffers() {
+  impl_->s_buf = Vertices();
+  impl_->r_buf = Vertices();
+  impl_->p_buf = Vertices();
+  impl_->Ap_buf = Vertices();
+  impl_->inv_diag_buf = Eigen::VectorXd();
+}
 
 // Eq. 1: argmin sum ||p~_i - p_i||^2 + alpha sum_e ||S(e)||^2  <=>  (I + alpha D^T D) P~ = P.
 Vertices initial_prefilter(const Vertices& P, const Topology& topo, double alpha, LinearSolver kind) {
@@ -264,22 +291,39 @@ Vertices initial_prefilter(const Vertices& P, const Topology& topo, double alpha
   return solver.solve(P, alpha, {});
 }
 
-// Eq. 4. A degenerate face has no normal; its edges get w_e = 1 (smoothed like flat ones).
-Eigen::VectorXd anisotropic_edge_weights(const Vertices& P, const Triangles& F, const Topology& topo,
-                                         double sigma_theta_deg, double b) {
-  const Vertices N = face_normals(P, F);
+namespace {
+// Eq. 4 into w (#E), with the face normals of P in N (both kept by the caller across passes),
+// over the executor's threads if given. A degenerate face has no normal; its edges get w_e = 1
+// (smoothed like flat ones).
+void edge_weights_into(const Vertices& P, const Triangles& F, const Topology& topo, double sigma_theta_deg, double b,
+                       Executor* executor, Vertices& N, Eigen::VectorXd& w) {
+  face_normals(P, F, N, executor);
   const double inv = 1.0 / (1.0 - std::cos(sigma_theta_deg * kDegToRad));
   const double log_b = std::log(b);
-  Eigen::VectorXd w(topo.num_interior_edges());
-  for (Eigen::Index e = 0; e < w.size(); ++e) {
-    const auto n1 = N.row(topo.edge_faces(e, 0)), n2 = N.row(topo.edge_faces(e, 1));
-    if (n1.squaredNorm() == 0 || n2.squaredNorm() == 0) {
-      w(e) = 1;
-      continue;
+  w.resize(topo.num_interior_edges());
+  auto body = [&](std::int64_t begin, std::int64_t end) {
+    for (Eigen::Index e = begin; e < end; ++e) {
+      const auto n1 = N.row(topo.edge_faces(e, 0)), n2 = N.row(topo.edge_faces(e, 1));
+      if (n1.squaredNorm() == 0 || n2.squaredNorm() == 0) {
+        w(e) = 1;
+        continue;
+      }
+      const double cos_theta = std::clamp(n1.dot(n2), -1.0, 1.0);
+      w(e) = detail::exp_nonpositive(-log_b * (1.0 - cos_theta) * inv);  // b^-((1 - cos theta) / (1 - cos sigma_theta))
     }
-    const double cos_theta = std::clamp(n1.dot(n2), -1.0, 1.0);
-    w(e) = detail::exp_nonpositive(-log_b * (1.0 - cos_theta) * inv);  // b^-((1 - cos theta) / (1 - cos sigma_theta))
-  }
+  };
+  if (executor)
+    executor->parallel_for(w.size(), 8192, body);
+  else
+    body(0, w.size());
+}
+}  // namespace
+
+Eigen::VectorXd anisotropic_edge_weights(const Vertices& P, const Triangles& F, const Topology& topo,
+                                         double sigma_theta_deg, double b) {
+  Vertices N;
+  Eigen::VectorXd w;
+  edge_weights_into(P, F, topo, sigma_theta_deg, b, nullptr, N, w);
   return w;
 }
 
@@ -293,20 +337,23 @@ Vertices anisotropic_prefilter(const Vertices& P, const Triangles& F, const Topo
     solver = own.get();
   }
   Vertices current = P;
+  Vertices normals;  // reused by every pass
+  Eigen::VectorXd w;
   if (on_iteration) on_iteration(0, current);
   for (int it = 0; it < params.n_aniso; ++it) {
     checkpoint(progress, Stage::AnisotropicPrefilter, static_cast<double>(it) / params.n_aniso);
-    const Eigen::VectorXd w = anisotropic_edge_weights(current, F, topo, params.sigma_theta, params.b);
+    edge_weights_into(current, F, topo, params.sigma_theta, params.b, solver->executor(), normals, w);
     current = solver->solve(current, params.alpha, w);
     if (on_iteration) on_iteration(it + 1, current);
   }
   return current;
 }
 
-double fold_ratio(const Vertices& P, const Triangles& F, const Topology& topo, double fold_angle_deg) {
+double fold_ratio(const Vertices& P, const Triangles& F, const Topology& topo, double fold_angle_deg, Executor* executor) {
   const auto E = topo.num_interior_edges();
   if (E == 0) return 0;
-  const Vertices N = face_normals(P, F);
+  Vertices N;
+  face_normals(P, F, N, executor);
   const double cos_fold = std::cos(fold_angle_deg * kDegToRad);
   std::int64_t folded = 0;
   for (Eigen::Index e = 0; e < E; ++e) {

@@ -30,6 +30,12 @@ class ShapingSolver {
   Vertices solve(const Vertices& P, double alpha, const Eigen::VectorXd& weights);
   // CG iterations of the last solve (0 for LDLT).
   int last_iterations() const;
+  // The threads given at construction (nullptr: serial).
+  Executor* executor() const;
+  // Frees the CG work vectors kept between solves (decision 29); the next solve allocates them
+  // again. The pipeline calls it before Eq. 2, whose factorisation would otherwise hold its
+  // peak on top of them.
+  void release_buffers();
 
  private:
   struct Impl;
@@ -54,7 +60,8 @@ Vertices anisotropic_prefilter(const Vertices& P, const Triangles& F, const Topo
 
 // Sec. 4.2: fraction of interior manifold edges whose two face normals make an angle
 // greater than fold_angle_deg.
-double fold_ratio(const Vertices& P, const Triangles& F, const Topology& topo, double fold_angle_deg);
+double fold_ratio(const Vertices& P, const Triangles& F, const Topology& topo, double fold_angle_deg,
+                  Executor* executor = nullptr);
 
 struct FaceClusters {
   std::vector<std::int32_t> label;   // #F cluster index in [0, K)

@@ -4,6 +4,8 @@
 #include <array>
 #include <numeric>
 
+#include "core/parallel.h"
+
 namespace mdn {
 namespace {
 
@@ -23,7 +25,7 @@ std::vector<std::int32_t> offsets_from_counts(const std::vector<std::int32_t>& c
 
 }  // namespace
 
-Topology Topology::build(const Triangles& F, std::int32_t num_vertices) {
+Topology Topology::build(const Triangles& F, std::int32_t num_vertices, Executor* executor) {
   Topology t;
   t.num_vertices = num_vertices;
   t.num_faces = static_cast<std::int32_t>(F.rows());
@@ -130,27 +132,49 @@ Topology Topology::build(const Triangles& F, std::int32_t num_vertices) {
   }
 
   // --- Face -> vertex-adjacent faces N(i), itself excluded (core/README.md, decision 9). ---
+  // One pass over the faces, split into one contiguous range per thread when an executor is
+  // given (decision 28): each range gathers its lists (a `seen` mark per face, so no sort of
+  // duplicates) into its own buffer, then the buffers are concatenated in order. The lists do
+  // not depend on the split.
   t.ff_offsets.assign(static_cast<std::size_t>(t.num_faces) + 1, 0);
-  t.ff_faces.reserve(static_cast<std::size_t>(t.num_faces) * 13);
-  std::vector<std::int32_t> scratch, seen(static_cast<std::size_t>(t.num_faces), -1);
-  for (std::int32_t f = 0; f < t.num_faces; ++f) {
-    scratch.clear();
-    seen[static_cast<std::size_t>(f)] = f;  // excludes f itself
-    for (int k = 0; k < 3; ++k) {
-      const auto v = static_cast<std::size_t>(F(f, k));
-      for (std::int32_t s = t.vf_offsets[v]; s < t.vf_offsets[v + 1]; ++s) {
-        const std::int32_t g = t.vf_faces[static_cast<std::size_t>(s)];
-        if (seen[static_cast<std::size_t>(g)] != f) {
-          seen[static_cast<std::size_t>(g)] = f;
-          scratch.push_back(g);
+  const int parts = executor ? std::max(1, executor->threads()) : 1;
+  std::vector<std::vector<std::int32_t>> lists(static_cast<std::size_t>(parts));
+  auto gather = [&](std::int64_t begin, std::int64_t end, std::vector<std::int32_t>& out) {
+    out.reserve(static_cast<std::size_t>(end - begin) * 13);
+    std::vector<std::int32_t> seen(static_cast<std::size_t>(t.num_faces), -1);
+    for (std::int64_t ff = begin; ff < end; ++ff) {
+      const auto f = static_cast<std::int32_t>(ff);
+      const auto first = static_cast<std::ptrdiff_t>(out.size());
+      seen[static_cast<std::size_t>(f)] = f;  // excludes f itself
+      for (int k = 0; k < 3; ++k) {
+        const auto v = static_cast<std::size_t>(F(f, k));
+        for (std::int32_t s = t.vf_offsets[v]; s < t.vf_offsets[v + 1]; ++s) {
+          const std::int32_t g = t.vf_faces[static_cast<std::size_t>(s)];
+          if (seen[static_cast<std::size_t>(g)] != f) {
+            seen[static_cast<std::size_t>(g)] = f;
+            out.push_back(g);
+          }
         }
       }
+      std::sort(out.begin() + first, out.end());
+      t.ff_offsets[static_cast<std::size_t>(f) + 1] = static_cast<std::int32_t>(out.size() - static_cast<std::size_t>(first));
     }
-    std::sort(scratch.begin(), scratch.end());
-    t.ff_faces.insert(t.ff_faces.end(), scratch.begin(), scratch.end());
-    t.ff_offsets[static_cast<std::size_t>(f) + 1] = static_cast<std::int32_t>(t.ff_faces.size());
+  };
+  if (parts > 1 && t.num_faces >= 2 * parts) {
+    executor->parallel_for(t.num_faces, [&](std::int64_t begin, std::int64_t end) {
+      // parallel_for(n, fn) cuts [0, n) into exactly threads() ranges: find ours by its start.
+      const auto part = static_cast<std::size_t>((begin * parts) / t.num_faces);
+      gather(begin, end, lists[std::min(part, lists.size() - 1)]);
+    });
+  } else {
+    gather(0, t.num_faces, lists[0]);
   }
-  t.ff_faces.shrink_to_fit();
+  std::partial_sum(t.ff_offsets.begin(), t.ff_offsets.end(), t.ff_offsets.begin());
+  t.ff_faces.reserve(static_cast<std::size_t>(t.ff_offsets.back()));
+  for (auto& list : lists) {
+    t.ff_faces.insert(t.ff_faces.end(), list.begin(), list.end());
+    list = {};
+  }
   return t;
 }
 

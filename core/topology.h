@@ -9,6 +9,8 @@
 
 namespace mdn {
 
+class Executor;
+
 struct Topology {
   std::int32_t num_vertices = 0;
   std::int32_t num_faces = 0;
@@ -30,7 +32,8 @@ struct Topology {
   // Face -> faces sharing at least one vertex with it, itself excluded (N(i), Eq. 6).
   std::vector<std::int32_t> ff_offsets, ff_faces;
 
-  static Topology build(const Triangles& F, std::int32_t num_vertices);
+  // executor: optional threads for the face -> faces lists (the result does not depend on it).
+  static Topology build(const Triangles& F, std::int32_t num_vertices, Executor* executor = nullptr);
 
   std::int64_t num_interior_edges() const { return interior_edges.rows(); }
   // Mean length of the unique undirected edges under positions V: mean_edge_length(V, F) bit

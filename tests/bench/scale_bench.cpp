@@ -1,19 +1,22 @@
-// Cost per face from ten thousand to five million faces: denoise() (ParamMode::Manual, so the
-// figures do not move with the automatic rule) on CGAL meshes subdivided 1-to-4 and given
-// along-normal noise 0.2 l (seed 1), with two fixed parameter sets at 1 and 2 threads. Prints
+// Cost per face from ten thousand to five million faces: denoise() on CGAL meshes subdivided
+// 1-to-4 and given
+// along-normal noise 0.2 l (seed 1), with the automatic choice and fixed parameter sets. Prints
 // one row per run: per-stage ns per face per iteration, whole-run time, peak RSS and MSAE.
 // Asserts nothing (never part of ctest). Compare figures only within one run on one machine.
 //
 //   scale_bench [--data DIR] [--meshes LIST] [--params LIST] [--threads LIST] [--order LIST] [--runs N] [--cg]
 //
 //   --meshes LIST   comma-separated NAME:LEVELS (a CGAL demo mesh, subdivided LEVELS times);
-//                   default fandisk:0,bunny00:0,bunny00:2,bunny00:3 (13k, 75k, 1.2M, 4.8M faces)
-//   --params LIST   paper (DenoiseParams{}, Table 1's Fandisk row) and/or cad (the heavy CAD
+//                   default fandisk:0,bunny00:0,bunny00:2 (13k, 75k, 1.2M faces)
+//   --big           also bunny00:3 (4.8M faces; minutes per run on two cores), or MDN_SCALE_BIG=1
+//   --params LIST   auto (ParamMode::Auto, the CLI's and the service's default), heavy (issue 36's
+//                   fixed heavy set: the paper's row with n_aniso 16, n_normal 100, n_vertex 30),
+//                   paper (DenoiseParams{}, Table 1's Fandisk row) and/or cad (the heavy CAD
 //                   prototype: alpha 0.06, sigma_theta 70, n_aniso 2, sigma_gamma 60,
-//                   n_normal 100, n_vertex 80); default paper,cad. "auto" (ParamMode::Auto) also
-//                   prints how much of the run choosing the parameters took (its per-iteration
-//                   columns divide by the default iteration counts, not the chosen ones)
-//   --threads LIST  default 1,2
+//                   n_normal 100, n_vertex 80); default auto,heavy. "auto" also prints how much
+//                   of the run choosing the parameters took; every per-iteration column divides
+//                   by the iteration counts that ran (auto: the chosen ones)
+//   --threads LIST  default 2
 //   --order LIST    RunOptions::order: auto (the default), input, curve and/or bfs (decision 16)
 //   --runs N        runs per configuration, round-robin over the configurations of a mesh;
 //                   medians printed (default 3)
@@ -58,9 +61,9 @@ namespace {
 
 struct Options {
   fs::path data;
-  std::vector<std::pair<std::string, int>> meshes = {{"fandisk", 0}, {"bunny00", 0}, {"bunny00", 2}, {"bunny00", 3}};
-  std::vector<std::string> params = {"paper", "cad"};
-  std::vector<int> threads = {1, 2};
+  std::vector<std::pair<std::string, int>> meshes = {{"fandisk", 0}, {"bunny00", 0}, {"bunny00", 2}};
+  std::vector<std::string> params = {"auto", "heavy"};
+  std::vector<int> threads = {2};
   std::vector<std::string> orders = {"auto"};
   int runs = 3;
   bool cg = false;
@@ -77,7 +80,7 @@ std::vector<std::string> split(const std::string& s) {
 
 [[noreturn]] void usage(const char* argv0, int code) {
   std::fprintf(code ? stderr : stdout,
-               "usage: %s [--data DIR] [--meshes NAME:LEVELS,...] [--params paper,cad] [--threads 1,2]\n"
+               "usage: %s [--data DIR] [--meshes NAME:LEVELS,...] [--big] [--params auto,heavy,paper,cad] [--threads 1,2]\n"
                "          [--order auto,input,curve,bfs] [--runs N] [--cg] [--jitter EPS]\n",
                argv0);
   std::exit(code);
@@ -102,7 +105,7 @@ Options parse(int argc, char** argv) {
     } else if (a == "--params") {
       o.params = split(value());
       for (const std::string& p : o.params)
-        if (p != "paper" && p != "cad" && p != "auto") usage(argv[0], 2);
+        if (p != "paper" && p != "cad" && p != "auto" && p != "heavy") usage(argv[0], 2);
     } else if (a == "--threads") {
       o.threads.clear();
       for (const std::string& t : split(value())) o.threads.push_back(std::max(1, std::stoi(t)));
@@ -110,6 +113,8 @@ Options parse(int argc, char** argv) {
       o.orders = split(value());
       for (const std::string& k : o.orders)
         if (k != "auto" && k != "input" && k != "curve" && k != "bfs") usage(argv[0], 2);
+    } else if (a == "--big") {
+      o.meshes.emplace_back("bunny00", 3);
     } else if (a == "--runs") {
       o.runs = std::max(1, std::stoi(value()));
     } else if (a == "--jitter") {
@@ -123,6 +128,7 @@ Options parse(int argc, char** argv) {
     }
   }
   if (o.data.empty()) o.data = bench::default_cgal_data();
+  if (const char* big = std::getenv("MDN_SCALE_BIG"); big && std::string(big) == "1") o.meshes.emplace_back("bunny00", 3);
   return o;
 }
 
@@ -130,6 +136,7 @@ Options parse(int argc, char** argv) {
 // CAD prototype. Manual either way.
 DenoiseParams params_named(const std::string& name) {
   if (name == "auto") return {.mode = ParamMode::Auto};  // the default of the CLI and the service
+  if (name == "heavy") return {.mode = ParamMode::Manual, .n_aniso = 16, .n_normal = 100, .n_vertex = 30};
   if (name == "cad")
     return {.mode = ParamMode::Manual, .alpha = 0.06, .sigma_theta = 70, .n_aniso = 2, .sigma_gamma = 60,
             .n_normal = 100, .n_vertex = 80};
@@ -172,6 +179,7 @@ struct RunFigures {
   double cpu_pre_s = 0, cpu_normal_s = 0, cpu_vertex_s = 0;
   double rss_before_mib = 0, peak_mib = 0;
   double cpu_s = 0;  // user + system CPU time of denoise(), all threads
+  int n_aniso = 0, n_normal = 0, n_vertex = 0;  // the iteration counts that ran
   bool peak_reset = false;
 };
 
@@ -206,6 +214,9 @@ RunFigures run_child(std::unique_ptr<TriMesh>& truth, std::unique_ptr<TriMesh>& 
     fig.cpu_vertex_s = clock.vertex1 - clock.vertex0;
     fig.peak_mib = proc_status_mib("VmHWM:");
     fig.t = r.report.timings;
+    fig.n_aniso = r.report.params.n_aniso;
+    fig.n_normal = r.report.params.n_normal;
+    fig.n_vertex = r.report.params.n_vertex;
     auto write_all = [&](const void* data, std::size_t bytes) {
       const char* p = static_cast<const char*>(data);
       while (bytes > 0) {
@@ -271,11 +282,16 @@ int main(int argc, char** argv) {
   std::printf("machine: %u hardware threads, load average %.2f %.2f %.2f; along_normal noise 0.2 l seed 1; "
               "%d runs per configuration (round-robin), medians\n",
               std::thread::hardware_concurrency(), load[0], load[1], load[2], o.runs);
-  std::printf("%-11s %8s %-5s %-5s %3s | %7s %7s %7s %7s %7s %7s | %6s %7s %7s %7s | %7s %7s | %9s\n", "", "", "", "",
-              "", "wall:", "setup", "eq1", "eq3", "normal", "vertex", "cpu:", "pre", "normal", "vertex", "peak", "per MF", "MSAE");
-  std::printf("%-11s %8s %-5s %-5s %3s | %7s %7s %7s %7s %7s %7s | %6s %7s %7s %7s | %7s %7s | %9s\n", "mesh", "faces",
-              "param", "order", "thr", "total s", "ms", "ms", "ms", "ns/f/it", "ns/f/it", "tot s", "s", "ns/f/it", "ns/f/it",
-              "MiB", "MiB", "x1e-2");
+  // Per stage, wall time of the stage per face per pass (setup, measure and Eq. 1 once; Eq. 3 per
+  // anisotropic pass, the filters per iteration, over the counts that ran), in ns.
+  // cpu: process CPU time (all threads; a loaded machine's waits excluded): the whole run, the
+  // pre-filter (Eq. 1 to the first normal-filter iteration) and the two filters per iteration.
+  std::printf("%-11s %8s %-5s %-5s %3s | %7s %7s %7s %7s %7s %7s %7s | %6s %6s %7s %7s | %7s %7s | %9s | %s\n", "", "", "",
+              "", "", "wall:", "setup", "measure", "eq1", "eq3", "normal", "vertex", "cpu:", "pre", "normal", "vertex", "peak",
+              "per MF", "MSAE", "ran");
+  std::printf("%-11s %8s %-5s %-5s %3s | %7s %7s %7s %7s %7s %7s %7s | %6s %6s %7s %7s | %7s %7s | %9s | %s\n", "mesh",
+              "faces", "param", "order", "thr", "total s", "ns/f", "ns/f", "ns/f", "ns/f/it", "ns/f/it", "ns/f/it", "tot s",
+              "s", "ns/f/it", "ns/f/it", "MiB", "MiB", "x1e-2", "aniso/normal/vertex");
   try {
     const fs::path dir = bench::cgal_meshes(o.data);
     for (const auto& [name, levels] : o.meshes) {
@@ -315,24 +331,29 @@ int main(int argc, char** argv) {
           for (const RunFigures& r : c.runs) v.push_back(get(r));
           return bench::median(v);
         };
-        const double per_normal = 1e9 / (nf * std::max(1, c.params.n_normal));  // seconds -> ns/f/it
-        const double per_vertex = 1e9 / (nf * std::max(1, c.params.n_vertex));
+        const RunFigures& ran = c.runs.front();  // the counts are those of every run (deterministic)
+        const double per_face = 1e6 / nf;  // ms -> ns/f
+        const double per_aniso = per_face / std::max(1, ran.n_aniso);
+        const double per_normal = per_face / std::max(1, ran.n_normal);
+        const double per_vertex = per_face / std::max(1, ran.n_vertex);
         const double peak = med([](const RunFigures& r) { return r.peak_mib; });
         const TriMesh out{c.output, truth->F};
-        std::printf("%-11s %8.0f %-5s %-5s %3d | %7.2f %7.0f %7.0f %7.0f %7.1f %7.1f | %6.2f %7.2f %7.1f %7.1f | %7.0f %7.0f | "
-                    "%9.6f  (RSS at start %.0f MiB)%s\n",
+        std::printf("%-11s %8.0f %-5s %-5s %3d | %7.3f %7.0f %7.0f %7.0f %7.1f %7.1f %7.1f | %6.2f %6.2f %7.1f %7.1f | %7.0f %7.0f | "
+                    "%9.6f | %d/%d/%d (RSS at start %.0f MiB)%s\n",
                     label.c_str(), nf, c.params_name.c_str(), c.order_name.c_str(), c.options.threads,
                     med([](const RunFigures& r) { return r.t.total_ms; }) / 1e3,
-                    med([](const RunFigures& r) { return r.t.setup_ms; }),
-                    med([](const RunFigures& r) { return r.t.initial_ms; }),
-                    med([](const RunFigures& r) { return r.t.anisotropic_ms; }),
-                    med([](const RunFigures& r) { return r.t.normal_ms; }) * 1e-3 * per_normal,
-                    med([](const RunFigures& r) { return r.t.vertex_ms; }) * 1e-3 * per_vertex,
+                    med([](const RunFigures& r) { return r.t.setup_ms; }) * per_face,
+                    med([](const RunFigures& r) { return r.t.measure_ms; }) * per_face,
+                    med([](const RunFigures& r) { return r.t.initial_ms; }) * per_face,
+                    med([](const RunFigures& r) { return r.t.anisotropic_ms; }) * per_aniso,
+                    med([](const RunFigures& r) { return r.t.normal_ms; }) * per_normal,
+                    med([](const RunFigures& r) { return r.t.vertex_ms; }) * per_vertex,
                     med([](const RunFigures& r) { return r.cpu_s; }), med([](const RunFigures& r) { return r.cpu_pre_s; }),
-                    med([](const RunFigures& r) { return r.cpu_normal_s; }) * per_normal,
-                    med([](const RunFigures& r) { return r.cpu_vertex_s; }) * per_vertex, peak, peak / (nf / 1e6),
-                    msae(out, *truth) * 1e2, med([](const RunFigures& r) { return r.rss_before_mib; }),
-                    c.runs.front().peak_reset ? "" : " (peak not reset)");
+                    med([](const RunFigures& r) { return r.cpu_normal_s; }) * 1e3 * per_normal,
+                    med([](const RunFigures& r) { return r.cpu_vertex_s; }) * 1e3 * per_vertex, peak, peak / (nf / 1e6),
+                    msae(out, *truth) * 1e2,
+                    ran.n_aniso, ran.n_normal, ran.n_vertex, med([](const RunFigures& r) { return r.rss_before_mib; }),
+                    ran.peak_reset ? "" : " (peak not reset)");
         if (c.params.mode == ParamMode::Auto) {
           const double select = med([](const RunFigures& r) { return r.t.measure_ms; });
           const double total = med([](const RunFigures& r) { return r.t.total_ms; });
