@@ -66,10 +66,10 @@ struct HttpService::Impl {
         log(std::move(l)),
         parts(std::move(p)),
         metrics(*parts.metrics),
-        queue(*parts.queue),
+        pool(*parts.pool),
         store(parts.store.get()),
-        jobs(config, log, metrics, queue, *store),
-        service_routes(config, metrics, queue, *store, jobs, [this] { return svr.gate().counts(); }) {
+        jobs(config, log, metrics, pool, *store),
+        service_routes(config, metrics, pool, *store, jobs, [this] { return svr.gate().counts(); }) {
     id_prefix = random_hex(4);
     routes = make_routes();
     for (Route& r : routes) r.regex = std::regex(r.pattern);
@@ -388,7 +388,7 @@ struct HttpService::Impl {
   const std::shared_ptr<const EventLog> log;
   ServiceParts parts;  // owns what the three below refer to
   Metrics& metrics;
-  JobQueue& queue;
+  WorkerPool& pool;
   JobStore* store;
   JobRoutes jobs;        // the job routes (/v1/denoise, /v1/jobs...)
   GatedServer svr;
@@ -450,20 +450,33 @@ int HttpService::bind() {
 bool HttpService::serve() { return impl_->svr.listen_after_bind(); }
 
 void HttpService::begin_drain() {
-  impl_->queue.begin_drain();
+  impl_->pool.begin_drain();
   impl_->store->begin_drain();
 }
 
 bool HttpService::wait_drained(Clock::time_point deadline) { return impl_->store->wait_drained(deadline); }
 
 void HttpService::stop() {
-  impl_->queue.begin_drain();
-  impl_->store->stop();  // Redis: jobs it still runs go back to the shared queue
-  impl_->queue.cancel_all();
+  impl_->pool.begin_drain();
+  impl_->store->stop();  // memory: its jobs cancelled; Redis: jobs it still runs go back to the shared queue
+  impl_->pool.abandon();
   impl_->svr.stop();
 }
 
-JobQueue& HttpService::queue() { return impl_->queue; }
+WorkerPool& HttpService::pool() { return impl_->pool; }
+
+std::vector<JobSnapshot> HttpService::unfinished() {
+  // The jobs waiting in the pool that no store here lists (synchronous ones, a shared store's),
+  // then the store's own.
+  std::vector<JobSnapshot> mine = impl_->store->unfinished(), out;
+  for (const auto& job : impl_->pool.queued_jobs())
+    if (std::none_of(mine.begin(), mine.end(), [&](const JobSnapshot& s) { return s.id == job->id(); }))
+      out.push_back(job->snapshot());
+  out.insert(out.end(), mine.begin(), mine.end());
+  return out;
+}
+
+int HttpService::unfetched_results() { return impl_->store->unfetched_results(); }
 
 std::vector<RouteInfo> HttpService::route_table() {
   std::vector<RouteInfo> out;

@@ -1,5 +1,5 @@
 // The HTTP service: route table, handlers, CORS, auth, request ids, access logs and metrics,
-// over cpp-httplib and the parts main() builds (service_parts.h): the metrics, the JobQueue
+// over cpp-httplib and the parts main() builds (service_parts.h): the metrics, the WorkerPool
 // (this process's workers; synchronous jobs) and a JobStore (asynchronous jobs: in memory, or
 // shared through Redis with --queue; job_store.h). The service never picks its store itself.
 //
@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "server/http/config.h"
-#include "server/http/job_queue.h"
+#include "server/http/worker_pool.h"
 #include "server/http/log.h"
 #include "server/http/service_parts.h"
 
@@ -52,7 +52,11 @@ class HttpService {
   // Stops accepting connections, lets in-flight requests finish, and cancels what is left.
   void stop();
 
-  JobQueue& queue();
+  WorkerPool& pool();
+  // For the drain's log: the jobs queued or running here (queued synchronous ones, the memory
+  // store's; not those running synchronously), and the succeeded results nobody fetched.
+  std::vector<JobSnapshot> unfinished();
+  int unfetched_results();
 
   // Every route the server answers (besides OPTIONS preflights), for contract tests.
   static std::vector<RouteInfo> route_table();

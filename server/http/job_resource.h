@@ -7,8 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
-// job_queue.h (Eigen, through the core) before httplib.h: see request_body.h.
-#include "server/http/job_queue.h"
+// worker_pool.h (Eigen, through the core) before httplib.h: see request_body.h.
+#include "server/http/worker_pool.h"
 #include "server/http/http_support.h"
 
 namespace mdn::http {

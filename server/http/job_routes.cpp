@@ -11,6 +11,7 @@
 #include "server/http/connection_probe.h"
 #include "server/http/job_resource.h"
 #include "server/http/problem.h"
+#include "server/http/secure_random.h"
 #include "service/params_json.h"
 
 namespace mdn::http {
@@ -26,10 +27,10 @@ JobSnapshot found(const std::string& id, std::optional<JobSnapshot> job) {
 
 }  // namespace
 
-JobRoutes::JobRoutes(const ServerConfig& config, std::shared_ptr<const EventLog> log, Metrics& metrics, JobQueue& queue,
+JobRoutes::JobRoutes(const ServerConfig& config, std::shared_ptr<const EventLog> log, Metrics& metrics, WorkerPool& pool,
                      JobStore& store)
     : log_(std::move(log)),
-      queue_(queue),
+      pool_(pool),
       store_(store),
       keys_(config.api_keys),
       sync_start_timeout_s_(config.sync_start_timeout_s),
@@ -97,21 +98,21 @@ JobSnapshot JobRoutes::wait_job(Context& ctx) {
 
 void JobRoutes::denoise(Context& ctx) {
   service::JobInput input = bodies_.read_job_input(ctx);
-  std::shared_ptr<Job> job = queue_.submit(std::move(input), false).job;
+  std::shared_ptr<Job> job = pool_.submit(new_job_id(), std::move(input), {.asynchronous = false});
   const auto probe = ConnectionProbe::current(ctx.req.remote_port);
   const auto start_by = Clock::now() + std::chrono::milliseconds(std::int64_t(sync_start_timeout_s_ * 1000));
   while (!job->wait_for(std::chrono::milliseconds(50))) {
     // A synchronous request whose job found no worker in time is answered 503 (never left
     // hanging behind a queue that does not move); the job is withdrawn.
     if (Clock::now() >= start_by && job->snapshot().state == JobState::Queued) {
-      queue_.cancel(job);
+      pool_.cancel(job);
       Problem p = make_problem(ProblemType::QueueFull, "no worker was free to start this job within " +
                                                            std::to_string(int(sync_start_timeout_s_)) + " s");
-      p.retry_after_s = queue_.retry_after_s();
+      p.retry_after_s = pool_.retry_after_s();
       throw HttpError(std::move(p));
     }
     if (probe && probe->peer_gone()) {
-      queue_.cancel(job);
+      pool_.cancel(job);
       if (log_) log_->info("client_gone", {{"request_id", ctx.request_id}, {"job_id", job->id()}});
       ctx.res.status = 499;  // nginx's "client closed request": for the access log only
       return;
@@ -189,13 +190,13 @@ void JobRoutes::delete_job(Context& ctx) {
   JobStore::CancelResult r = store_.cancel(store_id_of(ctx));
   r.job.id = public_id(ctx, r.job.id);
   switch (r.outcome) {
-    case JobQueue::CancelOutcome::NotFound:
+    case JobStore::CancelOutcome::NotFound:
       throw HttpError(job_not_found(ctx.req.matches[1].str()));
-    case JobQueue::CancelOutcome::CancelledQueued:
+    case JobStore::CancelOutcome::CancelledQueued:
       return set_json(ctx.res, job_json(r.job, ctx.request_id), 200);
-    case JobQueue::CancelOutcome::CancelRequested:
+    case JobStore::CancelOutcome::CancelRequested:
       return set_json(ctx.res, job_json(r.job, ctx.request_id), 202);
-    case JobQueue::CancelOutcome::Removed:
+    case JobStore::CancelOutcome::Removed:
       ctx.res.status = 204;
       return;
   }

@@ -11,7 +11,7 @@
 #include <memory>
 #include <string>
 
-// job_queue.h (Eigen, through the core) before httplib.h: see request_body.h.
+// worker_pool.h (Eigen, through the core) before httplib.h: see request_body.h.
 #include "server/http/job_store.h"
 #include "server/http/api_keys.h"
 #include "server/http/config.h"
@@ -24,7 +24,7 @@ namespace mdn::http {
 
 class JobRoutes {
  public:
-  JobRoutes(const ServerConfig& config, std::shared_ptr<const EventLog> log, Metrics& metrics, JobQueue& queue,
+  JobRoutes(const ServerConfig& config, std::shared_ptr<const EventLog> log, Metrics& metrics, WorkerPool& pool,
             JobStore& store);
 
   void denoise(Context& ctx);
@@ -46,7 +46,7 @@ class JobRoutes {
   const ApiKey* client_of(const Context& ctx) const;
 
   const std::shared_ptr<const EventLog> log_;
-  JobQueue& queue_;
+  WorkerPool& pool_;
   JobStore& store_;
   const ClientKeys keys_;
   const double sync_start_timeout_s_;  // POST /v1/denoise: longest wait for a worker, then 503

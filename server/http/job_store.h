@@ -1,12 +1,13 @@
 // Where asynchronous jobs (POST /v1/jobs) live: the interface the HTTP layer talks to, with two
 // implementations chosen by --queue:
-//   memory   MemoryJobStore (this file): the process's own JobQueue; a single node needs
-//            nothing else. Jobs die with the process.
+//   memory   MemoryJobStore (memory_job_store.h): the job table in this process; a single
+//            node needs nothing else. Jobs die with the process.
 //   redis:// RedisJobStore (redis/store.h): input, parameters, state, progress and result in
 //            Redis, the queue a Redis Stream with a consumer group; any replica accepts, any
 //            replica's workers run, any replica answers.
-// Synchronous POST /v1/denoise never goes through a JobStore: it runs on the local JobQueue in
-// both modes (see docker/README.md, "Job store").
+// Both run their jobs on this process's WorkerPool (worker_pool.h) through WorkerPool::submit.
+// Synchronous POST /v1/denoise never goes through a JobStore: it goes to the WorkerPool
+// directly in both modes (see docker/README.md, "Job store").
 //
 // Thread-safety contract: every method may be called from any thread at any time.
 // Errors: methods throw HttpError (503 queue-unavailable with Retry-After when the store cannot
@@ -19,8 +20,9 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
-#include "server/http/job_queue.h"
+#include "server/http/worker_pool.h"
 
 namespace mdn::http {
 
@@ -47,8 +49,9 @@ class JobStore {
   // GET /result delivered the bytes once (the memory store counts, at a drain, the results nobody fetched).
   virtual void result_fetched(const std::string& id) = 0;
 
+  enum class CancelOutcome { NotFound, CancelledQueued, CancelRequested, Removed };
   struct CancelResult {
-    JobQueue::CancelOutcome outcome = JobQueue::CancelOutcome::NotFound;
+    CancelOutcome outcome = CancelOutcome::NotFound;
     JobSnapshot job;  // after the cancellation (CancelledQueued, CancelRequested)
   };
   // Queued: cancelled at once. Running: cancellation requested; the worker running it, on
@@ -66,58 +69,12 @@ class JobStore {
   // Extra Prometheus lines (HELP/TYPE included) for GET /metrics.
   virtual void render_metrics(std::string& out) const = 0;
   virtual std::string_view kind() const = 0;  // "memory" or "redis"
-};
 
-// The default: jobs in this process's JobQueue (unchanged behaviour of a single node).
-class MemoryJobStore final : public JobStore {
- public:
-  explicit MemoryJobStore(JobQueue& queue) : queue_(queue) {}
-
-  Submitted submit(service::JobInput input, const std::optional<std::string>& idempotency_key,
-                   const std::string& fingerprint) override {
-    auto s = queue_.submit(std::move(input), true, idempotency_key, fingerprint);
-    return {snapshot(*s.job), s.replayed};
-  }
-  std::optional<JobSnapshot> find(const std::string& id, bool) override {
-    auto job = queue_.find(id);
-    if (!job) return std::nullopt;
-    return snapshot(*job);
-  }
-  std::optional<JobSnapshot> wait_finished(const std::string& id, Clock::time_point deadline) override {
-    auto job = queue_.find(id);
-    if (!job) return std::nullopt;
-    // In slices, so that a drain ends the wait.
-    for (auto now = Clock::now(); now < deadline && !queue_.draining(); now = Clock::now())
-      if (job->wait_for(std::min<std::chrono::milliseconds>(
-              std::chrono::ceil<std::chrono::milliseconds>(deadline - now), std::chrono::milliseconds(250))))
-        break;
-    return snapshot(*job);
-  }
-  void result_fetched(const std::string& id) override {
-    if (auto job = queue_.find(id)) job->mark_result_fetched();
-  }
-  CancelResult cancel(const std::string& id) override {
-    auto job = queue_.find(id);
-    CancelResult r;
-    r.outcome = queue_.cancel(id);
-    if (job && r.outcome != JobQueue::CancelOutcome::NotFound) r.job = job->snapshot();
-    return r;
-  }
-  std::optional<Problem> unavailable() const override { return std::nullopt; }
-  void begin_drain() override { queue_.begin_drain(); }
-  bool wait_drained(Clock::time_point deadline) override { return queue_.wait_drained(deadline); }
-  void stop() override {}
-  void render_metrics(std::string&) const override {}
-  std::string_view kind() const override { return "memory"; }
-
- private:
-  JobSnapshot snapshot(const Job& job) const {
-    JobSnapshot s = job.snapshot();
-    if (s.state == JobState::Queued) s.jobs_ahead = queue_.jobs_ahead(job);
-    return s;
-  }
-
-  JobQueue& queue_;
+  // For the drain's log: jobs this process keeps that are queued or running (the memory
+  // store; a shared store keeps none here), and succeeded ones whose result nobody fetched
+  // (lost when a memory store stops).
+  virtual std::vector<JobSnapshot> unfinished() { return {}; }
+  virtual int unfetched_results() { return 0; }
 };
 
 }  // namespace mdn::http

@@ -83,16 +83,16 @@ void log_listening(const EventLog& log, const ServerConfig& config, int port) {
 // The ids of the jobs a drain waits for (queued and running).
 nlohmann::json unfinished_ids(HttpService& service) {
   nlohmann::json ids = nlohmann::json::array();
-  for (const auto& job : service.queue().unfinished()) ids.push_back(job.id);
+  for (const auto& job : service.unfinished()) ids.push_back(job.id);
   return ids;
 }
 
 // Every job the drain gives up on is named (with the Redis store, unfinished jobs stay in Redis
 // for another replica).
 void log_abandoned(const EventLog& log, HttpService& service) {
-  const auto abandoned = service.queue().unfinished();
-  log.warn("drain_incomplete", {{"queued", service.queue().queued()},
-                                {"running", service.queue().running()},
+  const auto abandoned = service.unfinished();
+  log.warn("drain_incomplete", {{"queued", service.pool().queued()},
+                                {"running", service.pool().running()},
                                 {"abandoned", abandoned.size()},
                                 {"still_running", unfinished_ids(service)}});
   for (const auto& job : abandoned)
@@ -106,10 +106,10 @@ bool drain(HttpService& service, const ServerConfig& config, const EventLog& log
   // What the drain waits for, and what it does not: finished results nobody downloaded yet
   // (with the memory store they go with the process).
   log.info("draining", {{"grace_s", config.drain_grace_s},
-                        {"queued", service.queue().queued()},
-                        {"running", service.queue().running()},
+                        {"queued", service.pool().queued()},
+                        {"running", service.pool().running()},
                         {"waiting_for", unfinished_ids(service)},
-                        {"results_not_downloaded", service.queue().unfetched_results()}});
+                        {"results_not_downloaded", service.unfetched_results()}});
   service.begin_drain();
   // Drain on a helper thread so a second signal can still cut the grace period short.
   std::atomic<bool> drained_done{false};
@@ -120,7 +120,7 @@ bool drain(HttpService& service, const ServerConfig& config, const EventLog& log
   });
   while (!drained_done) {
     if (wait_for_signal(signals, 0.1)) {
-      log.warn("forced_stop", {{"queued", service.queue().queued()}, {"running", service.queue().running()}});
+      log.warn("forced_stop", {{"queued", service.pool().queued()}, {"running", service.pool().running()}});
       watchdog.arm(kStopBound);
       service.stop();
     }

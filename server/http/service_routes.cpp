@@ -16,36 +16,36 @@ namespace mdn::http {
 
 using nlohmann::json;
 
-ServiceRoutes::ServiceRoutes(const ServerConfig& config, Metrics& metrics, JobQueue& queue, JobStore& store,
+ServiceRoutes::ServiceRoutes(const ServerConfig& config, Metrics& metrics, WorkerPool& pool, JobStore& store,
                              const JobRoutes& jobs, std::function<ConnectionGate::Counts()> connections)
-    : config_(config), metrics_(metrics), queue_(queue), store_(store), jobs_(jobs), connections_(std::move(connections)) {}
+    : config_(config), metrics_(metrics), pool_(pool), store_(store), jobs_(jobs), connections_(std::move(connections)) {}
 
 void ServiceRoutes::healthz(Context& ctx) { set_json(ctx.res, {{"status", "ok"}}); }
 
 void ServiceRoutes::readyz(Context& ctx) {
-  if (queue_.draining()) {
+  if (pool_.draining()) {
     Problem p = make_problem(ProblemType::Draining, "the server is shutting down");
     p.retry_after_s = 5;
     throw HttpError(p);
   }
-  if (queue_.saturated()) {
+  if (pool_.saturated()) {
     Problem p = make_problem(ProblemType::QueueFull, "the job queue is full");
-    p.retry_after_s = queue_.retry_after_s();
+    p.retry_after_s = pool_.retry_after_s();
     throw HttpError(p);
   }
   if (auto p = store_.unavailable()) throw HttpError(*p);
   set_json(ctx.res, {{"status", "ready"},
                      {"job_store", store_.kind()},
-                     {"queued", queue_.queued()},
-                     {"running", queue_.running()},
-                     {"capacity", queue_.capacity()},
-                     {"workers", queue_.workers()}});
+                     {"queued", pool_.queued()},
+                     {"running", pool_.running()},
+                     {"capacity", pool_.capacity()},
+                     {"workers", pool_.workers()}});
 }
 
 void ServiceRoutes::metrics_route(Context& ctx) {
   ctx.res.status = 200;
-  std::string text = metrics_.render({queue_.queued(), queue_.capacity(), queue_.running(), queue_.workers(),
-                                     queue_.draining(), std::max(0, jobs_.waiting())});
+  std::string text = metrics_.render({pool_.queued(), pool_.capacity(), pool_.running(), pool_.workers(),
+                                     pool_.draining(), std::max(0, jobs_.waiting())});
   store_.render_metrics(text);
   render_connection_metrics(text);
   ctx.res.set_content(text, "text/plain; version=0.0.4; charset=utf-8");

@@ -9,7 +9,7 @@
 #include <functional>
 #include <string>
 
-// job_queue.h (Eigen, through the core) before httplib.h: see request_body.h.
+// worker_pool.h (Eigen, through the core) before httplib.h: see request_body.h.
 #include "server/http/job_store.h"
 #include "server/http/config.h"
 #include "server/http/connection_gate.h"
@@ -22,7 +22,7 @@ namespace mdn::http {
 class ServiceRoutes {
  public:
   // `connections` reads the connection gate's counts for /metrics.
-  ServiceRoutes(const ServerConfig& config, Metrics& metrics, JobQueue& queue, JobStore& store, const JobRoutes& jobs,
+  ServiceRoutes(const ServerConfig& config, Metrics& metrics, WorkerPool& pool, JobStore& store, const JobRoutes& jobs,
                 std::function<ConnectionGate::Counts()> connections);
 
   void healthz(Context& ctx);
@@ -40,7 +40,7 @@ class ServiceRoutes {
 
   const ServerConfig& config_;
   Metrics& metrics_;
-  JobQueue& queue_;
+  WorkerPool& pool_;
   JobStore& store_;
   const JobRoutes& jobs_;
   const std::function<ConnectionGate::Counts()> connections_;

@@ -15,7 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "server/http/job_queue.h"
+#include "server/http/worker_pool.h"
 #include "server/http/problem.h"
 
 namespace mdn::http::redis {

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <chrono>
 
-#include "server/http/job_queue.h"
+#include "server/http/worker_pool.h"
 #include "server/http/redis/script_args.h"
 
 namespace mdn::http::redis {

@@ -43,15 +43,15 @@ std::string consumer_name() {
 // stop_mutex_ guards stopped_.
 class RedisJobStore final : public JobStore {
  public:
-  RedisJobStore(const ServerConfig& c, JobQueue& queue, std::shared_ptr<const EventLog> log)
+  RedisJobStore(const ServerConfig& c, WorkerPool& worker_pool, std::shared_ptr<const EventLog> log)
       : config_(c),
-        queue_(queue),
+        worker_pool_(worker_pool),
         log_(std::move(log)),
         pool_(c.queue.value(), 10s),
         keys_{c.queue_prefix, c.queue_prefix + "queue", consumer_name()},
         ttl_ms_(std::to_string(std::max<std::int64_t>(1, std::int64_t(std::llround(c.result_ttl_s * 1000))))),
         monitor_(pool_, keys_, log_, stopping_),
-        slots_(config_, queue_, log_, pool_, monitor_, keys_, ttl_ms_, draining_, stopping_, recent_) {
+        slots_(config_, worker_pool_, log_, pool_, monitor_, keys_, ttl_ms_, draining_, stopping_, recent_) {
     if (c.max_body_bytes > (std::int64_t{512} << 20))
       throw ConfigError("--max-body: Redis stores values of at most 512 MiB; lower it with --queue redis://");
     const int slots = c.effective_workers();
@@ -80,7 +80,7 @@ class RedisJobStore final : public JobStore {
   // ---------------------------------------------------------------- JobStore
   Submitted submit(service::JobInput input, const std::optional<std::string>& key,
                    const std::string& fingerprint) override {
-    if (queue_.draining() || draining_) {
+    if (worker_pool_.draining() || draining_) {
       Problem p = make_problem(ProblemType::Draining, "the server is shutting down and accepts no new jobs");
       p.retry_after_s = 5;
       throw HttpError(std::move(p));
@@ -103,10 +103,10 @@ class RedisJobStore final : public JobStore {
       std::shared_ptr<Job> job;
       ~Early() {
         if (!job) return;
-        store.queue_.settle(job, false);
+        store.worker_pool_.settle(job, false);
         ++store.early_runs_discarded_;
       }
-    } early{*this, slot && monitor_.up() ? queue_.run_external(id, input, true) : nullptr};
+    } early{*this, slot && monitor_.up() ? worker_pool_.submit(id, input, {.admit = false, .held = true}) : nullptr};
     const std::int64_t input_bytes = std::int64_t(input.bytes.size());
     const std::string input_length = std::to_string(input_bytes), input_name = keys_.input(id);
     auto reply = run([&](Connection& c) {
@@ -123,7 +123,7 @@ class RedisJobStore final : public JobStore {
       if (outcome == "run") {
         Taken t = parse_taken(reply);
         if (early.job) {
-          queue_.settle(early.job, true);
+          worker_pool_.settle(early.job, true);
           t.early = std::move(early.job);
         } else {
           t.input = std::move(input.bytes);
@@ -223,10 +223,10 @@ class RedisJobStore final : public JobStore {
     if (outcome == "none") return r;
     if (outcome == "removed") {
       recent_.erase(id);
-      r.outcome = JobQueue::CancelOutcome::Removed;
+      r.outcome = CancelOutcome::Removed;
       return r;
     }
-    r.outcome = outcome == "cancelled" ? JobQueue::CancelOutcome::CancelledQueued : JobQueue::CancelOutcome::CancelRequested;
+    r.outcome = outcome == "cancelled" ? CancelOutcome::CancelledQueued : CancelOutcome::CancelRequested;
     if (auto s = find(id, false)) r.job = std::move(*s);
     else r.job.id = id;
     return r;
@@ -250,7 +250,7 @@ class RedisJobStore final : public JobStore {
       if (Clock::now() >= deadline || stopping_) return false;
       std::this_thread::sleep_for(20ms);
     }
-    return queue_.wait_drained(deadline);
+    return worker_pool_.wait_drained(deadline);
   }
 
   void stop() override {
@@ -365,7 +365,7 @@ class RedisJobStore final : public JobStore {
 
   // ---------------------------------------------------------------- state
   const ServerConfig config_;
-  JobQueue& queue_;
+  WorkerPool& worker_pool_;
   const std::shared_ptr<const EventLog> log_;
   Pool pool_;
 
@@ -391,9 +391,9 @@ class RedisJobStore final : public JobStore {
 
 }  // namespace
 
-std::unique_ptr<JobStore> make_redis_job_store(const ServerConfig& config, JobQueue& queue,
+std::unique_ptr<JobStore> make_redis_job_store(const ServerConfig& config, WorkerPool& worker_pool,
                                                std::shared_ptr<const EventLog> log) {
-  return std::make_unique<RedisJobStore>(config, queue, std::move(log));
+  return std::make_unique<RedisJobStore>(config, worker_pool, std::move(log));
 }
 
 }  // namespace mdn::http

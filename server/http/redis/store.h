@@ -17,7 +17,7 @@
 // hash and input and XADDs the id, so a job is either wholly accepted or not at all. A worker
 // slot (one per --workers) waits with XREAD BLOCK (read-only) for a new entry, then one script
 // XREADGROUPs it, marks the job running under this replica's consumer name and counts the
-// attempt (one write, hence one fsync with appendfsync always), and the local JobQueue runs it.
+// attempt (one write, hence one fsync with appendfsync always), and the local WorkerPool runs it.
 // Every 200 ms the slot reads the cancel flag and checks that the job is still its own (a
 // read-only script); on each stage change and at least every quarter of the idle threshold it
 // sends a heartbeat: the progress, and XCLAIM ... JUSTID, which resets the entry's idle time.
@@ -43,7 +43,7 @@ namespace mdn::http {
 
 // Starts the worker slots and the monitor; never fails because Redis is down (it keeps trying).
 // Throws ConfigError when the URL is malformed or a limit exceeds what Redis can store.
-std::unique_ptr<JobStore> make_redis_job_store(const ServerConfig& config, JobQueue& queue,
+std::unique_ptr<JobStore> make_redis_job_store(const ServerConfig& config, WorkerPool& worker_pool,
                                                std::shared_ptr<const EventLog> log);
 
 }  // namespace mdn::http

@@ -41,11 +41,11 @@ Taken parse_taken(const Reply& r) {
   return t;
 }
 
-WorkerSlots::WorkerSlots(const ServerConfig& config, JobQueue& queue, std::shared_ptr<const EventLog> log,
+WorkerSlots::WorkerSlots(const ServerConfig& config, WorkerPool& worker_pool, std::shared_ptr<const EventLog> log,
                          const Pool& pool, Monitor& monitor, const Keys& keys, const std::string& ttl_ms,
                          const std::atomic<bool>& draining, const std::atomic<bool>& stopping, RecentResults& recent)
     : config_(config),
-      queue_(queue),
+      worker_pool_(worker_pool),
       log_(std::move(log)),
       pool_(pool),
       monitor_(monitor),
@@ -303,7 +303,7 @@ WorkerSlots::RunEnd WorkerSlots::watch(std::unique_ptr<Connection>& conn, const 
   while (!job->wait_for(200ms)) {
     if (stopping_ && end == RunEnd::Finished) {
       end = RunEnd::Released;
-      queue_.cancel(job);
+      worker_pool_.cancel(job);
     }
     if (end != RunEnd::Finished || cancel_by_user) continue;
     const JobSnapshot s = job->snapshot();
@@ -325,10 +325,10 @@ WorkerSlots::RunEnd WorkerSlots::watch(std::unique_ptr<Connection>& conn, const 
       const std::string_view v = str(b.get());
       if (v == "cancel") {
         cancel_by_user = true;
-        queue_.cancel(job);
+        worker_pool_.cancel(job);
       } else if (v == "lost") {
         end = RunEnd::Lost;
-        queue_.cancel(job);
+        worker_pool_.cancel(job);
       }
     } catch (const RedisDown& ex) {
       conn.reset();
@@ -375,7 +375,7 @@ void WorkerSlots::process(std::unique_ptr<Connection>& conn, Taken t) {
   std::int64_t result_bytes = 0;
   RunEnd end = RunEnd::Finished;
   if (!error) {
-    auto job = e.early ? e.early : queue_.run_external(e.job_id, std::move(input));
+    auto job = e.early ? e.early : worker_pool_.submit(e.job_id, std::move(input), {.admit = false});
     bool cancel_by_user = false;
     end = watch(conn, e, job, cancel_by_user);
     const JobSnapshot s = job->snapshot();

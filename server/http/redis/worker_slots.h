@@ -1,6 +1,6 @@
 // This replica's worker slots (one thread per --workers) and their finisher thread. A slot waits
 // for a job (handed over by submit(), taken over from a silent worker with XAUTOCLAIM, or the
-// next new one by lua/take.lua), runs it on the local JobQueue with a check every 200 ms and
+// next new one by lua/take.lua), runs it on the local WorkerPool with a check every 200 ms and
 // heartbeats, and pushes the finished job to the finisher, which stores result and state
 // (lua/finish.lua) while the slot takes its next job. A job this replica stops running goes
 // back to the queue (lua/release.lua), not counted as an attempt.
@@ -31,7 +31,7 @@
 #include <vector>
 
 #include "server/http/config.h"
-#include "server/http/job_queue.h"
+#include "server/http/worker_pool.h"
 #include "server/http/log.h"
 #include "server/http/redis/monitor.h"
 #include "server/http/redis/recent_results.h"
@@ -55,7 +55,7 @@ class WorkerSlots {
  public:
   // `ttl_ms`: --result-ttl in ms, as the scripts take it; `recent`: where the finisher keeps
   // the results it stored.
-  WorkerSlots(const ServerConfig& config, JobQueue& queue, std::shared_ptr<const EventLog> log, const Pool& pool,
+  WorkerSlots(const ServerConfig& config, WorkerPool& worker_pool, std::shared_ptr<const EventLog> log, const Pool& pool,
               Monitor& monitor, const Keys& keys, const std::string& ttl_ms, const std::atomic<bool>& draining,
               const std::atomic<bool>& stopping, RecentResults& recent);
   WorkerSlots(const WorkerSlots&) = delete;
@@ -121,7 +121,7 @@ class WorkerSlots {
   bool retry(std::unique_ptr<Connection>& c, F&& f);
 
   const ServerConfig& config_;
-  JobQueue& queue_;
+  WorkerPool& worker_pool_;
   const std::shared_ptr<const EventLog> log_;
   const Pool& pool_;
   Monitor& monitor_;

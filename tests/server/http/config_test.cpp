@@ -99,7 +99,7 @@ TEST(Config, DecoderLimitsDefaultToTheDecodersOwnAndReachTheQueue) {
   EXPECT_EQ(defaults.max_accessors, io_defaults.max_accessors);
   const ServerConfig c = parse({"--max-decoded-bytes", "64M", "--max-json-depth", "32", "--max-nodes=500"},
                                {{"MDN_MAX_ACCESSORS", "2000"}, {"MDN_MAX_NODES", "7"}});
-  const io::Limits limits = make_queue_options(c).limits;
+  const io::Limits limits = make_pool_options(c).limits;
   EXPECT_EQ(limits.max_decoded_bytes, std::int64_t{64} << 20);
   EXPECT_EQ(limits.max_json_depth, 32);
   EXPECT_EQ(limits.max_nodes, 500);  // the flag wins over MDN_MAX_NODES

@@ -66,7 +66,7 @@ class HttpServiceTest : public ::testing::Test {
     config_.log_level = "off";
     ServiceParts parts;
     parts.metrics = std::make_unique<Metrics>();
-    parts.queue = std::make_unique<JobQueue>(make_queue_options(config_));
+    parts.pool = std::make_unique<WorkerPool>(make_pool_options(config_));
     auto store = std::make_unique<FakeStore>();
     store_ = store.get();
     parts.store = std::move(store);

@@ -10,7 +10,8 @@
 
 #include <gtest/gtest.h>
 
-#include "server/http/job_queue.h"
+#include "server/http/memory_job_store.h"
+#include "server/http/worker_pool.h"
 
 namespace mdn::http {
 namespace {
@@ -58,11 +59,12 @@ service::JobInput input() {
 
 TEST(JobQueueDecodeCancel, TheTimeLimitStopsADecode) {
   const double decode_s = fixture().decode_s;
-  JobQueueOptions o;
+  WorkerPoolOptions o;
   o.workers = 1;
   o.time_limit = std::chrono::milliseconds(std::int64_t(decode_s * 1000 / 10));  // a tenth of the decode
-  JobQueue q(o);
-  auto job = q.submit(input(), true).job;
+  WorkerPool pool(o);
+  MemoryJobStore q(pool);
+  auto job = q.job(q.submit(input(), std::nullopt, "").job.id);
   ASSERT_TRUE(job->wait_for(60s));
   const JobSnapshot s = job->snapshot();
   EXPECT_EQ(s.state, JobState::Failed);
@@ -76,15 +78,16 @@ TEST(JobQueueDecodeCancel, TheTimeLimitStopsADecode) {
 
 TEST(JobQueueDecodeCancel, DeleteStopsADecode) {
   const double decode_s = fixture().decode_s;
-  JobQueueOptions o;
+  WorkerPoolOptions o;
   o.workers = 1;
-  JobQueue q(o);
-  auto job = q.submit(input(), true).job;
+  WorkerPool pool(o);
+  MemoryJobStore q(pool);
+  auto job = q.job(q.submit(input(), std::nullopt, "").job.id);
   const auto deadline = Clock::now() + 30s;
   while (job->state() == JobState::Queued && Clock::now() < deadline) std::this_thread::sleep_for(1ms);
   std::this_thread::sleep_for(std::chrono::milliseconds(std::int64_t(decode_s * 1000 / 10)));  // inside the decode
   const auto cancelled = Clock::now();
-  ASSERT_EQ(q.cancel(job->id()), JobQueue::CancelOutcome::CancelRequested);
+  ASSERT_EQ(q.cancel(job->id()).outcome, JobStore::CancelOutcome::CancelRequested);
   ASSERT_TRUE(job->wait_for(60s));
   const double stop_s = Seconds(Clock::now() - cancelled).count();
   const JobSnapshot s = job->snapshot();

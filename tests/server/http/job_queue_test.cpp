@@ -1,5 +1,5 @@
-// JobQueue::run_external(held) and settle(), used by the Redis store to start a job while Redis
-// is still accepting it: a held run publishes its end (the finished hook, its final state) only
+// WorkerPool::submit with Submission::held, and settle(), used by the Redis store to start a job
+// while Redis is still accepting it: a held run publishes its end (the finished hook, its final state) only
 // once kept, and a run that was not accepted is never reported, whether it had ended or not.
 // And a run's end is published with its worker given back (running() no longer counts it).
 #include <atomic>
@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "server/http/job_queue.h"
+#include "server/http/worker_pool.h"
 #include "support/shapes.h"
 
 namespace mdn::http {
@@ -30,15 +30,15 @@ struct Reported {
   }
 };
 
-JobQueueOptions one_worker() {
-  JobQueueOptions o;
+WorkerPoolOptions one_worker() {
+  WorkerPoolOptions o;
   o.workers = 1;
   return o;
 }
 
-// Waits until the queue's worker is done with everything it took (running() counts a run until
+// Waits until the pool's worker is done with everything it took (running() counts a run until
 // its end has been handed over, published or held).
-bool wait_idle(JobQueue& q) {
+bool wait_idle(WorkerPool& q) {
   const auto deadline = std::chrono::steady_clock::now() + 60s;
   while (std::chrono::steady_clock::now() < deadline) {
     if (q.running() == 0 && q.queued() == 0) return true;
@@ -49,8 +49,8 @@ bool wait_idle(JobQueue& q) {
 
 TEST(JobQueueHeld, AnEndedRunWaitsUnpublishedUntilKept) {
   Reported reported;
-  JobQueue q(one_worker(), reported.hook());
-  auto job = q.run_external("held", off_input(1), true);
+  WorkerPool q(one_worker(), reported.hook());
+  auto job = q.submit("held", off_input(1), {.admit = false, .held = true});
   ASSERT_TRUE(wait_idle(q));
   EXPECT_EQ(job->state(), JobState::Running) << "held: the run's end is not published";
   EXPECT_FALSE(job->wait_for(0ms));
@@ -66,8 +66,8 @@ TEST(JobQueueHeld, AnEndedRunWaitsUnpublishedUntilKept) {
 
 TEST(JobQueueHeld, AKeptRunStillRunningEndsAsUsual) {
   Reported reported;
-  JobQueue q(one_worker(), reported.hook());
-  auto job = q.run_external("kept", off_input(4), true);
+  WorkerPool q(one_worker(), reported.hook());
+  auto job = q.submit("kept", off_input(4), {.admit = false, .held = true});
   q.settle(job, true);
   ASSERT_TRUE(job->wait_for(60s));
   EXPECT_EQ(job->state(), JobState::Succeeded);
@@ -76,15 +76,15 @@ TEST(JobQueueHeld, AKeptRunStillRunningEndsAsUsual) {
 
 TEST(JobQueueHeld, ARunNotAcceptedIsNeverReported) {
   Reported reported;
-  JobQueue q(one_worker(), reported.hook());
+  WorkerPool q(one_worker(), reported.hook());
   // Ended before the answer came.
-  auto ended = q.run_external("ended", off_input(1), true);
+  auto ended = q.submit("ended", off_input(1), {.admit = false, .held = true});
   ASSERT_TRUE(wait_idle(q));
   q.settle(ended, false);
   EXPECT_TRUE(ended->wait_for(0ms));
   // Still running (a 20k-face mesh): cancelled, and its end unreported too.
-  auto running = q.run_external("running", off_input(5), true);
-  auto queued = q.run_external("queued", off_input(1), true);  // behind it: the only worker is busy
+  auto running = q.submit("running", off_input(5), {.admit = false, .held = true});
+  auto queued = q.submit("queued", off_input(1), {.admit = false, .held = true});  // behind it: the only worker is busy
   q.settle(running, false);
   q.settle(queued, false);
   ASSERT_TRUE(running->wait_for(60s));
@@ -93,8 +93,8 @@ TEST(JobQueueHeld, ARunNotAcceptedIsNeverReported) {
   EXPECT_EQ(queued->state(), JobState::Cancelled);
   ASSERT_TRUE(wait_idle(q));
   EXPECT_EQ(reported.count, 0);
-  // An ordinary run on the same queue is reported as before.
-  auto plain = q.run_external("plain", off_input(1));
+  // An ordinary run on the same pool is reported as before.
+  auto plain = q.submit("plain", off_input(1), {.admit = false});
   ASSERT_TRUE(plain->wait_for(60s));
   EXPECT_EQ(reported.count, 1);
 }
@@ -103,10 +103,10 @@ TEST(JobQueueHeld, ARunNotAcceptedIsNeverReported) {
 // GET /metrics shows as mdn_jobs_running) no longer finds it counted: the worker is given back
 // as the end is published, not after. Repeated, since the old order failed only sometimes.
 TEST(JobQueue, AJobSeenFinishedIsNoLongerCountedRunning) {
-  JobQueue q(one_worker());
+  WorkerPool q(one_worker());
   int counted_after_end = 0;
   for (int i = 0; i < 200; ++i) {
-    auto job = q.submit(off_input(1), i % 2 == 1).job;
+    auto job = q.submit("job" + std::to_string(i), off_input(1), {.asynchronous = i % 2 == 1});
     ASSERT_TRUE(job->wait_for(60s));
     if (q.running() != 0) ++counted_after_end;
   }

@@ -1,4 +1,4 @@
-#include "server/http/job_queue.h"
+#include "server/http/worker_pool.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,6 @@
 
 #include "core/errors.h"
 #include "core/progress.h"
-#include "server/http/secure_random.h"
 
 namespace mdn::http {
 
@@ -100,19 +99,23 @@ bool Job::result_fetched() const {
   return result_fetched_;
 }
 
-JobQueue::JobQueue(JobQueueOptions options, JobFinishedHook on_finished)
+std::optional<Clock::time_point> Job::finished_at() const {
+  std::lock_guard lock(mutex_);
+  return finished_;
+}
+
+WorkerPool::WorkerPool(WorkerPoolOptions options, JobFinishedHook on_finished)
     : options_(std::move(options)), on_finished_(std::move(on_finished)) {
   const int n = std::max(1, options_.workers);
   workers_.reserve(std::size_t(n));
   for (int i = 0; i < n; ++i) workers_.emplace_back([this] { worker_loop(); });
 }
 
-JobQueue::~JobQueue() {
+WorkerPool::~WorkerPool() {
   {
     std::lock_guard lock(mutex_);
     stop_ = true;
     draining_ = true;
-    for (auto& [id, job] : jobs_) job->cancel_ = true;
   }
   work_cv_.notify_all();
   for (auto& t : workers_) t.join();
@@ -127,26 +130,7 @@ JobQueue::~JobQueue() {
   queue_.clear();
 }
 
-std::string JobQueue::new_id_locked() {
-  // 128 bits from the kernel's CSPRNG: ids are unguessable, even from many of one's own.
-  return new_job_id();
-}
-
-JobQueue::Submitted JobQueue::submit(service::JobInput input, bool asynchronous,
-                                     const std::optional<std::string>& idempotency_key,
-                                     const std::string& fingerprint) {
-  std::unique_lock lock(mutex_);
-  sweep_locked();
-  if (idempotency_key) {
-    if (auto it = idempotency_.find(*idempotency_key); it != idempotency_.end()) {
-      if (it->second.fingerprint != fingerprint) {
-        Problem p = make_problem(ProblemType::IdempotencyKeyReused, "this Idempotency-Key was already used with a different body or parameters");
-        throw HttpError(std::move(p));
-      }
-      if (auto job = jobs_.find(it->second.job_id); job != jobs_.end()) return {job->second, true};
-      idempotency_.erase(it);  // its job expired: the key is free again
-    }
-  }
+void WorkerPool::check_admission_locked() const {
   if (draining_ || stop_) {
     Problem p = make_problem(ProblemType::Draining, "the server is shutting down and accepts no new jobs");
     p.retry_after_s = retry_after_s();
@@ -157,82 +141,27 @@ JobQueue::Submitted JobQueue::submit(service::JobInput input, bool asynchronous,
     p.retry_after_s = retry_after_s();
     throw HttpError(std::move(p));
   }
-  // An accepted asynchronous job stays retrievable for its whole result lifetime: when every
-  // stored-job slot is taken, new jobs are refused rather than old ones evicted early.
-  if (asynchronous && int(jobs_.size()) >= options_.max_stored) {
-    Problem p = make_problem(ProblemType::StoreFull, "all " + std::to_string(options_.max_stored) +
-                                 " stored-job slots hold jobs within their result lifetime; retry later");
-    p.retry_after_s = store_retry_after_s_locked();
-    throw HttpError(std::move(p));
-  }
-  std::string id;
-  do id = new_id_locked();
-  while (jobs_.count(id) != 0);
-  input.threads = options_.threads_per_job;
-  auto job = std::make_shared<Job>(id, std::move(input), asynchronous);
-  // Synchronous jobs live only as long as their request holds them: they take no stored-job
-  // slot, and their bytes go with the response.
-  if (asynchronous) jobs_.emplace(id, job);
-  queue_.push_back(job);
-  if (idempotency_key) idempotency_[*idempotency_key] = {fingerprint, id};
-  lock.unlock();
-  work_cv_.notify_one();
-  return {job, false};
 }
 
-std::shared_ptr<Job> JobQueue::run_external(std::string id, service::JobInput input, bool held) {
+void WorkerPool::check_admission() const {
+  std::lock_guard lock(mutex_);
+  check_admission_locked();
+}
+
+std::shared_ptr<Job> WorkerPool::submit(std::string id, service::JobInput input, Submission how) {
   input.threads = options_.threads_per_job;
-  auto job = std::make_shared<Job>(std::move(id), std::move(input), true);
-  job->external_ = true;
-  job->held_ = held;
+  auto job = std::make_shared<Job>(std::move(id), std::move(input), how.asynchronous);
+  job->held_ = how.held;
   {
     std::lock_guard lock(mutex_);
+    if (how.admit) check_admission_locked();
     queue_.push_back(job);
   }
   work_cv_.notify_one();
   return job;
 }
 
-std::shared_ptr<Job> JobQueue::find(const std::string& id) {
-  std::lock_guard lock(mutex_);
-  sweep_locked();
-  auto it = jobs_.find(id);
-  return it == jobs_.end() ? nullptr : it->second;
-}
-
-JobQueue::CancelOutcome JobQueue::cancel(const std::string& id) {
-  std::unique_lock lock(mutex_);
-  sweep_locked();
-  auto it = jobs_.find(id);
-  if (it == jobs_.end()) return CancelOutcome::NotFound;
-  std::shared_ptr<Job> job = it->second;
-  std::unique_lock job_lock(job->mutex_);
-  switch (job->state_) {
-    case JobState::Queued: {
-      queue_.erase(std::remove(queue_.begin(), queue_.end(), job), queue_.end());
-      job->cancel_ = true;
-      finish_locked(*job, JobState::Cancelled,
-                    cancelled_before_start(), nullptr);
-      job_lock.unlock();
-      finished_order_.push_back(id);
-      idle_cv_.notify_all();
-      return CancelOutcome::CancelledQueued;
-    }
-    case JobState::Running:
-      job->cancel_ = true;
-      return CancelOutcome::CancelRequested;
-    default:
-      job_lock.unlock();
-      jobs_.erase(it);
-      finished_order_.erase(std::remove(finished_order_.begin(), finished_order_.end(), id), finished_order_.end());
-      for (auto k = idempotency_.begin(); k != idempotency_.end();)
-        k = k->second.job_id == id ? idempotency_.erase(k) : std::next(k);
-      idle_cv_.notify_all();
-      return CancelOutcome::Removed;
-  }
-}
-
-void JobQueue::settle(const std::shared_ptr<Job>& job, bool keep) {
+void WorkerPool::settle(const std::shared_ptr<Job>& job, bool keep) {
   std::optional<Job::End> end;
   {
     std::lock_guard lock(job->mutex_);
@@ -246,27 +175,25 @@ void JobQueue::settle(const std::shared_ptr<Job>& job, bool keep) {
   else if (!keep) cancel(job);  // queued: ends now; running: its end goes unreported
 }
 
-void JobQueue::cancel(const std::shared_ptr<Job>& job) {
+WorkerPool::Cancelled WorkerPool::cancel(const std::shared_ptr<Job>& job, Problem why) {
   std::unique_lock lock(mutex_);
   std::unique_lock job_lock(job->mutex_);
+  if (is_terminal(job->state_)) return Cancelled::AlreadyFinished;
   job->cancel_ = true;
-  if (job->state_ == JobState::Queued) {
-    queue_.erase(std::remove(queue_.begin(), queue_.end(), job), queue_.end());
-    finish_locked(*job, JobState::Cancelled,
-                  make_problem(ProblemType::Cancelled, "the client went away before the job started"), nullptr);
-    job_lock.unlock();
-    if (!job->external_ && job->asynchronous_) finished_order_.push_back(job->id_);
-    idle_cv_.notify_all();
-  }
+  if (job->state_ != JobState::Queued) return Cancelled::Requested;
+  queue_.erase(std::remove(queue_.begin(), queue_.end(), job), queue_.end());
+  finish_locked(*job, JobState::Cancelled, std::move(why), nullptr);
+  job_lock.unlock();
+  idle_cv_.notify_all();
+  return Cancelled::Queued;
 }
 
-void JobQueue::cancel_all() {
-  std::vector<std::shared_ptr<Job>> all;
-  {
-    std::lock_guard lock(mutex_);
-    for (auto& [id, job] : jobs_) all.push_back(job);
-  }
-  for (auto& job : all) cancel(job);
+void WorkerPool::cancel(const std::shared_ptr<Job>& job) {
+  job->cancel_ = true;  // a finished job too: its snapshot says so
+  cancel(job, make_problem(ProblemType::Cancelled, "the client went away before the job started"));
+}
+
+void WorkerPool::abandon() {
   {
     std::lock_guard lock(mutex_);
     abandoned_ = true;
@@ -274,17 +201,17 @@ void JobQueue::cancel_all() {
   idle_cv_.notify_all();
 }
 
-void JobQueue::begin_drain() {
+void WorkerPool::begin_drain() {
   std::lock_guard lock(mutex_);
   draining_ = true;
 }
 
-bool JobQueue::draining() const {
+bool WorkerPool::draining() const {
   std::lock_guard lock(mutex_);
   return draining_;
 }
 
-bool JobQueue::wait_drained(Clock::time_point deadline) {
+bool WorkerPool::wait_drained(Clock::time_point deadline) {
   std::unique_lock lock(mutex_);
   // Results waiting for their download do not hold the drain: nobody may ever fetch them, and
   // waiting for them kept every stop for the whole grace (issue 34). main() logs how many go.
@@ -296,67 +223,41 @@ bool JobQueue::wait_drained(Clock::time_point deadline) {
   return true;
 }
 
-int JobQueue::queued() const {
+int WorkerPool::queued() const {
   std::lock_guard lock(mutex_);
   return int(queue_.size());
 }
 
-int JobQueue::running() const {
+int WorkerPool::running() const {
   std::lock_guard lock(mutex_);
   return running_;
 }
 
-bool JobQueue::saturated() const {
+bool WorkerPool::saturated() const {
   std::lock_guard lock(mutex_);
   return int(queue_.size()) >= options_.capacity;
 }
 
-int JobQueue::store_retry_after_s_locked() const {
-  // When the oldest finished job's lifetime ends, a slot frees (at least 1 s, at most 60).
-  if (finished_order_.empty()) return retry_after_s();
-  const auto it = jobs_.find(finished_order_.front());
-  if (it == jobs_.end()) return 1;
-  std::lock_guard job_lock(it->second->mutex_);
-  if (!it->second->finished_) return retry_after_s();
-  const double left = seconds_between(Clock::now(), *it->second->finished_ + options_.result_ttl);
-  return int(std::clamp(std::ceil(left), 1.0, 60.0));
-}
-
-std::vector<JobSnapshot> JobQueue::unfinished() const {
-  std::vector<JobSnapshot> out;
+std::vector<std::shared_ptr<Job>> WorkerPool::queued_jobs() const {
   std::lock_guard lock(mutex_);
-  for (const auto& job : queue_)
-    if (!job->asynchronous_ || job->external_) out.push_back(job->snapshot());
-  for (const auto& [id, job] : jobs_) {
-    JobSnapshot s = job->snapshot();
-    if (!is_terminal(s.state)) out.push_back(std::move(s));
-  }
-  return out;
+  return {queue_.begin(), queue_.end()};
 }
 
-std::optional<int> JobQueue::jobs_ahead(const Job& job) const {
+std::optional<int> WorkerPool::jobs_ahead(const Job& job) const {
   std::lock_guard lock(mutex_);
   for (std::size_t i = 0; i < queue_.size(); ++i)
     if (queue_[i].get() == &job) return int(i);
   return std::nullopt;
 }
 
-int JobQueue::unfetched_results() const {
-  int n = 0;
-  std::lock_guard lock(mutex_);
-  for (const auto& [id, job] : jobs_)
-    if (job->asynchronous_ && job->state() == JobState::Succeeded && !job->result_fetched()) ++n;
-  return n;
-}
-
-int JobQueue::retry_after_s() const {
+int WorkerPool::retry_after_s() const {
   // How long jobs now wait in the queue before a worker takes them (measured), at least 1 s,
   // at most 60: a client told to come back then finds a slot about as soon as one frees.
   const double wait = queue_wait_s_.load();
   return wait < 0 ? 1 : int(std::clamp(std::ceil(wait), 1.0, 60.0));
 }
 
-void JobQueue::worker_loop() {
+void WorkerPool::worker_loop() {
   for (;;) {
     std::shared_ptr<Job> job;
     {
@@ -375,15 +276,11 @@ void JobQueue::worker_loop() {
       queue_wait_s_.store(old < 0 ? wait : 0.7 * old + 0.3 * wait);
     }
     run(job);  // gives the worker back (running_) as it publishes the end, or holds it
-    {
-      std::lock_guard lock(mutex_);
-      sweep_locked();
-    }
     idle_cv_.notify_all();
   }
 }
 
-void JobQueue::run(const std::shared_ptr<Job>& job) {
+void WorkerPool::run(const std::shared_ptr<Job>& job) {
   service::JobInput input;
   {
     std::lock_guard lock(job->mutex_);
@@ -414,7 +311,7 @@ void JobQueue::run(const std::shared_ptr<Job>& job) {
   input = {};  // free the request bytes before publishing
   bool report = true;
   {
-    std::lock_guard lock(mutex_);  // the queue's mutex first (lock order)
+    std::lock_guard lock(mutex_);  // the pool's mutex first (lock order)
     std::lock_guard job_lock(job->mutex_);
     if (job->held_) {  // not accepted yet: settle() ends it; the worker is free already
       job->held_end_ = Job::End{state, std::move(error), std::move(output)};
@@ -426,7 +323,7 @@ void JobQueue::run(const std::shared_ptr<Job>& job) {
   end_run(*job, Job::End{state, std::move(error), std::move(output)}, report, true);
 }
 
-void JobQueue::end_run(Job& job, Job::End end, bool report, bool from_worker) {
+void WorkerPool::end_run(Job& job, Job::End end, bool report, bool from_worker) {
   if (on_finished_ && report) {
     // Before the final state is published: a client that sees the job finished (the waiting
     // request, a poll) also sees it counted in the metrics.
@@ -439,19 +336,18 @@ void JobQueue::end_run(Job& job, Job::End end, bool report, bool from_worker) {
     on_finished_(s);
   }
   // The worker is given back (running_) and the job's end published (its state, waking the
-  // waiting request) in one critical section of the queue's mutex: whoever sees the job
+  // waiting request) in one critical section of the pool's mutex: whoever sees the job
   // finished (a synchronous response, a poll) and then reads running() (GET /metrics) no
   // longer finds it counted, and wait_drained() never sees running_ at 0 with the job still
   // running. Lowering running_ after finish_locked() let a client read mdn_jobs_running 1
   // after its result.
   std::lock_guard lock(mutex_);
   if (from_worker) --running_;
-  if (!job.external_ && job.asynchronous_) finished_order_.push_back(job.id_);
   std::lock_guard job_lock(job.mutex_);
   finish_locked(job, end.state, std::move(end.error), std::move(end.output));
 }
 
-void JobQueue::finish_locked(Job& job, JobState state, std::optional<Problem> error,
+void WorkerPool::finish_locked(Job& job, JobState state, std::optional<Problem> error,
                              std::shared_ptr<const service::JobOutput> output) {
   job.state_ = state;
   job.finished_ = Clock::now();
@@ -463,27 +359,6 @@ void JobQueue::finish_locked(Job& job, JobState state, std::optional<Problem> er
     job.fraction_ = 1;
   }
   job.done_cv_.notify_all();
-}
-
-void JobQueue::sweep_locked() {
-  const auto now = Clock::now();
-  auto drop = [&](const std::string& id) {
-    jobs_.erase(id);
-    for (auto k = idempotency_.begin(); k != idempotency_.end();)
-      k = k->second.job_id == id ? idempotency_.erase(k) : std::next(k);
-  };
-  // finished_order_ is in finishing order, so expired jobs are at the front.
-  while (!finished_order_.empty()) {
-    auto it = jobs_.find(finished_order_.front());
-    bool expire = it == jobs_.end();
-    if (!expire) {
-      std::lock_guard job_lock(it->second->mutex_);
-      expire = it->second->finished_ && *it->second->finished_ + options_.result_ttl <= now;
-    }
-    if (!expire) break;
-    drop(finished_order_.front());
-    finished_order_.pop_front();
-  }
 }
 
 }  // namespace mdn::http

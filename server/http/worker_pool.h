@@ -1,11 +1,15 @@
-// The bounded job queue and its worker pool. HTTP threads never run the pipeline: they submit
-// a Job here and either wait for it (POST /v1/denoise) or return its id (POST /v1/jobs).
+// The worker pool: threads that run jobs, the run queue they take them from (bounded for the
+// jobs it admits), cancellation, the time limit, progress and the finished hook. It keeps no
+// job beyond its run: where asynchronous jobs live is a JobStore's business (job_store.h:
+// MemoryJobStore in this process, RedisJobStore in Redis); both, and the synchronous
+// POST /v1/denoise, hand it jobs through submit(). HTTP threads never run the pipeline.
 //
-// Thread-safety contract: every public method of JobQueue and Job may be called from any
-// thread at any time. JobQueue::mutex_ guards the queue, the job table and the idempotency
-// keys; each Job's own mutex guards its state, progress and result. Lock order: the queue's
-// mutex before a job's, never the reverse. Workers never hold the queue's mutex while running
-// a job. A Job's output, once published, is immutable and shared (std::shared_ptr<const>).
+// Thread-safety contract: every public method of WorkerPool and Job may be called from any
+// thread at any time. WorkerPool::mutex_ guards the run queue and the counters; each Job's own
+// mutex guards its state, progress and result. Lock order: a store's mutex, then the pool's,
+// then a job's, never the reverse; the pool never calls into a store. Workers never hold the
+// pool's mutex while running a job. A Job's output, once published, is immutable and shared
+// (std::shared_ptr<const>).
 #pragma once
 
 #include <atomic>
@@ -14,7 +18,6 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
-#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -62,8 +65,11 @@ class Job {
  public:
   Job(std::string id, service::JobInput input, bool asynchronous);
   const std::string& id() const { return id_; }
+  bool asynchronous() const { return asynchronous_; }
   JobSnapshot snapshot() const;
   JobState state() const;
+  // When its end was published; nullopt while queued or running.
+  std::optional<Clock::time_point> finished_at() const;
   // Blocks until the job is finished or the timeout passes; true when finished.
   bool wait_for(std::chrono::milliseconds timeout) const;
   // Marks the result as fetched by a client (the drain counts the results nobody fetched).
@@ -71,12 +77,11 @@ class Job {
   bool result_fetched() const;
 
  private:
-  friend class JobQueue;
+  friend class WorkerPool;
   class Observer;
 
   const std::string id_;
   const bool asynchronous_;
-  bool external_ = false;  // run_external(): not in the job table
   const Clock::time_point created_ = Clock::now();
   const std::chrono::system_clock::time_point created_wall_ = std::chrono::system_clock::now();
   std::atomic<bool> cancel_{false};
@@ -92,7 +97,7 @@ class Job {
   std::optional<Problem> error_;
   std::shared_ptr<const service::JobOutput> output_;
   bool result_fetched_ = false;
-  // run_external(held): until settle(), the end of the run waits here, unreported.
+  // Submission::held: until settle(), the end of the run waits here, unreported.
   struct End {
     JobState state;
     std::optional<Problem> error;
@@ -102,77 +107,67 @@ class Job {
   std::optional<End> held_end_;
 };
 
-struct JobQueueOptions {
+struct WorkerPoolOptions {
   int workers = 1;                 // worker threads, >= 1
   int threads_per_job = 1;         // passed to the core pipeline
-  int capacity = 64;               // jobs waiting for a worker
+  int capacity = 64;               // admitted jobs waiting for a worker
   std::chrono::milliseconds time_limit{300'000};  // running time per job
-  std::chrono::milliseconds result_ttl{600'000};  // how long finished jobs stay
-  int max_stored = 1024;           // asynchronous jobs kept at most (queued, running, finished);
-                                   // when all are taken, new ones get 503 (none is evicted early)
   io::Limits limits;               // decoder limits
 };
 
 // Called when a job has run, just before its final state is published (so a client that sees
 // the job finished also sees it in the metrics): on the worker thread, or for a held run that
 // ended before it was settled, on the thread calling settle(). Must not call back into the
-// queue.
+// pool.
 using JobFinishedHook = std::function<void(const JobSnapshot&)>;
 
-class JobQueue {
+class WorkerPool {
  public:
-  JobQueue(JobQueueOptions options, JobFinishedHook on_finished = {});
-  ~JobQueue();  // cancels what is left and joins the workers
-  JobQueue(const JobQueue&) = delete;
-  JobQueue& operator=(const JobQueue&) = delete;
+  WorkerPool(WorkerPoolOptions options, JobFinishedHook on_finished = {});
+  ~WorkerPool();  // joins the workers (each ends its run); jobs still queued end cancelled
+  WorkerPool(const WorkerPool&) = delete;
+  WorkerPool& operator=(const WorkerPool&) = delete;
 
-  struct Submitted {
-    std::shared_ptr<Job> job;
-    bool replayed = false;  // an earlier job with the same Idempotency-Key and body
+  struct Submission {
+    bool asynchronous = true;  // POST /v1/jobs (either store); false: POST /v1/denoise
+    // Admitted here: refused (HttpError 503 draining or queue-full, with Retry-After) while
+    // draining or when `capacity` admitted jobs wait. False: a job its store accepted against
+    // its own capacity (Redis: a worker slot took it), which runs even while draining.
+    bool admit = true;
+    // Started before its store has accepted it (the Redis store overlaps the accepting with
+    // the run): it runs at once, but its end is not published (finished hook, final state)
+    // until settle(job, true). The caller must settle it either way.
+    bool held = false;
   };
-  // Enqueues a job. Throws HttpError: 503 (queue full or draining, with Retry-After) or
-  // 422 idempotency-key-reused (same key, different body). `fingerprint` identifies the body
-  // and parameters for idempotency and is ignored without a key.
-  Submitted submit(service::JobInput input, bool asynchronous,
-                   const std::optional<std::string>& idempotency_key = std::nullopt,
-                   const std::string& fingerprint = {});
+  // Queues a job for the next free worker; `id` is the store's (or a request's) id, which
+  // names it in logs and metrics. The caller keeps the job: the pool forgets it once it ended.
+  std::shared_ptr<Job> submit(std::string id, service::JobInput input, Submission how);
+  // Throws what submit() would for an admitted job now (draining, queue full); the memory
+  // store checks it before its own limits so that the answers keep their order.
+  void check_admission() const;
 
-  std::shared_ptr<Job> find(const std::string& id);
-
-  // Runs a job accepted elsewhere (the shared Redis queue): no capacity or drain check, not
-  // listed by find() nor kept after it finishes; `id` only names it in logs and metrics.
-  // The caller waits on the returned job and may cancel it with cancel(job).
-  // `held`: a run started before the shared queue has accepted the job (so that it overlaps
-  // the accepting); it runs at once, but its end is not published (finished hook, final
-  // state) until settle(job, true). The caller must settle it either way.
-  std::shared_ptr<Job> run_external(std::string id, service::JobInput input, bool held = false);
   // Kept: the held job's end is published as usual (now, if the run already ended). Not kept:
   // it is cancelled and its end is never reported (for metrics and logs it never ran).
   void settle(const std::shared_ptr<Job>& job, bool keep);
 
-  enum class CancelOutcome { NotFound, CancelledQueued, CancelRequested, Removed };
-  // Queued: cancelled at once. Running: cancellation requested (the pipeline stops at its next
-  // iteration). Finished: the job and its result are removed.
-  CancelOutcome cancel(const std::string& id);
-  // Requests cancellation of one job object (a synchronous request whose client went away).
+  enum class Cancelled { Queued, Requested, AlreadyFinished };
+  // Queued: withdrawn and ended Cancelled with `why`. Running: cancellation requested (the
+  // pipeline stops at its next iteration). Finished: nothing.
+  Cancelled cancel(const std::shared_ptr<Job>& job, Problem why);
+  // The same, for a synchronous request whose client went away (or a job the server gives up).
   void cancel(const std::shared_ptr<Job>& job);
 
-  // Cancels every queued job and requests cancellation of every running one (forced stop).
-  void cancel_all();
-
-  // Refuses new jobs from now on (503); what was accepted still runs.
+  // Refuses admitted jobs from now on (503); what was submitted still runs.
   void begin_drain();
   bool draining() const;
-  // Waits until no job is queued or running, or the deadline passes. True if everything
-  // finished. Finished results not downloaded yet do not hold it (see unfetched_results()).
+  // Waits until no job is queued or running, the deadline passes or abandon() was called.
+  // True if everything finished.
   bool wait_drained(Clock::time_point deadline);
+  // A forced stop: drain waits end now (the stores cancelled their jobs first).
+  void abandon();
 
-  // Jobs a drain that ends now would abandon: queued or running (running synchronous jobs are
-  // not listed; their requests are answered 503).
-  std::vector<JobSnapshot> unfinished() const;
-  // Succeeded asynchronous jobs whose result was never fetched (lost when a memory store stops).
-  int unfetched_results() const;
-
+  // The jobs waiting for a worker, oldest first.
+  std::vector<std::shared_ptr<Job>> queued_jobs() const;
   // Jobs queued before this one (0: it starts next); nullopt when it is not in the queue.
   std::optional<int> jobs_ahead(const Job& job) const;
 
@@ -191,25 +186,19 @@ class JobQueue {
   void end_run(Job& job, Job::End end, bool report, bool from_worker);
   void finish_locked(Job& job, JobState state, std::optional<Problem> error,
                      std::shared_ptr<const service::JobOutput> output);  // job.mutex_ held
-  void sweep_locked();  // mutex_ held: drops finished jobs past their result lifetime
-  int store_retry_after_s_locked() const;  // mutex_ held: until a stored-job slot frees
-  std::string new_id_locked();
+  void check_admission_locked() const;  // mutex_ held
 
-  const JobQueueOptions options_;
+  const WorkerPoolOptions options_;
   const JobFinishedHook on_finished_;
 
   mutable std::mutex mutex_;
   std::condition_variable work_cv_;
   mutable std::condition_variable idle_cv_;
   std::deque<std::shared_ptr<Job>> queue_;
-  std::map<std::string, std::shared_ptr<Job>> jobs_;  // every known job by id
-  std::deque<std::string> finished_order_;            // ids of finished jobs, oldest first
-  struct IdempotencyEntry { std::string fingerprint, job_id; };
-  std::map<std::string, IdempotencyEntry> idempotency_;
   int running_ = 0;
   bool draining_ = false;
   bool stop_ = false;
-  bool abandoned_ = false;  // cancel_all() was called: drain waits no longer
+  bool abandoned_ = false;  // abandon() was called: drain waits no longer
   std::atomic<double> queue_wait_s_{-1};  // moving average of measured queue waits; -1: none yet
   std::vector<std::thread> workers_;
 };
