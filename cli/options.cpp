@@ -120,9 +120,10 @@ Options:
 std::string options_text() {
   std::ostringstream out;
   for (const OptionSpec& option : kOptions) {
-    std::string head = "  " + std::string(option.name);
-    if (!option.alias.empty()) head += ", " + std::string(option.alias);
-    if (!option.value.empty()) head += " " + std::string(option.value);
+    std::string head = "  ";
+    head += option.name;
+    if (!option.alias.empty()) head.append(", ").append(option.alias);
+    if (!option.value.empty()) head.append(" ").append(option.value);
     head.resize(std::max<std::size_t>(head.size() + 1, 23), ' ');
     std::string_view help = option.help;
     for (std::size_t line = 0; !help.empty() || line == 0; ++line) {
