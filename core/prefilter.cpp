@@ -364,38 +364,36 @@ double fold_ratio(const Vertices& P, const Triangles& F, const Topology& topo, d
   return static_cast<double>(folded) / static_cast<double>(E);
 }
 
-// Sec. 4.2: K-means over (centroid, area).
-FaceClusters cluster_faces(const Vertices& P, const Triangles& F, int k, std::uint64_t seed, int max_iterations,
-                           Executor* executor) {
-  const auto nf = static_cast<std::size_t>(F.rows());
-  FaceClusters out;
-  out.label.assign(nf, 0);
-  out.mean_area.assign(static_cast<std::size_t>(k), 0);
-  if (nf == 0 || k < 1) return out;
+namespace {
+using Features = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
 
-  const Vertices C = face_centroids(P, F);
-  const Eigen::VectorXd A = face_areas(P, F);
-  // Feature scaling (core/README.md, decision 6): the three centroid coordinates share one
-  // scale so that together they carry unit variance (distances stay isotropic), and the
-  // area enters as log(area), standardised to unit variance on its own. Sampling density is
-  // a ratio, so log-area separates a 16x denser region as clearly wherever it lies, and the
-  // area block weighs as much as the whole position block: on a regular mesh the split is
-  // spatial and the cluster area ratio stays near 1. Raw areas (~1e-5 in a unit box) would
-  // not count at all.
+// Feature scaling (core/README.md, decision 6): the three centroid coordinates share one
+// scale so that together they carry unit variance (distances stay isotropic), and the
+// area enters as log(area), standardised to unit variance on its own. Sampling density is
+// a ratio, so log-area separates a 16x denser region as clearly wherever it lies, and the
+// area block weighs as much as the whole position block: on a regular mesh the split is
+// spatial and the cluster area ratio stays near 1. Raw areas (~1e-5 in a unit box) would
+// not count at all.
+Features cluster_features(const Vertices& C, const Eigen::VectorXd& A) {
+  const auto nf = static_cast<std::size_t>(C.rows());
   const Eigen::RowVector3d c_mean = C.colwise().mean();
   const double c_scale = std::sqrt((C.rowwise() - c_mean).squaredNorm() / static_cast<double>(nf));
   const double a_floor = std::max(A.maxCoeff(), 1e-300) * 1e-12;  // zero-area faces: clamp before the log
   const Eigen::ArrayXd log_area = A.array().max(a_floor).log();
   const double a_mean = log_area.mean();
   const double a_scale = std::sqrt((log_area - a_mean).square().sum() / static_cast<double>(nf));
-  Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> X(static_cast<Eigen::Index>(nf), 4);
+  Features X(static_cast<Eigen::Index>(nf), 4);
   X.leftCols<3>() = (C.rowwise() - c_mean) / (c_scale > 0 ? c_scale : 1.0);
   X.col(3) = (log_area - a_mean) / (a_scale > 0 ? a_scale : 1.0);
+  return X;
+}
 
-  // k-means++ seeding with a fixed seed: deterministic.
+// k-means++ seeding with a fixed seed: deterministic.
+Features seed_centers(const Features& X, int k, std::uint64_t seed) {
+  const auto nf = static_cast<std::size_t>(X.rows());
   std::mt19937_64 rng(seed);
   auto uniform = [&rng] { return static_cast<double>(rng() >> 11) * 0x1.0p-53; };
-  Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> centers(k, 4);
+  Features centers(k, 4);
   centers.row(0) = X.row(static_cast<Eigen::Index>(rng() % nf));
   Eigen::VectorXd d2(static_cast<Eigen::Index>(nf));
   for (std::size_t i = 0; i < nf; ++i) d2(static_cast<Eigen::Index>(i)) = (X.row(static_cast<Eigen::Index>(i)) - centers.row(0)).squaredNorm();
@@ -413,8 +411,15 @@ FaceClusters cluster_faces(const Vertices& P, const Triangles& F, int k, std::ui
     for (std::size_t i = 0; i < nf; ++i)
       d2(static_cast<Eigen::Index>(i)) = std::min(d2(static_cast<Eigen::Index>(i)), (X.row(static_cast<Eigen::Index>(i)) - centers.row(c)).squaredNorm());
   }
+  return centers;
+}
 
-  // Lloyd iterations until no label changes.
+// Lloyd iterations from `centers` until no label changes (at most max_iterations); the labels
+// into `label` (#F, all 0 on entry).
+void lloyd_iterations(const Features& X, Features& centers, int max_iterations, Executor* executor,
+                      std::vector<std::int32_t>& label) {
+  const auto nf = static_cast<std::size_t>(X.rows());
+  const auto k = static_cast<int>(centers.rows());
   std::vector<std::int64_t> count(static_cast<std::size_t>(k));
   std::vector<std::int32_t> nearest(nf);
   for (int it = 0; it < max_iterations; ++it) {
@@ -434,21 +439,25 @@ FaceClusters cluster_faces(const Vertices& P, const Triangles& F, int k, std::ui
       executor->parallel_for(static_cast<std::int64_t>(nf), assign);
     else
       assign(0, static_cast<std::int64_t>(nf));
-    const bool changed = nearest != out.label;
-    out.label.swap(nearest);
+    const bool changed = nearest != label;
+    label.swap(nearest);
     if (!changed && it > 0) break;
     centers.setZero();
     std::fill(count.begin(), count.end(), 0);
     for (std::size_t i = 0; i < nf; ++i) {
-      centers.row(out.label[i]) += X.row(static_cast<Eigen::Index>(i));
-      ++count[static_cast<std::size_t>(out.label[i])];
+      centers.row(label[i]) += X.row(static_cast<Eigen::Index>(i));
+      ++count[static_cast<std::size_t>(label[i])];
     }
     for (int c = 0; c < k; ++c)
       if (count[static_cast<std::size_t>(c)] > 0) centers.row(c) /= static_cast<double>(count[static_cast<std::size_t>(c)]);
   }
+}
 
-  std::fill(count.begin(), count.end(), 0);
-  for (std::size_t i = 0; i < nf; ++i) {
+// Each cluster's mean face area, the smallest cluster and the largest-to-smallest ratio, from
+// out.label and the areas A.
+void cluster_areas(const Eigen::VectorXd& A, int k, FaceClusters& out) {
+  std::vector<std::int64_t> count(static_cast<std::size_t>(k), 0);
+  for (std::size_t i = 0; i < out.label.size(); ++i) {
     out.mean_area[static_cast<std::size_t>(out.label[i])] += A(static_cast<Eigen::Index>(i));
     ++count[static_cast<std::size_t>(out.label[i])];
   }
@@ -461,6 +470,24 @@ FaceClusters cluster_faces(const Vertices& P, const Triangles& F, int k, std::ui
     hi = std::max(hi, m);
   }
   out.area_ratio = lo > 0 ? hi / lo : (hi > 0 ? std::numeric_limits<double>::infinity() : 1.0);
+}
+}  // namespace
+
+// Sec. 4.2: K-means over (centroid, area).
+FaceClusters cluster_faces(const Vertices& P, const Triangles& F, int k, std::uint64_t seed, int max_iterations,
+                           Executor* executor) {
+  const auto nf = static_cast<std::size_t>(F.rows());
+  FaceClusters out;
+  out.label.assign(nf, 0);
+  out.mean_area.assign(static_cast<std::size_t>(k), 0);
+  if (nf == 0 || k < 1) return out;
+
+  const Vertices C = face_centroids(P, F);
+  const Eigen::VectorXd A = face_areas(P, F);
+  const Features X = cluster_features(C, A);
+  Features centers = seed_centers(X, k, seed);
+  lloyd_iterations(X, centers, max_iterations, executor, out.label);
+  cluster_areas(A, k, out);
   return out;
 }
 

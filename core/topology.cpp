@@ -23,17 +23,12 @@ std::vector<std::int32_t> offsets_from_counts(const std::vector<std::int32_t>& c
   return offsets;
 }
 
-}  // namespace
-
-Topology Topology::build(const Triangles& F, std::int32_t num_vertices, Executor* executor) {
-  Topology t;
-  t.num_vertices = num_vertices;
-  t.num_faces = static_cast<std::int32_t>(F.rows());
-
-  // --- Edges: sort half-edges by undirected key, classify by multiplicity. ---
+// The half-edges of F (none for a repeated index), in (lo, hi, face) order.
+std::vector<HalfEdge> sorted_half_edges(const Triangles& F, std::int32_t num_vertices) {
+  const auto num_faces = static_cast<std::int32_t>(F.rows());
   std::vector<HalfEdge> half;
   half.reserve(static_cast<std::size_t>(F.rows()) * 3);
-  for (std::int32_t f = 0; f < t.num_faces; ++f)
+  for (std::int32_t f = 0; f < num_faces; ++f)
     for (int k = 0; k < 3; ++k) {
       const std::int32_t a = F(f, k), b = F(f, (k + 1) % 3), c = F(f, (k + 2) % 3);
       if (a == b) continue;  // a face with a repeated index has no edge here
@@ -41,22 +36,38 @@ Topology Topology::build(const Triangles& F, std::int32_t num_vertices, Executor
     }
   // Counting sort by the smaller vertex (O(n)), then each small bucket by (hi, face): the
   // same order as one comparison sort on (lo, hi, face), at a fraction of its cost.
-  {
-    std::vector<std::int32_t> start(static_cast<std::size_t>(num_vertices) + 1, 0);
-    for (const HalfEdge& h : half) ++start[static_cast<std::size_t>(h.lo) + 1];
-    std::partial_sum(start.begin(), start.end(), start.begin());
-    std::vector<HalfEdge> sorted(half.size());
-    std::vector<std::int32_t> cursor(start.begin(), start.end() - 1);
-    for (const HalfEdge& h : half) sorted[static_cast<std::size_t>(cursor[static_cast<std::size_t>(h.lo)]++)] = h;
-    for (std::size_t v = 0; v + 1 < start.size(); ++v)
-      std::sort(sorted.begin() + start[v], sorted.begin() + start[v + 1], [](const HalfEdge& x, const HalfEdge& y) {
-        return x.hi != y.hi ? x.hi < y.hi : x.face < y.face;
-      });
-    half.swap(sorted);
-  }
+  std::vector<std::int32_t> start(static_cast<std::size_t>(num_vertices) + 1, 0);
+  for (const HalfEdge& h : half) ++start[static_cast<std::size_t>(h.lo) + 1];
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  std::vector<HalfEdge> sorted(half.size());
+  std::vector<std::int32_t> cursor(start.begin(), start.end() - 1);
+  for (const HalfEdge& h : half) sorted[static_cast<std::size_t>(cursor[static_cast<std::size_t>(h.lo)]++)] = h;
+  for (std::size_t v = 0; v + 1 < start.size(); ++v)
+    std::sort(sorted.begin() + start[v], sorted.begin() + start[v + 1], [](const HalfEdge& x, const HalfEdge& y) {
+      return x.hi != y.hi ? x.hi < y.hi : x.face < y.face;
+    });
+  return sorted;
+}
 
+// rows as an Eigen matrix, one row each.
+template <std::size_t N>
+Eigen::Matrix<std::int32_t, Eigen::Dynamic, static_cast<int>(N), Eigen::RowMajor> to_matrix(
+    const std::vector<std::array<std::int32_t, N>>& rows) {
+  Eigen::Matrix<std::int32_t, Eigen::Dynamic, static_cast<int>(N), Eigen::RowMajor> m(static_cast<Eigen::Index>(rows.size()), N);
+  for (std::size_t r = 0; r < rows.size(); ++r)
+    for (int k = 0; k < static_cast<int>(N); ++k) m(static_cast<Eigen::Index>(r), k) = rows[r][static_cast<std::size_t>(k)];
+  return m;
+}
+
+// The undirected edges, classified by multiplicity; unique_edges lists every edge once, in
+// sorted order.
+struct EdgeLists {
   std::vector<std::array<std::int32_t, 4>> interior;
   std::vector<std::array<std::int32_t, 2>> interior_faces, boundary, nonmanifold, unique_edges;
+};
+
+void classify_edges(const std::vector<HalfEdge>& half, EdgeLists& edges) {
+  auto& [interior, interior_faces, boundary, nonmanifold, unique_edges] = edges;
   for (std::size_t i = 0; i < half.size();) {
     std::size_t j = i;
     while (j < half.size() && half[j].lo == half[i].lo && half[j].hi == half[i].hi) ++j;
@@ -79,25 +90,10 @@ Topology Topology::build(const Triangles& F, std::int32_t num_vertices, Executor
     }
     i = j;
   }
-  auto to_matrix4 = [](const auto& rows) {
-    Eigen::Matrix<std::int32_t, Eigen::Dynamic, 4, Eigen::RowMajor> m(static_cast<Eigen::Index>(rows.size()), 4);
-    for (std::size_t r = 0; r < rows.size(); ++r)
-      for (int k = 0; k < 4; ++k) m(static_cast<Eigen::Index>(r), k) = rows[r][static_cast<std::size_t>(k)];
-    return m;
-  };
-  auto to_matrix2 = [](const auto& rows) {
-    Eigen::Matrix<std::int32_t, Eigen::Dynamic, 2, Eigen::RowMajor> m(static_cast<Eigen::Index>(rows.size()), 2);
-    for (std::size_t r = 0; r < rows.size(); ++r)
-      for (int k = 0; k < 2; ++k) m(static_cast<Eigen::Index>(r), k) = rows[r][static_cast<std::size_t>(k)];
-    return m;
-  };
-  t.interior_edges = to_matrix4(interior);
-  t.edge_faces = to_matrix2(interior_faces);
-  t.boundary_edges = to_matrix2(boundary);
-  t.nonmanifold_edges = to_matrix2(nonmanifold);
+}
 
-  // --- Vertex -> faces (each face listed once per distinct vertex). ---
-  std::vector<std::int32_t> counts(static_cast<std::size_t>(num_vertices), 0);
+// Vertex -> faces (each face listed once per distinct vertex); counts: #V zeros, scratch.
+void build_vertex_faces(const Triangles& F, Topology& t, std::vector<std::int32_t>& counts) {
   auto distinct = [&](std::int32_t f, int k) {
     for (int m = 0; m < k; ++m)
       if (F(f, m) == F(f, k)) return false;
@@ -108,14 +104,15 @@ Topology Topology::build(const Triangles& F, std::int32_t num_vertices, Executor
       if (distinct(f, k)) ++counts[static_cast<std::size_t>(F(f, k))];
   t.vf_offsets = offsets_from_counts(counts);
   t.vf_faces.assign(static_cast<std::size_t>(t.vf_offsets.back()), 0);
-  {
-    std::vector<std::int32_t> cursor(t.vf_offsets.begin(), t.vf_offsets.end() - 1);
-    for (std::int32_t f = 0; f < t.num_faces; ++f)
-      for (int k = 0; k < 3; ++k)
-        if (distinct(f, k)) t.vf_faces[static_cast<std::size_t>(cursor[static_cast<std::size_t>(F(f, k))]++)] = f;
-  }
+  std::vector<std::int32_t> cursor(t.vf_offsets.begin(), t.vf_offsets.end() - 1);
+  for (std::int32_t f = 0; f < t.num_faces; ++f)
+    for (int k = 0; k < 3; ++k)
+      if (distinct(f, k)) t.vf_faces[static_cast<std::size_t>(cursor[static_cast<std::size_t>(F(f, k))]++)] = f;
+}
 
-  // --- Vertex -> vertices from the unique edges (sorted, so deterministic). ---
+// Vertex -> vertices from the unique edges (sorted, so deterministic); counts: #V scratch.
+void build_vertex_vertices(const std::vector<std::array<std::int32_t, 2>>& unique_edges, Topology& t,
+                           std::vector<std::int32_t>& counts) {
   std::fill(counts.begin(), counts.end(), 0);
   for (const auto& [a, b] : unique_edges) {
     ++counts[static_cast<std::size_t>(a)];
@@ -123,51 +120,53 @@ Topology Topology::build(const Triangles& F, std::int32_t num_vertices, Executor
   }
   t.vv_offsets = offsets_from_counts(counts);
   t.vv_vertices.assign(static_cast<std::size_t>(t.vv_offsets.back()), 0);
-  {
-    std::vector<std::int32_t> cursor(t.vv_offsets.begin(), t.vv_offsets.end() - 1);
-    for (const auto& [a, b] : unique_edges) {
-      t.vv_vertices[static_cast<std::size_t>(cursor[static_cast<std::size_t>(a)]++)] = b;
-      t.vv_vertices[static_cast<std::size_t>(cursor[static_cast<std::size_t>(b)]++)] = a;
-    }
+  std::vector<std::int32_t> cursor(t.vv_offsets.begin(), t.vv_offsets.end() - 1);
+  for (const auto& [a, b] : unique_edges) {
+    t.vv_vertices[static_cast<std::size_t>(cursor[static_cast<std::size_t>(a)]++)] = b;
+    t.vv_vertices[static_cast<std::size_t>(cursor[static_cast<std::size_t>(b)]++)] = a;
   }
+}
 
-  // --- Face -> vertex-adjacent faces N(i), itself excluded (core/README.md, decision 9). ---
-  // One pass over the faces, split into one contiguous range per thread when an executor is
-  // given (decision 28): each range gathers its lists (a `seen` mark per face, so no sort of
-  // duplicates) into its own buffer, then the buffers are concatenated in order. The lists do
-  // not depend on the split.
+// N(f) for the faces [begin, end), sorted, appended to `out`; each list's length into
+// t.ff_offsets[f + 1]. A `seen` mark per face, so no sort of duplicates.
+void gather_face_faces(const Triangles& F, Topology& t, std::int64_t begin, std::int64_t end, std::vector<std::int32_t>& out) {
+  out.reserve(static_cast<std::size_t>(end - begin) * 13);
+  std::vector<std::int32_t> seen(static_cast<std::size_t>(t.num_faces), -1);
+  for (std::int64_t ff = begin; ff < end; ++ff) {
+    const auto f = static_cast<std::int32_t>(ff);
+    const auto first = static_cast<std::ptrdiff_t>(out.size());
+    seen[static_cast<std::size_t>(f)] = f;  // excludes f itself
+    for (int k = 0; k < 3; ++k) {
+      const auto v = static_cast<std::size_t>(F(f, k));
+      for (std::int32_t s = t.vf_offsets[v]; s < t.vf_offsets[v + 1]; ++s) {
+        const std::int32_t g = t.vf_faces[static_cast<std::size_t>(s)];
+        if (seen[static_cast<std::size_t>(g)] != f) {
+          seen[static_cast<std::size_t>(g)] = f;
+          out.push_back(g);
+        }
+      }
+    }
+    std::sort(out.begin() + first, out.end());
+    t.ff_offsets[static_cast<std::size_t>(f) + 1] = static_cast<std::int32_t>(out.size() - static_cast<std::size_t>(first));
+  }
+}
+
+// Face -> vertex-adjacent faces N(i), itself excluded (core/README.md, decision 9).
+// One pass over the faces, split into one contiguous range per thread when an executor is
+// given (decision 28): each range gathers its lists into its own buffer, then the buffers are
+// concatenated in order. The lists do not depend on the split.
+void build_face_faces(const Triangles& F, Topology& t, Executor* executor) {
   t.ff_offsets.assign(static_cast<std::size_t>(t.num_faces) + 1, 0);
   const int parts = executor ? std::max(1, executor->threads()) : 1;
   std::vector<std::vector<std::int32_t>> lists(static_cast<std::size_t>(parts));
-  auto gather = [&](std::int64_t begin, std::int64_t end, std::vector<std::int32_t>& out) {
-    out.reserve(static_cast<std::size_t>(end - begin) * 13);
-    std::vector<std::int32_t> seen(static_cast<std::size_t>(t.num_faces), -1);
-    for (std::int64_t ff = begin; ff < end; ++ff) {
-      const auto f = static_cast<std::int32_t>(ff);
-      const auto first = static_cast<std::ptrdiff_t>(out.size());
-      seen[static_cast<std::size_t>(f)] = f;  // excludes f itself
-      for (int k = 0; k < 3; ++k) {
-        const auto v = static_cast<std::size_t>(F(f, k));
-        for (std::int32_t s = t.vf_offsets[v]; s < t.vf_offsets[v + 1]; ++s) {
-          const std::int32_t g = t.vf_faces[static_cast<std::size_t>(s)];
-          if (seen[static_cast<std::size_t>(g)] != f) {
-            seen[static_cast<std::size_t>(g)] = f;
-            out.push_back(g);
-          }
-        }
-      }
-      std::sort(out.begin() + first, out.end());
-      t.ff_offsets[static_cast<std::size_t>(f) + 1] = static_cast<std::int32_t>(out.size() - static_cast<std::size_t>(first));
-    }
-  };
   if (parts > 1 && t.num_faces >= 2 * parts) {
     executor->parallel_for(t.num_faces, [&](std::int64_t begin, std::int64_t end) {
       // parallel_for(n, fn) cuts [0, n) into exactly threads() ranges: find ours by its start.
       const auto part = static_cast<std::size_t>((begin * parts) / t.num_faces);
-      gather(begin, end, lists[std::min(part, lists.size() - 1)]);
+      gather_face_faces(F, t, begin, end, lists[std::min(part, lists.size() - 1)]);
     });
   } else {
-    gather(0, t.num_faces, lists[0]);
+    gather_face_faces(F, t, 0, t.num_faces, lists[0]);
   }
   std::partial_sum(t.ff_offsets.begin(), t.ff_offsets.end(), t.ff_offsets.begin());
   t.ff_faces.reserve(static_cast<std::size_t>(t.ff_offsets.back()));
@@ -175,6 +174,28 @@ Topology Topology::build(const Triangles& F, std::int32_t num_vertices, Executor
     t.ff_faces.insert(t.ff_faces.end(), list.begin(), list.end());
     list = {};
   }
+}
+
+}  // namespace
+
+Topology Topology::build(const Triangles& F, std::int32_t num_vertices, Executor* executor) {
+  Topology t;
+  t.num_vertices = num_vertices;
+  t.num_faces = static_cast<std::int32_t>(F.rows());
+  // Edges: sort half-edges by undirected key, classify by multiplicity. `half` and `edges`
+  // live to the end, as in the single function this was: freeing them sooner shifts the heap
+  // layout (peak RSS +3 MiB, a slower vertex update on a 300k-face mesh).
+  const std::vector<HalfEdge> half = sorted_half_edges(F, num_vertices);
+  EdgeLists edges;
+  classify_edges(half, edges);
+  t.interior_edges = to_matrix<4>(edges.interior);
+  t.edge_faces = to_matrix<2>(edges.interior_faces);
+  t.boundary_edges = to_matrix<2>(edges.boundary);
+  t.nonmanifold_edges = to_matrix<2>(edges.nonmanifold);
+  std::vector<std::int32_t> counts(static_cast<std::size_t>(num_vertices), 0);
+  build_vertex_faces(F, t, counts);
+  build_vertex_vertices(edges.unique_edges, t, counts);
+  build_face_faces(F, t, executor);
   return t;
 }
 

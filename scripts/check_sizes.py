@@ -8,7 +8,7 @@ and preprocessor lines are skipped. Heuristic, but it needs no compiler.
 
 Usage: check_sizes.py [--max-file N] [--max-function N] [PATH...]   (default: the product
 folders core, service, cli, server, relative to this script's repository). Exit 1 when
-something is over.
+something is over, 2 when a PATH does not exist.
 """
 import argparse
 import os
@@ -90,6 +90,9 @@ def main():
     paths = args.paths or [os.path.join(root, d) for d in DEFAULT_DIRS]
     files = []
     for p in paths:
+        if not os.path.exists(p):  # a renamed folder must not make the check pass on nothing
+            print("%s: no such file or folder" % p, file=sys.stderr)
+            return 2
         if os.path.isfile(p):
             files.append(p)
         for dirpath, dirnames, filenames in os.walk(p):
