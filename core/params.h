@@ -30,8 +30,8 @@ std::optional<LinearSolver> linear_solver_from_string(std::string_view text);
 // Who sets the six parameters of Table 1 and the region mode.
 enum class ParamMode {
   Manual,  // the values below, as given
-  Auto,    // chosen per input among candidates by an estimated error (core/auto/recorrupted.h), except pinned fields
-  Search,  // Auto, then a coordinate descent driven by the same estimated error (slower; core/auto/tune.h)
+  Auto,    // chosen per input by the trained model (core/auto/choose.h), except pinned fields
+  Search,  // Auto, then a coordinate descent driven by a recorrupted estimate of the error (slower; core/auto/tune.h)
   None,    // no denoising: denoise() returns the input's positions unchanged (format conversion only)
 };
 std::string_view to_string(ParamMode mode);

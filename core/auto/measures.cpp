@@ -25,9 +25,9 @@ struct Residuals {
 Residuals residuals(const Vertices& P, const Triangles& F, const Topology& topo, const std::vector<std::int32_t>& vertices,
                     Executor& ex) {
   const Vertices N = vertex_normals(P, F);
-  const std::int64_t n = vertices.empty() ? P.rows() : static_cast<std::int64_t>(vertices.size());
-  std::vector<double> r(static_cast<std::size_t>(n));
-  ex.parallel_for(n, [&](std::int64_t begin, std::int64_t end) {
+  const std::int64_t count = vertices.empty() ? P.rows() : static_cast<std::int64_t>(vertices.size());
+  std::vector<double> r(static_cast<std::size_t>(count));
+  ex.parallel_for(count, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t k = begin; k < end; ++k) {
       const std::int64_t i = vertices.empty() ? k : vertices[static_cast<std::size_t>(k)];
       const std::int32_t b = topo.vv_offsets[static_cast<std::size_t>(i)], e = topo.vv_offsets[static_cast<std::size_t>(i) + 1];
@@ -37,7 +37,7 @@ Residuals residuals(const Vertices& P, const Triangles& F, const Topology& topo,
         continue;
       }
       Eigen::RowVector3d c = Eigen::RowVector3d::Zero();
-      for (std::int32_t k = b; k < e; ++k) c += P.row(topo.vv_vertices[static_cast<std::size_t>(k)]);
+      for (std::int32_t a = b; a < e; ++a) c += P.row(topo.vv_vertices[static_cast<std::size_t>(a)]);
       r[static_cast<std::size_t>(k)] = std::abs(n.dot(P.row(i) - c / static_cast<double>(e - b)));
     }
   });

@@ -62,6 +62,12 @@ TEST(Orientation, DenoisingAMixedWindingGivesTheConsistentResultAndKeepsTheInput
     EXPECT_NE(got.report.notes[0].find(std::to_string(turned.size()) + " of "), std::string::npos);
     EXPECT_TRUE(consistent.report.notes.empty());
   }
+  // Mode None filters nothing: no note, the input as it came.
+  DenoiseParams none;
+  none.mode = ParamMode::None;
+  const DenoiseResult converted = denoise(mixed, none);
+  EXPECT_TRUE(converted.report.notes.empty());
+  EXPECT_TRUE(converted.mesh.V == mixed.V && converted.mesh.F == mixed.F);
   // A clean surface with mixed winding is left alone, as the consistent one is.
   std::vector<std::int32_t> ignored;
   const TriMesh clean = turn_every_third(test::sphere(4), ignored);
