@@ -10,7 +10,10 @@ as include_directions):
   never a method header (prefilter.h, pipeline.h, core/auto/...), and nothing above it;
 - service never includes cli or server;
 - cli never includes server; server never includes cli;
-- server/http includes its Redis store (server/http/redis) in service_parts.cpp only.
+- server/http includes its Redis store (server/http/redis) in service_parts.cpp only;
+- only the transport includes cpp-httplib (<httplib.h>, or connection_gate.h, which does):
+  http_server.cpp and the connection gate under it (connection_gate.*, connection_probe.cpp);
+  the route handlers work on the service's own types (server/http/http_message.h).
 
 Usage: check_include_directions.py [SOURCE_DIR]   (default: this script's repository)
 Prints every violation as FILE:LINE: INCLUDE (rule) and exits 1 if there is one.
@@ -19,10 +22,14 @@ import os
 import re
 import sys
 
-INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
+INCLUDE = re.compile(r'^\s*#\s*include\s+(?:"([^"]+)"|<(httplib\.h)>)')
 CORE_TYPES_FOR_IO = {"core/mesh.h", "core/errors.h", "core/progress.h"}
 SOURCE_SUFFIXES = (".h", ".hpp", ".cpp", ".cc", ".inc")
 LAYERS = ("core", "service", "cli", "server")
+# The transport: the only files that may include cpp-httplib, directly or through the gate.
+HTTPLIB = {"httplib.h", "server/http/connection_gate.h"}
+TRANSPORT = {"server/http/http_server.cpp", "server/http/connection_gate.h", "server/http/connection_gate.cpp",
+             "server/http/connection_probe.cpp"}
 
 
 def under(path, folder):
@@ -31,6 +38,8 @@ def under(path, folder):
 
 def violation(src, inc):
     """The rule that `src` including `inc` breaks, or None. Both are repository-relative."""
+    if inc in HTTPLIB and src not in TRANSPORT:
+        return "only the transport (http_server.cpp, connection_gate) includes cpp-httplib"
     if under(src, "core/io"):
         if under(inc, "core") and not under(inc, "core/io") and inc not in CORE_TYPES_FOR_IO:
             return "core/io includes a method header; only mesh.h, errors.h, progress.h"
@@ -80,9 +89,10 @@ def main():
                     for number, line in enumerate(f, 1):
                         m = INCLUDE.match(line)
                         if m:
-                            rule = violation(src, m.group(1))
+                            inc = m.group(1) or m.group(2)
+                            rule = violation(src, inc)
                             if rule:
-                                found.append("%s:%d: %s (%s)" % (src, number, m.group(1), rule))
+                                found.append("%s:%d: %s (%s)" % (src, number, inc, rule))
     if checked == 0:
         print("check_include_directions: no source file under %s" % root, file=sys.stderr)
         return 1

@@ -37,6 +37,8 @@
 #include <memory>
 #include <string>
 
+#include "server/http/connection_probe.h"
+
 namespace mdn::http {
 
 struct GateOptions {
@@ -75,10 +77,7 @@ class ConnectionGate {
   // Closes every waiting connection and stops the threads once they finish their request.
   void shutdown();
 
-  struct Counts {
-    std::int64_t open = 0, parked = 0, queued = 0;
-    std::int64_t refused_client = 0, refused_total = 0, evicted = 0, head_timeouts = 0, queue_timeouts = 0;
-  };
+  using Counts = ConnectionCounts;  // connection_probe.h
   Counts counts() const;
 
   // For the request being served on this thread (null outside one): the route handlers and the
@@ -87,7 +86,7 @@ class ConnectionGate {
   static void request_head_parsed();
   // Why the last read of this thread's request failed: a gap longer than the read timeout, or
   // the body's total deadline.
-  enum class ReadTimeout { None, Stall, BodyDeadline };
+  using ReadTimeout = BodyReadTimeout;  // connection_probe.h (last_body_read_timeout)
   static ReadTimeout last_read_timeout();
   // Close the connection after this response (with a lingering close when bytes stay unread).
   static void close_after_this_response(bool bytes_left_unread);

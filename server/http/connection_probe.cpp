@@ -1,5 +1,7 @@
 #include "server/http/connection_probe.h"
 
+#include "server/http/connection_gate.h"
+
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
@@ -60,5 +62,7 @@ bool ConnectionProbe::peer_gone() const {
   }
   return false;
 }
+
+BodyReadTimeout last_body_read_timeout() { return ConnectionGate::last_read_timeout(); }
 
 }  // namespace mdn::http

@@ -7,12 +7,23 @@
 // one thread and names its socket there (Scope); ConnectionProbe::current() then reads it.
 #pragma once
 
-#include <httplib.h>
 #include <sys/types.h>
 
+#include <cstdint>
 #include <optional>
 
 namespace mdn::http {
+
+// Why the last read of this thread's request body failed (the gate's stream sets it): a gap
+// longer than the read timeout, or the body's total deadline.
+enum class BodyReadTimeout { None, Stall, BodyDeadline };
+BodyReadTimeout last_body_read_timeout();  // the gate's (ConnectionGate::last_read_timeout)
+
+// The connection gate's counts (ConnectionGate::counts(), for /metrics).
+struct ConnectionCounts {
+  std::int64_t open = 0, parked = 0, queued = 0;
+  std::int64_t refused_client = 0, refused_total = 0, evicted = 0, head_timeouts = 0, queue_timeouts = 0;
+};
 
 class ConnectionProbe {
  public:

@@ -13,6 +13,7 @@
 #include <ctime>
 #include <functional>
 #include <map>
+#include <optional>
 #include <regex>
 #include <thread>
 #include <utility>
@@ -44,6 +45,63 @@ constexpr const char* kAllowedRequestHeaders =
     "Authorization, Content-Type, X-Request-Id, X-Denoise-Params, Idempotency-Key";
 // Header fields a request may carry (431 beyond; cpp-httplib 0.11.4 has no such limit).
 constexpr std::size_t kMaxRequestHeaders = 100;
+
+// ---------------------------------------------------------------- the transport
+// Only this file (and the connection gate under it) knows cpp-httplib: the route handlers work
+// on the service's own Request and Response (http_message.h), adapted here both ways.
+
+Request to_request(const httplib::Request& in) {
+  Request r;
+  r.method = in.method;
+  r.path = in.path;
+  r.headers = Headers(in.headers.begin(), in.headers.end());
+  r.params = Params(in.params.begin(), in.params.end());
+  for (const auto& m : in.matches) r.matches.push_back(m.str());
+  r.remote_addr = in.remote_addr;
+  r.remote_port = in.remote_port;
+  r.multipart = in.is_multipart_form_data();
+  return r;
+}
+
+// The body reader of a POST route, over cpp-httplib's.
+ContentReader to_reader(const httplib::ContentReader& in) {
+  return ContentReader(
+      [&in](ContentReceiver receiver) { return in(std::move(receiver)); },
+      [&in](FormPartHandler part, ContentReceiver receiver) {
+        return in([&part](const httplib::MultipartFormData& f) { return part(FormPart{f.name, f.filename, f.content_type}); },
+                  std::move(receiver));
+      });
+}
+
+// What the handler answered, into cpp-httplib's response (which held the wiring's headers).
+void write_back(Response& in, httplib::Response& out) {
+  out.status = in.status;
+  out.headers = httplib::Headers(in.headers.begin(), in.headers.end());
+  out.body = std::move(in.body);
+  if (!in.provider) return;
+  out.set_content_provider(in.content_length, in.content_type,
+                           [provider = std::move(in.provider)](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
+                             DataSink to{[&sink](const char* data, std::size_t n) { return sink.write(data, n); }};
+                             return provider(offset, length, to);
+                           });
+}
+
+// The wiring's own answers (pre-routing, errors) are written on cpp-httplib's response.
+void replace_header(httplib::Response& res, const std::string& key, const std::string& value) {
+  res.headers.erase(key);
+  res.set_header(key, value);
+}
+
+void close_after_response(httplib::Response& res) {
+  replace_header(res, "Connection", "close");
+  mark_bytes_left_unread();
+}
+
+bool has_request_body(const httplib::Request& req) {
+  Request headers_only;
+  headers_only.headers = Headers(req.headers.begin(), req.headers.end());
+  return has_request_body(headers_only);
+}
 
 }  // namespace
 
@@ -127,7 +185,10 @@ struct HttpService::Impl {
     svr.set_payload_max_length(std::size_t(config.max_body_bytes));
     // Byte ranges leave the request before routing (http_support.h, request_ranges()), so an
     // error body is never sliced and no handler changes a const request.
-    svr.set_request_setup([](httplib::Request& req) { take_request_ranges(req); });
+    svr.set_request_setup([](httplib::Request& req) {
+      set_request_ranges(Ranges(req.ranges.begin(), req.ranges.end()));
+      req.ranges.clear();
+    });
     svr.set_tcp_nodelay(true);
     // Not httplib::default_socket_options: 0.11.4 sets SO_REUSEPORT there, with which a second
     // server binds the same port without a word and the kernel splits connections between the
@@ -181,8 +242,9 @@ struct HttpService::Impl {
     return id;
   }
 
-  void write_problem(const httplib::Request& req, httplib::Response& res, const Problem& p,
-                     const std::string& request_id) {
+  // On cpp-httplib's response (the wiring) or the service's (a handler's failure).
+  template <class Req, class Res>
+  static void write_problem(const Req& req, Res& res, const Problem& p, const std::string& request_id) {
     res.status = p.status;
     if (p.retry_after_s) replace_header(res, "Retry-After", std::to_string(*p.retry_after_s));
     if (p.status == 401) replace_header(res, "WWW-Authenticate", "Bearer realm=\"meshdenoise\"");
@@ -191,14 +253,20 @@ struct HttpService::Impl {
   }
 
   // Every route handler runs through here once: whatever it throws becomes one problem+json.
-  void dispatch(const Route& route, const httplib::Request& req, httplib::Response& res,
-                const httplib::ContentReader* reader) {
-    Context ctx{req, res, reader, request_id_of(req, res)};
+  void dispatch(const Route& route, const httplib::Request& in, httplib::Response& out, const httplib::ContentReader* in_reader) {
+    std::string request_id = request_id_of(in, out);
+    const Request req = to_request(in);
+    Response res;  // starts with what the wiring set (X-Request-Id, CORS)
+    res.status = out.status;
+    res.headers = Headers(out.headers.begin(), out.headers.end());
+    std::optional<ContentReader> reader;
+    if (in_reader) reader.emplace(to_reader(*in_reader));
+    Context ctx{req, res, reader ? &*reader : nullptr, std::move(request_id)};
     try {
       route.handler(*this, ctx);
     } catch (...) {
       const Problem p = problem_from_exception(std::current_exception());
-      if (route.reads_body && !ctx.body_consumed && has_request_body(req)) close_after_response(req, res);
+      if (route.reads_body && !ctx.body_consumed && has_request_body(req)) close_after_response(res);
       if (p.status == 503 && (p.type == "queue-full" || p.type == "store-full")) {
         // Overload is expected and already counted in the metrics: one line per interval with
         // the number refused, not one error per request (10k lines a minute under overload).
@@ -215,6 +283,7 @@ struct HttpService::Impl {
         res.body.clear();
       }
     }
+    write_back(res, out);
   }
 
   httplib::Server::HandlerResponse pre_routing(const httplib::Request& req, httplib::Response& res) {
@@ -232,14 +301,14 @@ struct HttpService::Impl {
     }
     auto reject = [&](const Problem& p) {
       // The body (if any) stays unread: close the connection so it is not parsed as a request.
-      if (has_request_body(req)) close_after_response(req, res);
+      if (has_request_body(req)) close_after_response(res);
       write_problem(req, res, p, id);
       return httplib::Server::HandlerResponse::Handled;
     };
     // RFC 9112, 6.3: both framings in one request are a smuggling vector; refused, and the
     // connection closed after the answer.
     if (req.has_header("Transfer-Encoding") && req.has_header("Content-Length")) {
-      close_after_response(req, res);
+      close_after_response(res);
       return reject(make_problem(ProblemType::BadRequest, "the request has both Transfer-Encoding and Content-Length"));
     }
     // Several Content-Length fields (or a list) that do not agree: which one frames the body is
@@ -258,7 +327,7 @@ struct HttpService::Impl {
         }
       }
       if (conflict) {
-        close_after_response(req, res);
+        close_after_response(res);
         return reject(make_problem(ProblemType::BadRequest, "the request has conflicting Content-Length values"));
       }
     }
@@ -307,11 +376,11 @@ struct HttpService::Impl {
       }
       case 413:
         p = make_problem(ProblemType::TooLarge, "the body exceeds the limit of " + std::to_string(config.max_body_bytes) + " bytes");
-        close_after_response(req, res);
+        close_after_response(res);
         break;
       case 414:
         p = make_problem(ProblemType::UriTooLong, "the request target is too long");
-        close_after_response(req, res);  // a body, if any, stays unread
+        close_after_response(res);  // a body, if any, stays unread
         break;
       case 416:
         p = make_problem(ProblemType::RangeNotSatisfiable, "the Range header is invalid");
@@ -321,7 +390,7 @@ struct HttpService::Impl {
         // follows on the connection is not a request we can find the start of (0.11.4 would
         // parse each following line as a request of its own).
         p = make_problem(ProblemType::BadRequest, "the HTTP request could not be parsed");
-        close_after_response(req, res);
+        close_after_response(res);
         break;
       default:
         p = make_problem(ProblemType::HttpError, "the request failed with status " + std::to_string(res.status));

@@ -51,11 +51,11 @@ std::string server_timing(const JobSnapshot& s) {
 
 void write_result(Context& ctx, const JobSnapshot& s) {
   const service::JobOutput& out = *s.output;
-  httplib::Response& res = ctx.res;
+  Response& res = ctx.res;
   // A single byte range of a result is honoured (resumable downloads): offset and length as
   // cpp-httplib computes them (a suffix range counts from the end, an open one runs to it),
   // the last byte clamped to the result's (RFC 9110, 14.1.2).
-  const httplib::Ranges& ranges = request_ranges();
+  const Ranges& ranges = request_ranges();
   std::size_t offset = 0, length = out.bytes.size();
   if (ranges.size() == 1) {
     auto [first, last] = ranges.front();
@@ -95,7 +95,7 @@ void write_result(Context& ctx, const JobSnapshot& s) {
     length = body->size();  // gzipped or not
   }
   res.set_content_provider(length, out.media_type,
-                           [body, offset](std::size_t at, std::size_t n, httplib::DataSink& sink) {
+                           [body, offset](std::size_t at, std::size_t n, DataSink& sink) {
                              return sink.write(body->data() + offset + at, n);
                            });
   res.set_header("Content-Disposition", "attachment; filename=\"" + service::output_file_name({}, out.format) + "\"");

@@ -7,7 +7,6 @@
 
 #include <nlohmann/json.hpp>
 
-// worker_pool.h (Eigen, through the core) before httplib.h: see request_body.h.
 #include "server/http/worker_pool.h"
 #include "server/http/http_support.h"
 

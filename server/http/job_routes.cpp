@@ -62,7 +62,7 @@ std::string JobRoutes::public_id(const Context& ctx, const std::string& store_id
 
 JobSnapshot JobRoutes::find_job(Context& ctx, bool with_result) {
   const std::string id = store_id_of(ctx);
-  JobSnapshot s = found(ctx.req.matches[1].str(), store_.find(id, with_result));
+  JobSnapshot s = found(ctx.req.matches[1], store_.find(id, with_result));
   s.id = public_id(ctx, s.id);
   return s;
 }
@@ -90,7 +90,7 @@ JobSnapshot JobRoutes::wait_job(Context& ctx) {
   } leave{waiting_};
   if (waiting >= max_waiting_) return find_job(ctx, false);
   const std::string id = store_id_of(ctx);
-  JobSnapshot s = found(ctx.req.matches[1].str(), store_.wait_finished(id, Clock::now() + std::chrono::microseconds(std::int64_t(
+  JobSnapshot s = found(ctx.req.matches[1], store_.wait_finished(id, Clock::now() + std::chrono::microseconds(std::int64_t(
                                                                                     std::llround(seconds * 1e6)))));
   s.id = public_id(ctx, s.id);
   return s;
@@ -191,7 +191,7 @@ void JobRoutes::delete_job(Context& ctx) {
   r.job.id = public_id(ctx, r.job.id);
   switch (r.outcome) {
     case JobStore::CancelOutcome::NotFound:
-      throw HttpError(job_not_found(ctx.req.matches[1].str()));
+      throw HttpError(job_not_found(ctx.req.matches[1]));
     case JobStore::CancelOutcome::CancelledQueued:
       return set_json(ctx.res, job_json(r.job, ctx.request_id), 200);
     case JobStore::CancelOutcome::CancelRequested:

@@ -11,7 +11,6 @@
 #include <memory>
 #include <string>
 
-// worker_pool.h (Eigen, through the core) before httplib.h: see request_body.h.
 #include "server/http/job_store.h"
 #include "server/http/api_keys.h"
 #include "server/http/config.h"

@@ -6,7 +6,7 @@
 #include <optional>
 #include <utility>
 
-#include "server/http/connection_gate.h"
+#include "server/http/connection_probe.h"
 #include "service/params_json.h"
 
 namespace mdn::http {
@@ -84,7 +84,7 @@ io::Format resolve_format(const std::string& content_type, std::string_view byte
 
 // Reads the body through the ContentReader, counting bytes ourselves: cpp-httplib 0.11.4
 // applies set_payload_max_length to Content-Length bodies only, not to chunked uploads.
-std::string BodyReader::read_body(Context& ctx, const httplib::ContentReader& reader) {
+std::string BodyReader::read_body(Context& ctx, const ContentReader& reader) {
   std::string body;
   check_declared_length(ctx);
   bool over = false;
@@ -109,9 +109,9 @@ std::string BodyReader::read_body(Context& ctx, const httplib::ContentReader& re
 void BodyReader::check_stall(Context& ctx, std::chrono::steady_clock::time_point last_byte) {
   // The gate's stream says why a read gave up: the body's total deadline, or a gap longer than
   // the read timeout (or, outside the gate, a failure that long after the last byte).
-  const ConnectionGate::ReadTimeout why = ConnectionGate::last_read_timeout();
-  if (why == ConnectionGate::ReadTimeout::BodyDeadline) {
-    close_after_response(ctx.req, ctx.res);  // the rest of the body may still come: never read it
+  const BodyReadTimeout why = last_body_read_timeout();
+  if (why == BodyReadTimeout::BodyDeadline) {
+    close_after_response(ctx.res);  // the rest of the body may still come: never read it
     char seconds[32];
     std::snprintf(seconds, sizeof seconds, "%g", body_timeout_s_);
     Problem p = make_problem(ProblemType::RequestTimeout, std::string("the request body did not arrive within ") + seconds + " s");
@@ -119,8 +119,8 @@ void BodyReader::check_stall(Context& ctx, std::chrono::steady_clock::time_point
     throw HttpError(std::move(p));
   }
   const double idle_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_byte).count();
-  if (why != ConnectionGate::ReadTimeout::Stall && idle_s < 0.9 * stall_timeout_s_) return;
-  close_after_response(ctx.req, ctx.res);  // the rest of the body may still come: never read it
+  if (why != BodyReadTimeout::Stall && idle_s < 0.9 * stall_timeout_s_) return;
+  close_after_response(ctx.res);  // the rest of the body may still come: never read it
   char seconds[32];
   std::snprintf(seconds, sizeof seconds, "%g", stall_timeout_s_);
   Problem p = make_problem(ProblemType::RequestTimeout, std::string("the request body sent nothing for ") + seconds + " s");
@@ -129,7 +129,7 @@ void BodyReader::check_stall(Context& ctx, std::chrono::steady_clock::time_point
 }
 
 void BodyReader::throw_too_large(Context& ctx) {
-  close_after_response(ctx.req, ctx.res);  // the rest of the body stays unread
+  close_after_response(ctx.res);  // the rest of the body stays unread
   throw HttpError(make_problem(ProblemType::TooLarge, "the body exceeds the limit of " + std::to_string(max_body_bytes_) + " bytes"));
 }
 
@@ -137,7 +137,7 @@ void BodyReader::check_declared_length(Context& ctx) {
   const bool chunked = lower(ctx.req.get_header_value("Transfer-Encoding")).find("chunked") != std::string::npos;
   if (chunked) return;
   if (!ctx.req.has_header("Content-Length")) {
-    close_after_response(ctx.req, ctx.res);
+    close_after_response(ctx.res);
     throw HttpError(make_problem(ProblemType::LengthRequired, "send Content-Length or Transfer-Encoding: chunked"));
   }
   const std::string text = ctx.req.get_header_value("Content-Length");
@@ -145,7 +145,7 @@ void BodyReader::check_declared_length(Context& ctx) {
   auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), n);
   if (ec == std::errc::result_out_of_range) throw_too_large(ctx);
   if (ec != std::errc() || ptr != text.data() + text.size() || text.empty()) {
-    close_after_response(ctx.req, ctx.res);
+    close_after_response(ctx.res);
     throw HttpError(make_problem(ProblemType::BadRequest, "Content-Length is not a number"));
   }
   if (n > std::uint64_t(max_body_bytes_)) throw_too_large(ctx);
@@ -153,7 +153,7 @@ void BodyReader::check_declared_length(Context& ctx) {
 
 // Body, container and parameters of a job, from a raw body or a multipart form.
 service::JobInput BodyReader::read_job_input(Context& ctx) {
-  const httplib::Request& req = ctx.req;
+  const Request& req = ctx.req;
   std::optional<std::string> params_text;
   auto set_params = [&](std::string text, const char* where) {
     if (params_text)
@@ -173,7 +173,7 @@ service::JobInput BodyReader::read_job_input(Context& ctx) {
     std::int64_t total = 0;
     auto last_byte = std::chrono::steady_clock::now();
     const bool ok = (*ctx.reader)(
-        [&](const httplib::MultipartFormData& part) {
+        [&](const FormPart& part) {
           last_byte = std::chrono::steady_clock::now();
           current = part.name;
           if (current == "mesh") {

@@ -9,8 +9,6 @@
 #include <string>
 #include <string_view>
 
-// The core headers (Eigen) before httplib.h: its <resolv.h> defines a macro `_res` that breaks
-// Eigen's parameter names.
 #include "core/io/document.h"
 #include "service/job_runner.h"
 #include "server/http/metrics.h"
@@ -40,7 +38,7 @@ class BodyReader {
   service::JobInput read_job_input(Context& ctx);
 
  private:
-  std::string read_body(Context& ctx, const httplib::ContentReader& reader);
+  std::string read_body(Context& ctx, const ContentReader& reader);
   [[noreturn]] void throw_too_large(Context& ctx);
   void check_declared_length(Context& ctx);
   // After a failed read: 408 (and close) if no byte came for the stall timeout, or the body's

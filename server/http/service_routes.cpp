@@ -1,7 +1,5 @@
 #include "server/http/service_routes.h"
 
-#include <httplib.h>
-
 #include <algorithm>
 #include <string>
 #include <utility>
@@ -17,7 +15,7 @@ namespace mdn::http {
 using nlohmann::json;
 
 ServiceRoutes::ServiceRoutes(const ServerConfig& config, Metrics& metrics, WorkerPool& pool, JobStore& store,
-                             const JobRoutes& jobs, std::function<ConnectionGate::Counts()> connections)
+                             const JobRoutes& jobs, std::function<ConnectionCounts()> connections)
     : config_(config), metrics_(metrics), pool_(pool), store_(store), jobs_(jobs), connections_(std::move(connections)) {}
 
 void ServiceRoutes::healthz(Context& ctx) { set_json(ctx.res, {{"status", "ok"}}); }
@@ -53,7 +51,7 @@ void ServiceRoutes::metrics_route(Context& ctx) {
 
 // The connection gate's state and the connections it closed to protect the service.
 void ServiceRoutes::render_connection_metrics(std::string& out) const {
-  const ConnectionGate::Counts c = connections_();
+  const ConnectionCounts c = connections_();
   out += "# HELP mdn_http_connections Client connections: open, waiting for a request (no thread), queued for a thread.\n"
          "# TYPE mdn_http_connections gauge\n";
   out += "mdn_http_connections{state=\"open\"} " + std::to_string(c.open) + "\n";
@@ -110,7 +108,7 @@ void ServiceRoutes::report_schema(Context& ctx) {
 void ServiceRoutes::web_page(Context& ctx) {
   if (!config_.web)
     throw HttpError(make_problem(ProblemType::NotFound, "no route GET " + ctx.req.path + " (--web off)"));
-  serve_web_file(ctx.req, ctx.res, ctx.req.matches.size() > 1 ? ctx.req.matches[1].str() : "index.html");
+  serve_web_file(ctx.req, ctx.res, ctx.req.matches.size() > 1 ? ctx.req.matches[1] : "index.html");
 }
 
 }  // namespace mdn::http

@@ -9,10 +9,9 @@
 #include <functional>
 #include <string>
 
-// worker_pool.h (Eigen, through the core) before httplib.h: see request_body.h.
 #include "server/http/job_store.h"
 #include "server/http/config.h"
-#include "server/http/connection_gate.h"
+#include "server/http/connection_probe.h"
 #include "server/http/http_support.h"
 #include "server/http/job_routes.h"
 #include "server/http/metrics.h"
@@ -23,7 +22,7 @@ class ServiceRoutes {
  public:
   // `connections` reads the connection gate's counts for /metrics.
   ServiceRoutes(const ServerConfig& config, Metrics& metrics, WorkerPool& pool, JobStore& store, const JobRoutes& jobs,
-                std::function<ConnectionGate::Counts()> connections);
+                std::function<ConnectionCounts()> connections);
 
   void healthz(Context& ctx);
   void readyz(Context& ctx);
@@ -43,7 +42,7 @@ class ServiceRoutes {
   WorkerPool& pool_;
   JobStore& store_;
   const JobRoutes& jobs_;
-  const std::function<ConnectionGate::Counts()> connections_;
+  const std::function<ConnectionCounts()> connections_;
 };
 
 }  // namespace mdn::http

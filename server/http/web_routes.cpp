@@ -87,7 +87,7 @@ bool etag_matches(const std::string& header, const std::string& identity, const 
 
 }  // namespace
 
-void serve_web_file(const httplib::Request& req, httplib::Response& res, std::string_view name) {
+void serve_web_file(const Request& req, Response& res, std::string_view name) {
   const auto& files = web_files();
   const auto it = files.find(name);
   if (it == files.end())
@@ -116,7 +116,7 @@ void serve_web_file(const httplib::Request& req, httplib::Response& res, std::st
   // itself on every request, with Brotli at quality 11 when the browser accepts it (10 s for
   // three.core.js on a loaded 2-core machine); the bytes here are compressed once.
   res.set_content_provider(body.size(), file.media_type,
-                           [body](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
+                           [body](std::size_t offset, std::size_t length, DataSink& sink) {
                              return sink.write(body.data() + offset, length);
                            });
 }

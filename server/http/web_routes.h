@@ -6,7 +6,7 @@
 
 #include <string_view>
 
-#include <httplib.h>
+#include "server/http/http_message.h"
 
 namespace mdn::http {
 
@@ -26,6 +26,6 @@ inline constexpr const char* kWebContentSecurityPolicy =
 // no-cache (a browser revalidates and gets 304 while the build is the same), the CSP and nosniff;
 // answers 304 with no body when If-None-Match names an ETag of the file. Throws HttpError (404)
 // for a name that is not embedded.
-void serve_web_file(const httplib::Request& req, httplib::Response& res, std::string_view name);
+void serve_web_file(const Request& req, Response& res, std::string_view name);
 
 }  // namespace mdn::http
