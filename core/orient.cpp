@@ -2,27 +2,16 @@
 
 #include <algorithm>
 
+#include "core/topology.h"
+
 namespace mdn {
 
 namespace {
 
-// Vertex -> faces, compressed rows.
+// Vertex -> faces, compressed rows (core/topology.h).
 struct VertexFaces {
   std::vector<std::int32_t> offsets, faces;
 };
-
-VertexFaces vertex_faces(const Triangles& F, std::int32_t nv) {
-  VertexFaces vf;
-  vf.offsets.assign(static_cast<std::size_t>(nv) + 1, 0);
-  for (std::int64_t f = 0; f < F.rows(); ++f)
-    for (int c = 0; c < 3; ++c) ++vf.offsets[static_cast<std::size_t>(F(f, c)) + 1];
-  for (std::size_t v = 0; v < static_cast<std::size_t>(nv); ++v) vf.offsets[v + 1] += vf.offsets[v];
-  vf.faces.resize(static_cast<std::size_t>(vf.offsets.back()));
-  std::vector<std::int32_t> next(vf.offsets.begin(), vf.offsets.end() - 1);
-  for (std::int64_t f = 0; f < F.rows(); ++f)
-    for (int c = 0; c < 3; ++c) vf.faces[static_cast<std::size_t>(next[static_cast<std::size_t>(F(f, c))]++)] = static_cast<std::int32_t>(f);
-  return vf;
-}
 
 // The face across edge (a -> b) of face f, if exactly one other face has that edge; `same` says
 // whether it runs the edge the same way (a -> b: wound against f).
@@ -53,7 +42,8 @@ Across across(const Triangles& F, const VertexFaces& vf, std::int32_t f, std::in
 }  // namespace
 
 std::vector<std::int32_t> faces_to_turn(const Triangles& F, std::int32_t num_vertices) {
-  const VertexFaces vf = vertex_faces(F, num_vertices);
+  VertexFaces vf;
+  build_vertex_faces(F, num_vertices, vf.offsets, vf.faces);
   const auto f_count = static_cast<std::int32_t>(F.rows());
   // Most meshes are consistent: one look at every edge, nothing else.
   bool consistent = true;

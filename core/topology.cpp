@@ -92,24 +92,6 @@ void classify_edges(const std::vector<HalfEdge>& half, EdgeLists& edges) {
   }
 }
 
-// Vertex -> faces (each face listed once per distinct vertex); counts: #V zeros, scratch.
-void build_vertex_faces(const Triangles& F, Topology& t, std::vector<std::int32_t>& counts) {
-  auto distinct = [&](std::int32_t f, int k) {
-    for (int m = 0; m < k; ++m)
-      if (F(f, m) == F(f, k)) return false;
-    return true;
-  };
-  for (std::int32_t f = 0; f < t.num_faces; ++f)
-    for (int k = 0; k < 3; ++k)
-      if (distinct(f, k)) ++counts[static_cast<std::size_t>(F(f, k))];
-  t.vf_offsets = offsets_from_counts(counts);
-  t.vf_faces.assign(static_cast<std::size_t>(t.vf_offsets.back()), 0);
-  std::vector<std::int32_t> cursor(t.vf_offsets.begin(), t.vf_offsets.end() - 1);
-  for (std::int32_t f = 0; f < t.num_faces; ++f)
-    for (int k = 0; k < 3; ++k)
-      if (distinct(f, k)) t.vf_faces[static_cast<std::size_t>(cursor[static_cast<std::size_t>(F(f, k))]++)] = f;
-}
-
 // Vertex -> vertices from the unique edges (sorted, so deterministic); counts: #V scratch.
 void build_vertex_vertices(const std::vector<std::array<std::int32_t, 2>>& unique_edges, Topology& t,
                            std::vector<std::int32_t>& counts) {
@@ -178,6 +160,26 @@ void build_face_faces(const Triangles& F, Topology& t, Executor* executor) {
 
 }  // namespace
 
+void build_vertex_faces(const Triangles& F, std::int32_t num_vertices, std::vector<std::int32_t>& offsets,
+                        std::vector<std::int32_t>& faces) {
+  const auto num_faces = static_cast<std::int32_t>(F.rows());
+  auto distinct = [&](std::int32_t f, int k) {
+    for (int m = 0; m < k; ++m)
+      if (F(f, m) == F(f, k)) return false;
+    return true;
+  };
+  std::vector<std::int32_t> counts(static_cast<std::size_t>(num_vertices), 0);
+  for (std::int32_t f = 0; f < num_faces; ++f)
+    for (int k = 0; k < 3; ++k)
+      if (distinct(f, k)) ++counts[static_cast<std::size_t>(F(f, k))];
+  offsets = offsets_from_counts(counts);
+  faces.assign(static_cast<std::size_t>(offsets.back()), 0);
+  std::vector<std::int32_t> cursor(offsets.begin(), offsets.end() - 1);
+  for (std::int32_t f = 0; f < num_faces; ++f)
+    for (int k = 0; k < 3; ++k)
+      if (distinct(f, k)) faces[static_cast<std::size_t>(cursor[static_cast<std::size_t>(F(f, k))]++)] = f;
+}
+
 Topology Topology::build(const Triangles& F, std::int32_t num_vertices, Executor* executor) {
   Topology t;
   t.num_vertices = num_vertices;
@@ -192,8 +194,8 @@ Topology Topology::build(const Triangles& F, std::int32_t num_vertices, Executor
   t.edge_faces = to_matrix<2>(edges.interior_faces);
   t.boundary_edges = to_matrix<2>(edges.boundary);
   t.nonmanifold_edges = to_matrix<2>(edges.nonmanifold);
+  build_vertex_faces(F, num_vertices, t.vf_offsets, t.vf_faces);
   std::vector<std::int32_t> counts(static_cast<std::size_t>(num_vertices), 0);
-  build_vertex_faces(F, t, counts);
   build_vertex_vertices(edges.unique_edges, t, counts);
   build_face_faces(F, t, executor);
   return t;

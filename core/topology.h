@@ -44,4 +44,9 @@ struct Topology {
   std::vector<bool> boundary_vertex_mask() const;
 };
 
+// Vertex -> incident faces as compressed rows (each face listed once per distinct vertex, in
+// face order): Topology's vf_offsets / vf_faces, for callers that need no more of it.
+void build_vertex_faces(const Triangles& F, std::int32_t num_vertices, std::vector<std::int32_t>& offsets,
+                        std::vector<std::int32_t>& faces);
+
 }  // namespace mdn

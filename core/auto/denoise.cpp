@@ -27,13 +27,13 @@ DenoiseResult run(const TriMesh& input, const DenoiseParams& params, const RunOp
 
 DenoiseResult denoise(const TriMesh& input, const DenoiseParams& params, const RunOptions& options) {
   // Decision 34: faces wound against their neighbours are filtered turned to their piece's
-  // winding; the result keeps the input's faces as they were.
-  // Nothing is filtered in mode None; an invalid mesh is the pipeline's to refuse.
-  const std::vector<std::int32_t> turn =
-      params.mode != ParamMode::None && input.V.rows() > 0 && input.F.rows() > 0 && input.F.minCoeff() >= 0 &&
-              input.F.maxCoeff() < input.V.rows()
-          ? faces_to_turn(input.F, static_cast<std::int32_t>(input.V.rows()))
-          : std::vector<std::int32_t>{};
+  // winding; the result keeps the input's faces as they were. Nothing is filtered in mode
+  // None. The pipeline's own checks come first, in its order, so that faces_to_turn reads
+  // only valid indices.
+  if (params.mode == ParamMode::None) return run(input, params, options);
+  params.validate();
+  validate_mesh(input);
+  const std::vector<std::int32_t> turn = faces_to_turn(input.F, static_cast<std::int32_t>(input.V.rows()));
   if (turn.empty()) return run(input, params, options);
   TriMesh wound = input;
   for (const std::int32_t f : turn) std::swap(wound.F(f, 1), wound.F(f, 2));

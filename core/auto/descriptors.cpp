@@ -73,7 +73,6 @@ struct Read {
   const Vertices* P;
   const Triangles* F;
   const Topology* topo;
-  std::vector<std::int32_t> inner;  // the sample's scored vertices (empty: all)
 
   Read(const Vertices& P0, const Triangles& F0, const Topology& topo0, std::int64_t max_faces) : P(&P0), F(&F0), topo(&topo0) {
     if (F0.rows() <= max_faces) return;
@@ -81,11 +80,17 @@ struct Read {
     P = &sample->P;
     F = &sample->F;
     topo = &sample->topo;
-    inner = sample->scored_vertices;
   }
+  Read(const Read&) = delete;  // P, F and topo may point into `sample`
+  Read& operator=(const Read&) = delete;
   bool scored(std::int64_t f) const { return !sample || sample->scored[static_cast<std::size_t>(f)] != 0; }
-  std::int64_t vertex_count() const { return sample ? static_cast<std::int64_t>(inner.size()) : P->rows(); }
-  std::int32_t vertex(std::int64_t k) const { return sample ? inner[static_cast<std::size_t>(k)] : static_cast<std::int32_t>(k); }
+  // The sample's scored vertices (empty: all of the surface).
+  const std::vector<std::int32_t>& inner() const {
+    static const std::vector<std::int32_t> all;
+    return sample ? sample->scored_vertices : all;
+  }
+  std::int64_t vertex_count() const { return sample ? static_cast<std::int64_t>(inner().size()) : P->rows(); }
+  std::int32_t vertex(std::int64_t k) const { return sample ? inner()[static_cast<std::size_t>(k)] : static_cast<std::int32_t>(k); }
 };
 
 // Per scored face: the angle to its ring's mean normal (noise with no recorruption), the same
@@ -199,7 +204,7 @@ Descriptors describe_input(const Vertices& P, const Triangles& F, const Topology
   const std::int64_t stride = std::max<std::int64_t>(1, (nv + kNoiseVertices - 1) / kNoiseVertices);
   for (std::int64_t k = 0; k < nv; k += stride) where.push_back(r.vertex(k));
   d.noise = estimate_noise_quick(*r.P, *r.F, *r.topo, where, &executor);
-  d.measures = measure_input(*r.P, *r.F, *r.topo, DenoiseParams{}, &executor, r.inner);
+  d.measures = measure_input(*r.P, *r.F, *r.topo, DenoiseParams{}, &executor, r.inner());
   // The boundary's share is the whole surface's (the sample's cut is not a boundary).
   const double edges = static_cast<double>(topo.num_interior_edges() + topo.boundary_edges.rows() + topo.nonmanifold_edges.rows());
   const double boundary_share = edges > 0 ? static_cast<double>(topo.boundary_edges.rows()) / edges : 0;
