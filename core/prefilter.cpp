@@ -13,6 +13,7 @@
 #include "core/fast_math.h"
 #include "core/parallel.h"
 #include "core/progress.h"
+#include "core/shaping_cg.h"
 
 namespace mdn {
 
@@ -55,6 +56,8 @@ struct ShapingSolver::Impl {
   // (decision 29). z = D^-1 r is not stored: it is formed where it is read, the same product.
   Vertices s_buf, r_buf, p_buf, Ap_buf;
   Eigen::VectorXd inv_diag_buf;
+  // CG runs in single precision first, then checks and polishes in double (decision 37).
+  detail::SingleCG single;
 
   Impl(const Topology& t, LinearSolver k, double tol, Executor* ex)
       : kind(k), cg_tolerance(tol), topo(&t), executor(ex) {
@@ -201,7 +204,9 @@ struct ShapingSolver::Impl {
            }).col(0);
   }
 
-  Vertices solve_cg(const Vertices& P, double alpha, const Eigen::VectorXd& weights) {
+  // From x (the anchor P, or single's result): the first residual is formed in double, so a
+  // start that already meets the tolerance returns after one product.
+  Vertices solve_cg(const Vertices& P, double alpha, const Eigen::VectorXd& weights, Vertices x) {
     const Eigen::Index n = P.rows();
     // Jacobi preconditioner: diag(A)_v = 1 + alpha sum_{e containing v} w_e (coefficients +-1).
     Eigen::VectorXd& inv_diag = inv_diag_buf;
@@ -215,7 +220,6 @@ struct ShapingSolver::Impl {
       }
     });
 
-    Vertices x = P;  // start from the anchor: A = I + (small) so P is already close
     Vertices &s = s_buf, &r = r_buf, &p = p_buf, &Ap = Ap_buf;
     s.resize(topo->num_interior_edges(), 3);
     r.resize(n, 3);
@@ -263,7 +267,15 @@ struct ShapingSolver::Impl {
   Vertices solve(const Vertices& P, double alpha, const Eigen::VectorXd& weights) {
     if (weights.size() != 0 && weights.size() != topo->num_interior_edges())
       throw std::invalid_argument("ShapingSolver: one weight per interior edge expected");
-    Vertices x = kind == LinearSolver::Ldlt ? solve_ldlt(P, alpha, weights) : solve_cg(P, alpha, weights);
+    Vertices x;
+    if (kind == LinearSolver::Ldlt) {
+      x = solve_ldlt(P, alpha, weights);
+    } else {  // start from the anchor: A = I + (small) so P is already close
+      const detail::ShapingIncidence op{topo, &ve_offsets, &ve_edges, executor && topo->num_vertices >= kParallelRows ? executor : nullptr};
+      const int single_iterations = single.solve(op, P, alpha, weights, cg_tolerance, 1000, x);
+      x = solve_cg(P, alpha, weights, std::move(x));
+      last_iterations += single_iterations;
+    }
     if (!x.allFinite()) throw SolverError("pre-filter solve produced non-finite positions");
     return x;
   }
@@ -283,6 +295,7 @@ void ShapingSolver::release_buffers() {
   impl_->p_buf = Vertices();
   impl_->Ap_buf = Vertices();
   impl_->inv_diag_buf = Eigen::VectorXd();
+  impl_->single.release();
 }
 
 // Eq. 1: argmin sum ||p~_i - p_i||^2 + alpha sum_e ||S(e)||^2  <=>  (I + alpha D^T D) P~ = P.
