@@ -29,7 +29,7 @@ std::vector<std::int32_t> offsets_from_counts(const std::vector<std::int32_t>& c
 // by the smaller vertex (O(n), straight from F), then each small bucket by (hi, face). A bucket
 // of up to 16 is sorted by insertion, as std::sort does below 16 elements (libstdc++), so the
 // order is that of one comparison sort on (lo, hi, face) at a fraction of its cost.
-std::vector<HalfEdge> sorted_half_edges(const Triangles& F, std::int32_t num_vertices) {
+std::vector<HalfEdge> sorted_half_edges(const Triangles& F, std::int32_t num_vertices, Executor* executor) {
   const auto num_faces = static_cast<std::int32_t>(F.rows());
   std::vector<std::int32_t> start(static_cast<std::size_t>(num_vertices) + 1, 0);
   for (std::int32_t f = 0; f < num_faces; ++f)
@@ -45,16 +45,22 @@ std::vector<HalfEdge> sorted_half_edges(const Triangles& F, std::int32_t num_ver
       sorted[static_cast<std::size_t>(cursor[static_cast<std::size_t>(std::min(a, b))]++)] = {std::min(a, b), std::max(a, b), a, b, c, f};
     }
   const auto less = [](const HalfEdge& x, const HalfEdge& y) { return x.hi != y.hi ? x.hi < y.hi : x.face < y.face; };
-  for (std::size_t v = 0; v + 1 < start.size(); ++v) {
-    HalfEdge* first = sorted.data() + start[v];
-    HalfEdge* last = sorted.data() + start[v + 1];
-    if (last - first > 16) {
-      std::sort(first, last, less);
-      continue;
+  auto sort_buckets = [&](std::int64_t begin, std::int64_t end) {  // buckets are disjoint: any split
+    for (auto v = static_cast<std::size_t>(begin); v < static_cast<std::size_t>(end); ++v) {
+      HalfEdge* first = sorted.data() + start[v];
+      HalfEdge* last = sorted.data() + start[v + 1];
+      if (last - first > 16) {
+        std::sort(first, last, less);
+        continue;
+      }
+      for (HalfEdge* i = first + 1; i < last; ++i)  // stable insertion sort
+        for (HalfEdge* j = i; j > first && less(*j, *(j - 1)); --j) std::swap(*j, *(j - 1));
     }
-    for (HalfEdge* i = first + 1; i < last; ++i)  // stable insertion sort
-      for (HalfEdge* j = i; j > first && less(*j, *(j - 1)); --j) std::swap(*j, *(j - 1));
-  }
+  };
+  if (executor)
+    executor->parallel_for(num_vertices, 65536, sort_buckets);
+  else
+    sort_buckets(0, num_vertices);
   return sorted;
 }
 
@@ -204,7 +210,7 @@ Topology Topology::build(const Triangles& F, std::int32_t num_vertices, Executor
   // Edges: sort half-edges by undirected key, classify by multiplicity. `half` and `edges`
   // live to the end, as in the single function this was: freeing them sooner shifts the heap
   // layout (peak RSS +3 MiB, a slower vertex update on a 300k-face mesh).
-  const std::vector<HalfEdge> half = sorted_half_edges(F, num_vertices);
+  const std::vector<HalfEdge> half = sorted_half_edges(F, num_vertices, executor);
   EdgeLists edges;
   classify_edges(half, edges);
   t.interior_edges = to_matrix<4>(edges.interior);
