@@ -42,7 +42,7 @@ struct ShapingSolver::Impl {
   // ConjugateGradient only: vertex -> (edge, coefficient of the vertex in S(e)), CSR, so that
   // D^T s is a gather per vertex (parallel, fixed summation order). An entry is 2 e + 1 where
   // the coefficient is -1 and 2 e where it is +1: 4 bytes per incidence, not 12.
-  std::vector<std::int32_t> ve_offsets, ve_edges;
+  std::vector<std::int32_t> ve_offsets, ve_edges, ve_split;
   static Eigen::Index edge_of(std::int32_t entry) { return entry >> 1; }
   static double coef_of(std::int32_t entry) { return (entry & 1) ? -1.0 : 1.0; }
   // Ldlt only.
@@ -82,6 +82,13 @@ struct ShapingSolver::Impl {
         const auto slot = static_cast<std::size_t>(cursor[static_cast<std::size_t>(t.interior_edges(e, a))]++);
         ve_edges[slot] = static_cast<std::int32_t>(2 * e + (kShape[a] < 0 ? 1 : 0));
       }
+    // Each vertex's +1 entries first, then its -1 entries (each in edge order), split at
+    // ve_split[v]: the single-precision product sums them without a multiply by the sign.
+    ve_split.resize(static_cast<std::size_t>(t.num_vertices));
+    for (std::size_t v = 0; v < ve_split.size(); ++v) {
+      const auto first = ve_edges.begin() + ve_offsets[v], last = ve_edges.begin() + ve_offsets[v + 1];
+      ve_split[v] = static_cast<std::int32_t>(std::stable_partition(first, last, [](std::int32_t x) { return (x & 1) == 0; }) - ve_edges.begin());
+    }
   }
 
   // Below this many rows a CG step is a few microseconds and dispatching it to threads costs
@@ -271,7 +278,7 @@ struct ShapingSolver::Impl {
     if (kind == LinearSolver::Ldlt) {
       x = solve_ldlt(P, alpha, weights);
     } else {  // start from the anchor: A = I + (small) so P is already close
-      const detail::ShapingIncidence op{topo, &ve_offsets, &ve_edges, executor && topo->num_vertices >= kParallelRows ? executor : nullptr};
+      const detail::ShapingIncidence op{topo, &ve_offsets, &ve_edges, &ve_split, executor && topo->num_vertices >= kParallelRows ? executor : nullptr};
       const int single_iterations = single.solve(op, P, alpha, weights, cg_tolerance, 1000, x);
       x = solve_cg(P, alpha, weights, std::move(x));
       last_iterations += single_iterations;

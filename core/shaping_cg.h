@@ -20,11 +20,13 @@ class Executor;
 namespace mdn::detail {
 
 // The matrix-free operator's incidence: vertex -> signed edge entries (2 e + 1 where the
-// vertex's coefficient in S(e) is -1, 2 e where it is +1), CSR; ShapingSolver builds it.
+// vertex's coefficient in S(e) is -1, 2 e where it is +1), CSR, each vertex's +1 entries
+// before split[v] and its -1 entries from there; ShapingSolver builds it.
 struct ShapingIncidence {
   const Topology* topo = nullptr;
   const std::vector<std::int32_t>* offsets = nullptr;
   const std::vector<std::int32_t>* edges = nullptr;
+  const std::vector<std::int32_t>* split = nullptr;
   Executor* executor = nullptr;  // nullptr: serial
 };
 
