@@ -110,25 +110,15 @@ struct ShapingSolver::Impl {
   // blocked_sums runs body(i, sums) for every row i, block by block in parallel, and returns the
   // in-order total of the blocks' sums; passes that update a vector take its dot products in
   // the same sweep (the same sums, in the same order, as a separate dot3).
-  static constexpr std::int64_t kBlock = 2048;
-  using Sums = Eigen::Array<double, 3, 2>;
+  using Sums = detail::Sums;
   template <class Body>
   Sums blocked_sums(std::int64_t n, const Body& body) const {
-    const std::int64_t blocks = (n + kBlock - 1) / kBlock;
-    std::vector<Sums> partial(static_cast<std::size_t>(blocks), Sums::Zero());
-    parallel(
-        blocks,
-        [&](std::int64_t begin, std::int64_t end) {
-          for (std::int64_t blk = begin; blk < end; ++blk) {
-            Sums sum = Sums::Zero();
-            for (std::int64_t i = blk * kBlock; i < std::min(n, (blk + 1) * kBlock); ++i) body(i, sum);
-            partial[static_cast<std::size_t>(blk)] = sum;
-          }
+    return detail::blocked_sums(
+        n, kGrain / detail::kSumBlock,
+        [&](std::int64_t count, const std::function<void(std::int64_t, std::int64_t)>& fn, std::int64_t grain) {
+          parallel(count, fn, grain);
         },
-        kGrain / kBlock);
-    Sums total = Sums::Zero();
-    for (const auto& p : partial) total += p;
-    return total;
+        body);
   }
   Eigen::Array3d dot3(const Vertices& a, const Vertices& b) const {
     return blocked_sums(a.rows(), [&](std::int64_t i, Sums& sum) {

@@ -11,14 +11,11 @@ namespace {
 using Row4f = Eigen::Array4f;
 using Ref4f = Eigen::Map<Row4f, Eigen::Aligned16>;
 using ConstRef4f = Eigen::Map<const Row4f, Eigen::Aligned16>;
-using Sums = Eigen::Array<double, 3, 2>;
-
 // The same thresholds as ShapingSolver's double CG: serial under 32768 vertices, chunks of
 // 8192 rows claimed by free threads (decision 28), dot products in blocks of 2048 rows summed
 // in order (decision 11: the result does not depend on the number of threads).
 constexpr std::int64_t kParallelRows = 32768;
 constexpr std::int64_t kGrain = 8192;
-constexpr std::int64_t kBlock = 2048;
 
 void parallel(const ShapingIncidence& op, std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& fn,
               std::int64_t grain = kGrain) {
@@ -30,21 +27,12 @@ void parallel(const ShapingIncidence& op, std::int64_t n, const std::function<vo
 
 template <class Body>
 Sums blocked_sums(const ShapingIncidence& op, std::int64_t n, const Body& body) {
-  const std::int64_t blocks = (n + kBlock - 1) / kBlock;
-  std::vector<Sums> partial(static_cast<std::size_t>(blocks), Sums::Zero());
-  parallel(
-      op, blocks,
-      [&](std::int64_t begin, std::int64_t end) {
-        for (std::int64_t blk = begin; blk < end; ++blk) {
-          Sums sum = Sums::Zero();
-          for (std::int64_t i = blk * kBlock; i < std::min(n, (blk + 1) * kBlock); ++i) body(i, sum);
-          partial[static_cast<std::size_t>(blk)] = sum;
-        }
+  return detail::blocked_sums(
+      n, kGrain / kSumBlock,
+      [&](std::int64_t count, const std::function<void(std::int64_t, std::int64_t)>& fn, std::int64_t grain) {
+        parallel(op, count, fn, grain);
       },
-      kGrain / kBlock);
-  Sums total = Sums::Zero();
-  for (const auto& p : partial) total += p;
-  return total;
+      body);
 }
 
 // The signed sum over v's incident edges of the 4-float rows of s: the +1 entries, less the

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -30,6 +31,31 @@ struct ShapingIncidence {
   Executor* executor = nullptr;  // nullptr: serial
 };
 
+// Column sums of a sweep with a fixed blocking (decision 11): body(i, sums) runs for every row
+// i of [0, n), block by block (kSumBlock rows), the blocks handed to run(blocks, fn, grain)
+// (in parallel or not), and the blocks' sums are added in order, so the rounding does not
+// depend on the number of threads. Shared by both CGs.
+using Sums = Eigen::Array<double, 3, 2>;
+constexpr std::int64_t kSumBlock = 2048;
+template <class Run, class Body>
+Sums blocked_sums(std::int64_t n, std::int64_t grain, const Run& run, const Body& body) {
+  const std::int64_t blocks = (n + kSumBlock - 1) / kSumBlock;
+  std::vector<Sums> partial(static_cast<std::size_t>(blocks), Sums::Zero());
+  run(
+      blocks,
+      [&](std::int64_t begin, std::int64_t end) {
+        for (std::int64_t blk = begin; blk < end; ++blk) {
+          Sums sum = Sums::Zero();
+          for (std::int64_t i = blk * kSumBlock; i < std::min(n, (blk + 1) * kSumBlock); ++i) body(i, sum);
+          partial[static_cast<std::size_t>(blk)] = sum;
+        }
+      },
+      grain);
+  Sums total = Sums::Zero();
+  for (const auto& p : partial) total += p;
+  return total;
+}
+
 class SingleCG {
  public:
   // Jacobi-preconditioned CG on A x = P started from x = P, until the (recurrence) residual of
@@ -41,7 +67,6 @@ class SingleCG {
   void release();
 
  private:
-  using Sums = Eigen::Array<double, 3, 2>;
   void prepare(const ShapingIncidence& op, double alpha, const Eigen::VectorXd& weights);
   Sums initial_residual(const ShapingIncidence& op, const Vertices& P, double alpha, const Eigen::VectorXd& weights);
   Eigen::Array3d apply(const ShapingIncidence& op);
