@@ -13,24 +13,23 @@ namespace mdn {
 
 namespace {
 
-// range[q] <- phi(x[q]) / ||n_i - n_j||, the symmetric factor of omega_ij (Eq. 7), with
-// bilateral weights where ||n_i - n_j|| = sqrt(dist2[q]) < sw; phi(x) = exp(-x^2). On entry
-// range[q] holds ||n_i - n_j||^2. Single precision (decision 36). Branch-free so that it
-// vectorises; compiled for AVX2 too and picked at run time. Without FMA contraction
-// (-ffp-contract=off) both versions do the same IEEE operations, so the weights are identical
-// on every x86-64 machine.
+// range[q] <- phi(x_q) / ||n_i - n_j||, the symmetric factor of omega_ij (Eq. 7), with
+// bilateral weights where ||n_i - n_j|| < sw; phi(x) = exp(-x^2). On entry range[q] holds
+// ||n_i - n_j||^2, and x_q = (1 - cos gamma_ij) / (1 - cos sigma_gamma) is formed from it:
+// 1 - cos gamma = ||n_i - n_j||^2 / 2 for unit normals (exact where n_i . n_j would cancel).
+// Single precision (decision 36). Branch-free so that it vectorises; compiled for AVX2 too and
+// picked at run time. Without FMA contraction (-ffp-contract=off) both versions do the same
+// IEEE operations, so the weights are identical on every x86-64 machine.
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__) && !defined(__SANITIZE_ADDRESS__)
 __attribute__((target_clones("avx2", "default")))
 #endif
-void range_weights(const float* x, float* range, std::int64_t n, float sw, bool l1_median) {
-  if (l1_median) {
-    for (std::int64_t q = 0; q < n; ++q) {
-      const float dist = std::sqrt(range[q]);
-      const float denom = dist >= sw ? dist : 1.0f;
-      range[q] = detail::exp_nonpositive_f(-x[q] * x[q]) / denom;
-    }
-  } else {
-    for (std::int64_t q = 0; q < n; ++q) range[q] = detail::exp_nonpositive_f(-x[q] * x[q]);
+void range_weights(float* range, std::int64_t n, float inv_range, float sw, bool l1_median) {
+  const float half_inv_range = 0.5f * inv_range;
+  for (std::int64_t q = 0; q < n; ++q) {
+    const float x = range[q] * half_inv_range;
+    const float dist = std::sqrt(range[q]);
+    const float denom = l1_median && dist >= sw ? dist : 1.0f;
+    range[q] = detail::exp_nonpositive_f(-x * x) / denom;
   }
 }
 
@@ -114,31 +113,27 @@ PairIndex index_pairs(const Topology& topo, std::int64_t nf, Executor& ex) {
 }
 
 // The range factor of every pair (i, j > i) for faces [begin, end), normals n (#F x 4 floats,
-// decision 36). Blocks of about kBlock pairs: gather (1 - cos gamma_ij) / (1 - cos sigma_gamma)
-// into a small buffer and ||n_i - n_j||^2 into range, then the weights while both are in L1
-// (branch-free, vectorised).
+// decision 36). Blocks of about kBlock pairs: gather ||n_i - n_j||^2 into range, then the
+// weights while the block is in L1 (branch-free, vectorised).
 void range_pass(const float* n, const Topology& topo, const PairIndex& pairs, float inv_range,
                 const NormalFilterSettings& s, std::vector<float>& range, std::int64_t begin, std::int64_t end) {
   const std::vector<std::int32_t>& upper = pairs.upper;
   const std::vector<std::int32_t>& pair_start = pairs.pair_start;
   constexpr std::int32_t kBlock = 512;
-  std::vector<float> x(kBlock);
   for (std::int64_t i = begin; i < end;) {
     std::int64_t stop = i + 1;  // at least one face, however many pairs it has
     while (stop < end && pair_start[static_cast<std::size_t>(stop) + 1] - pair_start[static_cast<std::size_t>(i)] <= kBlock) ++stop;
     const std::int32_t q0 = pair_start[static_cast<std::size_t>(i)];
     const std::int32_t count = pair_start[static_cast<std::size_t>(stop)] - q0;
-    if (static_cast<std::size_t>(count) > x.size()) x.resize(static_cast<std::size_t>(count));
     for (std::int32_t q = q0; i < stop; ++i) {
       const float* ni = n + 4 * i;
       for (std::int32_t k = upper[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k, ++q) {
         const float* nj = n + 4 * std::int64_t{topo.ff_faces[static_cast<std::size_t>(k)]};
         const float dx = ni[0] - nj[0], dy = ni[1] - nj[1], dz = ni[2] - nj[2];
-        x[static_cast<std::size_t>(q - q0)] = (1.0f - (ni[0] * nj[0] + ni[1] * nj[1] + ni[2] * nj[2])) * inv_range;
         range[static_cast<std::size_t>(q)] = dx * dx + dy * dy + dz * dz;
       }
     }
-    range_weights(x.data(), range.data() + q0, count, static_cast<float>(s.bilateral_switch), s.l1_median);
+    range_weights(range.data() + q0, count, inv_range, static_cast<float>(s.bilateral_switch), s.l1_median);
   }
 }
 
