@@ -41,7 +41,8 @@ struct ShapingSolver::Impl {
   Executor* executor;
   // ConjugateGradient only: vertex -> (edge, coefficient of the vertex in S(e)), CSR, so that
   // D^T s is a gather per vertex (parallel, fixed summation order). An entry is 2 e + 1 where
-  // the coefficient is -1 and 2 e where it is +1: 4 bytes per incidence, not 12.
+  // the coefficient is -1 and 2 e where it is +1: 4 bytes per incidence, not 12. A vertex's +1
+  // entries come first, up to ve_split[v] (build_incidence).
   std::vector<std::int32_t> ve_offsets, ve_edges, ve_split;
   static Eigen::Index edge_of(std::int32_t entry) { return entry >> 1; }
   static double coef_of(std::int32_t entry) { return (entry & 1) ? -1.0 : 1.0; }
@@ -268,7 +269,8 @@ struct ShapingSolver::Impl {
     if (kind == LinearSolver::Ldlt) {
       x = solve_ldlt(P, alpha, weights);
     } else {  // start from the anchor: A = I + (small) so P is already close
-      const detail::ShapingIncidence op{topo, &ve_offsets, &ve_edges, &ve_split, executor && topo->num_vertices >= kParallelRows ? executor : nullptr};
+      Executor* threads = executor && topo->num_vertices >= kParallelRows ? executor : nullptr;
+      const detail::ShapingIncidence op{topo, &ve_offsets, &ve_edges, &ve_split, threads};
       const int single_iterations = single.solve(op, P, alpha, weights, cg_tolerance, 1000, x);
       x = solve_cg(P, alpha, weights, std::move(x));
       last_iterations += single_iterations;
