@@ -13,23 +13,23 @@ namespace mdn {
 
 namespace {
 
-// range[q] <- phi(x[q]) / ||n_i - n_j||, the symmetric factor of omega_ij (Eq. 7), with
-// bilateral weights where ||n_i - n_j|| = sqrt(dist2[q]) < sw; phi(x) = exp(-x^2). On entry
-// range[q] holds ||n_i - n_j||^2. Branch-free so that it vectorises; compiled for AVX2 too
-// and picked at run time. Without FMA contraction (-ffp-contract=off) both versions do the
-// same IEEE operations, so the weights are identical on every x86-64 machine.
+// range[q] <- phi(x_q) / ||n_i - n_j||, the symmetric factor of omega_ij (Eq. 7), with
+// bilateral weights where ||n_i - n_j|| < sw; phi(x) = exp(-x^2). On entry range[q] holds
+// ||n_i - n_j||^2, and x_q = (1 - cos gamma_ij) / (1 - cos sigma_gamma) is formed from it:
+// 1 - cos gamma = ||n_i - n_j||^2 / 2 for unit normals (exact where n_i . n_j would cancel).
+// Single precision (decision 36). Branch-free so that it vectorises; compiled for AVX2 too and
+// picked at run time. Without FMA contraction (-ffp-contract=off) both versions do the same
+// IEEE operations, so the weights are identical on every x86-64 machine.
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__) && !defined(__SANITIZE_ADDRESS__)
 __attribute__((target_clones("avx2", "default")))
 #endif
-void range_weights(const double* x, double* range, std::int64_t n, double sw, bool l1_median) {
-  if (l1_median) {
-    for (std::int64_t q = 0; q < n; ++q) {
-      const double dist = std::sqrt(range[q]);
-      const double denom = dist >= sw ? dist : 1.0;
-      range[q] = detail::exp_nonpositive(-x[q] * x[q]) / denom;
-    }
-  } else {
-    for (std::int64_t q = 0; q < n; ++q) range[q] = detail::exp_nonpositive(-x[q] * x[q]);
+void range_weights(float* range, std::int64_t n, float inv_range, float sw, bool l1_median) {
+  const float half_inv_range = 0.5f * inv_range;
+  for (std::int64_t q = 0; q < n; ++q) {
+    const float x = range[q] * half_inv_range;
+    const float dist = std::sqrt(range[q]);
+    const float denom = l1_median && dist >= sw ? dist : 1.0f;
+    range[q] = detail::exp_nonpositive_f(-x * x) / denom;
   }
 }
 
@@ -53,20 +53,20 @@ double sigma_c_of(const Vertices& centroid, const Topology& topo, std::int64_t n
 // Areas and centroids are those of the pre-filtered mesh and stay fixed (core/README.md, decision 9).
 // They are read only to set sigma_c and these weights, and are released on return, before the
 // iterations, where the run's memory peaks (decision 31).
-std::vector<double> spatial_weights(const Vertices& V, const Triangles& F, const Topology& topo, double sigma_c_factor,
-                                    Executor& ex) {
+std::vector<float> spatial_weights(const Vertices& V, const Triangles& F, const Topology& topo, double sigma_c_factor,
+                                   Executor& ex) {
   const std::int64_t nf = F.rows();
   const Eigen::VectorXd area = face_areas(V, F);
   const Vertices centroid = face_centroids(V, F);
   const double sigma_c = sigma_c_of(centroid, topo, nf, sigma_c_factor);
-  std::vector<double> spatial(topo.ff_faces.size());
+  std::vector<float> spatial(topo.ff_faces.size());  // computed in double, stored in float (decision 36)
   const double inv_sigma_c2 = 1.0 / (sigma_c * sigma_c);
   ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t i = begin; i < end; ++i)
       for (std::int32_t k = topo.ff_offsets[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k) {
         const std::int32_t j = topo.ff_faces[static_cast<std::size_t>(k)];
         const double d2 = (centroid.row(i) - centroid.row(j)).squaredNorm();
-        spatial[static_cast<std::size_t>(k)] = area(j) * detail::exp_nonpositive(-d2 * inv_sigma_c2);
+        spatial[static_cast<std::size_t>(k)] = static_cast<float>(area(j) * detail::exp_nonpositive(-d2 * inv_sigma_c2));
       }
   });
   return spatial;
@@ -112,60 +112,73 @@ PairIndex index_pairs(const Topology& topo, std::int64_t nf, Executor& ex) {
   return p;
 }
 
-// The range factor of every pair (i, j > i) for faces [begin, end), normals n (row-major
-// #F x 3). Blocks of about kBlock pairs: gather (1 - cos gamma_ij) / (1 - cos sigma_gamma)
-// into a small buffer and ||n_i - n_j||^2 into range, then the weights while both are in L1
-// (branch-free, vectorised).
-void range_pass(const double* n, const Topology& topo, const PairIndex& pairs, double inv_range,
-                const NormalFilterSettings& s, std::vector<double>& range, std::int64_t begin, std::int64_t end) {
+// The range factor of every pair (i, j > i) for faces [begin, end), normals n (#F x 4 floats,
+// decision 36). Blocks of about kBlock pairs: gather ||n_i - n_j||^2 into range, then the
+// weights while the block is in L1 (branch-free, vectorised).
+void range_pass(const float* n, const Topology& topo, const PairIndex& pairs, float inv_range,
+                const NormalFilterSettings& s, std::vector<float>& range, std::int64_t begin, std::int64_t end) {
   const std::vector<std::int32_t>& upper = pairs.upper;
   const std::vector<std::int32_t>& pair_start = pairs.pair_start;
   constexpr std::int32_t kBlock = 512;
-  std::vector<double> x(kBlock);
   for (std::int64_t i = begin; i < end;) {
     std::int64_t stop = i + 1;  // at least one face, however many pairs it has
     while (stop < end && pair_start[static_cast<std::size_t>(stop) + 1] - pair_start[static_cast<std::size_t>(i)] <= kBlock) ++stop;
     const std::int32_t q0 = pair_start[static_cast<std::size_t>(i)];
     const std::int32_t count = pair_start[static_cast<std::size_t>(stop)] - q0;
-    if (static_cast<std::size_t>(count) > x.size()) x.resize(static_cast<std::size_t>(count));
     for (std::int32_t q = q0; i < stop; ++i) {
-      const double* ni = n + 3 * i;
+      const float* ni = n + 4 * i;
       for (std::int32_t k = upper[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k, ++q) {
-        const double* nj = n + 3 * topo.ff_faces[static_cast<std::size_t>(k)];
-        const double dx = ni[0] - nj[0], dy = ni[1] - nj[1], dz = ni[2] - nj[2];
-        x[static_cast<std::size_t>(q - q0)] = (1.0 - (ni[0] * nj[0] + ni[1] * nj[1] + ni[2] * nj[2])) * inv_range;
+        const float* nj = n + 4 * std::int64_t{topo.ff_faces[static_cast<std::size_t>(k)]};
+        const float dx = ni[0] - nj[0], dy = ni[1] - nj[1], dz = ni[2] - nj[2];
         range[static_cast<std::size_t>(q)] = dx * dx + dy * dy + dz * dz;
       }
     }
-    range_weights(x.data(), range.data() + q0, count, s.bilateral_switch, s.l1_median);
+    range_weights(range.data() + q0, count, inv_range, static_cast<float>(s.bilateral_switch), s.l1_median);
   }
 }
 
+using Row4f = Eigen::Array4f;
+using ConstRow4f = Eigen::Map<const Row4f, Eigen::Aligned16>;
+
 // Eq. 7: one Jacobi step of the weighted L1-median for faces [begin, end), all faces from the
-// previous iterate `current`; omega_ij = spatial[k] * range[pair_of[k]].
-void jacobi_step(const Vertices& current, const Topology& topo, const std::vector<double>& spatial,
-                 const std::vector<double>& range, const std::vector<std::int32_t>& pair_of, Vertices& next,
+// previous iterate `current` (#F x 4 floats, the fourth 0); omega_ij = spatial[k] *
+// range[pair_of[k]]. Each neighbour is one 4-wide multiply-add, summed in float (decision 36).
+void jacobi_step(const float* current, const Topology& topo, const std::vector<float>& spatial,
+                 const std::vector<float>& range, const std::vector<std::int32_t>& pair_of, float* next,
                  std::int64_t begin, std::int64_t end) {
   for (std::int64_t i = begin; i < end; ++i) {
-    if (current.row(i).squaredNorm() == 0) {  // degenerate face: nothing to filter
-      next.row(i).setZero();
+    const ConstRow4f ni(current + 4 * i);
+    Eigen::Map<Row4f, Eigen::Aligned16> out(next + 4 * i);
+    if ((ni * ni).sum() == 0) {  // degenerate face: nothing to filter
+      out.setZero();
       continue;
     }
-    const double* n = current.data();
-    double sx = 0, sy = 0, sz = 0;
+    Row4f sum = Row4f::Zero();
     for (std::int32_t k = topo.ff_offsets[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k) {
-      const double w = spatial[static_cast<std::size_t>(k)] * range[static_cast<std::size_t>(pair_of[static_cast<std::size_t>(k)])];
-      const double* nj = n + 3 * topo.ff_faces[static_cast<std::size_t>(k)];
-      sx += w * nj[0];
-      sy += w * nj[1];
-      sz += w * nj[2];
+      const float w = spatial[static_cast<std::size_t>(k)] * range[static_cast<std::size_t>(pair_of[static_cast<std::size_t>(k)])];
+      sum += w * ConstRow4f(current + 4 * std::int64_t{topo.ff_faces[static_cast<std::size_t>(k)]});
     }
-    const Eigen::RowVector3d sum(sx, sy, sz);
-    const double len = sum.norm();
+    const float len = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
     if (len > 0)
-      next.row(i) = sum / len;
+      out = sum / len;
     else
-      next.row(i) = current.row(i);  // no usable neighbour (isolated or all degenerate)
+      out = ni;  // no usable neighbour (isolated or all degenerate)
+  }
+}
+
+// #F x 3 doubles <-> #F x 4 floats (the fourth 0). Back to double, each row is normalised again
+// in double, so the filter returns unit normals to double precision.
+void to_float4(const Vertices& N, std::vector<float>& out) {
+  out.assign(static_cast<std::size_t>(4 * N.rows()), 0.0f);
+  for (Eigen::Index i = 0; i < N.rows(); ++i)
+    for (int c = 0; c < 3; ++c) out[static_cast<std::size_t>(4 * i + c)] = static_cast<float>(N(i, c));
+}
+void to_double(const std::vector<float>& n, Vertices& out) {
+  out.resize(static_cast<Eigen::Index>(n.size() / 4), 3);
+  for (Eigen::Index i = 0; i < out.rows(); ++i) {
+    for (int c = 0; c < 3; ++c) out(i, c) = n[static_cast<std::size_t>(4 * i + c)];
+    const double len = out.row(i).norm();
+    if (len > 0) out.row(i) /= len;
   }
 }
 
@@ -176,29 +189,35 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
   Executor serial(1);
   Executor& ex = executor ? *executor : serial;
   const std::int64_t nf = F.rows();
-  Vertices current = face_normals(V, F);
-  if (s.iterations <= 0 || nf == 0) return current;
+  Vertices normals = face_normals(V, F);
+  if (s.iterations <= 0 || nf == 0) return normals;
 
-  const std::vector<double> spatial = spatial_weights(V, F, topo, s.sigma_c_factor, ex);
+  const std::vector<float> spatial = spatial_weights(V, F, topo, s.sigma_c_factor, ex);
   const PairIndex pairs = index_pairs(topo, nf, ex);
-  std::vector<double> range(static_cast<std::size_t>(pairs.pair_start.back()));
+  std::vector<float> range(static_cast<std::size_t>(pairs.pair_start.back()));
 
   // Eq. 7 typo: both denominators mean 1 - cos(sigma_gamma) (core/README.md, decision 8).
-  const double inv_range = 1.0 / (1.0 - std::cos(s.sigma_gamma_deg * std::numbers::pi / 180.0));
-  Vertices next(nf, 3);
-  if (s.on_iteration) s.on_iteration(0, current);
+  const auto inv_range = static_cast<float>(1.0 / (1.0 - std::cos(s.sigma_gamma_deg * std::numbers::pi / 180.0)));
+  // The iterations run in single precision (decision 36).
+  std::vector<float> current, next(static_cast<std::size_t>(4 * nf));
+  to_float4(normals, current);
+  if (s.on_iteration) s.on_iteration(0, normals);
   for (int it = 0; it < s.iterations; ++it) {
     checkpoint(progress, Stage::NormalFilter, static_cast<double>(it) / s.iterations);
     ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
       range_pass(current.data(), topo, pairs, inv_range, s, range, begin, end);
     });
     ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
-      jacobi_step(current, topo, spatial, range, pairs.pair_of, next, begin, end);
+      jacobi_step(current.data(), topo, spatial, range, pairs.pair_of, next.data(), begin, end);
     });
     current.swap(next);
-    if (s.on_iteration) s.on_iteration(it + 1, current);
+    if (s.on_iteration) {
+      to_double(current, normals);
+      s.on_iteration(it + 1, normals);
+    }
   }
   if (progress) progress->on_progress(Stage::NormalFilter, 1.0);
-  return current;
+  to_double(current, normals);
+  return normals;
 }
 }  // namespace mdn

@@ -13,6 +13,7 @@
 #include "core/fast_math.h"
 #include "core/parallel.h"
 #include "core/progress.h"
+#include "core/shaping_cg.h"
 
 namespace mdn {
 
@@ -40,8 +41,9 @@ struct ShapingSolver::Impl {
   Executor* executor;
   // ConjugateGradient only: vertex -> (edge, coefficient of the vertex in S(e)), CSR, so that
   // D^T s is a gather per vertex (parallel, fixed summation order). An entry is 2 e + 1 where
-  // the coefficient is -1 and 2 e where it is +1: 4 bytes per incidence, not 12.
-  std::vector<std::int32_t> ve_offsets, ve_edges;
+  // the coefficient is -1 and 2 e where it is +1: 4 bytes per incidence, not 12. A vertex's +1
+  // entries come first, up to ve_split[v] (build_incidence).
+  std::vector<std::int32_t> ve_offsets, ve_edges, ve_split;
   static Eigen::Index edge_of(std::int32_t entry) { return entry >> 1; }
   static double coef_of(std::int32_t entry) { return (entry & 1) ? -1.0 : 1.0; }
   // Ldlt only.
@@ -55,6 +57,8 @@ struct ShapingSolver::Impl {
   // (decision 29). z = D^-1 r is not stored: it is formed where it is read, the same product.
   Vertices s_buf, r_buf, p_buf, Ap_buf;
   Eigen::VectorXd inv_diag_buf;
+  // CG runs in single precision first, then checks and polishes in double (decision 37).
+  detail::SingleCG single;
 
   Impl(const Topology& t, LinearSolver k, double tol, Executor* ex)
       : kind(k), cg_tolerance(tol), topo(&t), executor(ex) {
@@ -79,6 +83,13 @@ struct ShapingSolver::Impl {
         const auto slot = static_cast<std::size_t>(cursor[static_cast<std::size_t>(t.interior_edges(e, a))]++);
         ve_edges[slot] = static_cast<std::int32_t>(2 * e + (kShape[a] < 0 ? 1 : 0));
       }
+    // Each vertex's +1 entries first, then its -1 entries (each in edge order), split at
+    // ve_split[v]: the single-precision product sums them without a multiply by the sign.
+    ve_split.resize(static_cast<std::size_t>(t.num_vertices));
+    for (std::size_t v = 0; v < ve_split.size(); ++v) {
+      const auto first = ve_edges.begin() + ve_offsets[v], last = ve_edges.begin() + ve_offsets[v + 1];
+      ve_split[v] = static_cast<std::int32_t>(std::stable_partition(first, last, [](std::int32_t x) { return (x & 1) == 0; }) - ve_edges.begin());
+    }
   }
 
   // Below this many rows a CG step is a few microseconds and dispatching it to threads costs
@@ -100,25 +111,15 @@ struct ShapingSolver::Impl {
   // blocked_sums runs body(i, sums) for every row i, block by block in parallel, and returns the
   // in-order total of the blocks' sums; passes that update a vector take its dot products in
   // the same sweep (the same sums, in the same order, as a separate dot3).
-  static constexpr std::int64_t kBlock = 2048;
-  using Sums = Eigen::Array<double, 3, 2>;
+  using Sums = detail::Sums;
   template <class Body>
   Sums blocked_sums(std::int64_t n, const Body& body) const {
-    const std::int64_t blocks = (n + kBlock - 1) / kBlock;
-    std::vector<Sums> partial(static_cast<std::size_t>(blocks), Sums::Zero());
-    parallel(
-        blocks,
-        [&](std::int64_t begin, std::int64_t end) {
-          for (std::int64_t blk = begin; blk < end; ++blk) {
-            Sums sum = Sums::Zero();
-            for (std::int64_t i = blk * kBlock; i < std::min(n, (blk + 1) * kBlock); ++i) body(i, sum);
-            partial[static_cast<std::size_t>(blk)] = sum;
-          }
+    return detail::blocked_sums(
+        n, kGrain / detail::kSumBlock,
+        [&](std::int64_t count, const std::function<void(std::int64_t, std::int64_t)>& fn, std::int64_t grain) {
+          parallel(count, fn, grain);
         },
-        kGrain / kBlock);
-    Sums total = Sums::Zero();
-    for (const auto& p : partial) total += p;
-    return total;
+        body);
   }
   Eigen::Array3d dot3(const Vertices& a, const Vertices& b) const {
     return blocked_sums(a.rows(), [&](std::int64_t i, Sums& sum) {
@@ -201,7 +202,9 @@ struct ShapingSolver::Impl {
            }).col(0);
   }
 
-  Vertices solve_cg(const Vertices& P, double alpha, const Eigen::VectorXd& weights) {
+  // From x (the anchor P, or single's result): the first residual is formed in double, so a
+  // start that already meets the tolerance returns after one product.
+  Vertices solve_cg(const Vertices& P, double alpha, const Eigen::VectorXd& weights, Vertices x) {
     const Eigen::Index n = P.rows();
     // Jacobi preconditioner: diag(A)_v = 1 + alpha sum_{e containing v} w_e (coefficients +-1).
     Eigen::VectorXd& inv_diag = inv_diag_buf;
@@ -215,7 +218,6 @@ struct ShapingSolver::Impl {
       }
     });
 
-    Vertices x = P;  // start from the anchor: A = I + (small) so P is already close
     Vertices &s = s_buf, &r = r_buf, &p = p_buf, &Ap = Ap_buf;
     s.resize(topo->num_interior_edges(), 3);
     r.resize(n, 3);
@@ -263,7 +265,16 @@ struct ShapingSolver::Impl {
   Vertices solve(const Vertices& P, double alpha, const Eigen::VectorXd& weights) {
     if (weights.size() != 0 && weights.size() != topo->num_interior_edges())
       throw std::invalid_argument("ShapingSolver: one weight per interior edge expected");
-    Vertices x = kind == LinearSolver::Ldlt ? solve_ldlt(P, alpha, weights) : solve_cg(P, alpha, weights);
+    Vertices x;
+    if (kind == LinearSolver::Ldlt) {
+      x = solve_ldlt(P, alpha, weights);
+    } else {  // start from the anchor: A = I + (small) so P is already close
+      Executor* threads = executor && topo->num_vertices >= kParallelRows ? executor : nullptr;
+      const detail::ShapingIncidence op{topo, &ve_offsets, &ve_edges, &ve_split, threads};
+      const int single_iterations = single.solve(op, P, alpha, weights, cg_tolerance, 1000, x);
+      x = solve_cg(P, alpha, weights, std::move(x));
+      last_iterations += single_iterations;
+    }
     if (!x.allFinite()) throw SolverError("pre-filter solve produced non-finite positions");
     return x;
   }
@@ -283,6 +294,7 @@ void ShapingSolver::release_buffers() {
   impl_->p_buf = Vertices();
   impl_->Ap_buf = Vertices();
   impl_->inv_diag_buf = Eigen::VectorXd();
+  impl_->single.release();
 }
 
 // Eq. 1: argmin sum ||p~_i - p_i||^2 + alpha sum_e ||S(e)||^2  <=>  (I + alpha D^T D) P~ = P.

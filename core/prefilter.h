@@ -28,7 +28,8 @@ class ShapingSolver {
   ~ShapingSolver();
   // Returns the solution P~ (#V by 3). weights: #E edge weights, or empty for W = I.
   Vertices solve(const Vertices& P, double alpha, const Eigen::VectorXd& weights);
-  // CG iterations of the last solve (0 for LDLT).
+  // CG iterations of the last solve: single-precision and double ones together (decision 37;
+  // 0 for LDLT).
   int last_iterations() const;
   // The threads given at construction (nullptr: serial).
   Executor* executor() const;
