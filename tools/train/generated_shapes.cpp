@@ -1,4 +1,4 @@
-// Seeded random members of the corpus's families (shape_kit.h). Each shape draws its
+// Seeded random members of the corpus's families (shape_kit.h; decision 35). Each shape draws its
 // parameters from its own generator, seeded by its kind and index, so adding a kind or
 // changing one never changes another shape. Sizes stay under 12,000 faces, so every shape
 // gets all the corpus's noise kinds.
