@@ -64,8 +64,15 @@ inline std::string set_name(const DenoiseParams& p) {
     if (s.back() == '.') s.pop_back();
     return s;
   };
-  return "a" + num(p.alpha) + "_t" + num(p.sigma_theta) + "_k" + std::to_string(p.n_aniso) + "_g" + num(p.sigma_gamma) +
-         "_n" + std::to_string(p.n_normal) + "_v" + std::to_string(p.n_vertex);
+  // Appended piece by piece: GCC 12 warns (-Wrestrict, a false positive) on "a" + std::string&&.
+  std::string out = "a";
+  out += num(p.alpha);
+  out += "_t" + num(p.sigma_theta);
+  out += "_k" + std::to_string(p.n_aniso);
+  out += "_g" + num(p.sigma_gamma);
+  out += "_n" + std::to_string(p.n_normal);
+  out += "_v" + std::to_string(p.n_vertex);
+  return out;
 }
 
 }  // namespace mdn::train
