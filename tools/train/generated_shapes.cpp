@@ -7,7 +7,6 @@
 #include <numbers>
 #include <random>
 
-#include "../../tests/bench/subdivide.h"
 #include "corpus.h"
 #include "shape_kit.h"
 #include "support/shapes.h"
@@ -106,74 +105,6 @@ TriMesh filleted_box(Draw d) {
   return superquadric(d.integer(8, 22), p, axes);
 }
 
-// The second batch's kinds (decision 35): what the first lacked.
-
-// A revolved part like revolved_part, its outer corners rounded by arcs.
-TriMesh rounded_revolve(Draw d) {
-  const double bore = d.real(0.15, 0.5), height = d.real(0.3, 1.2);
-  const int steps = d.integer(1, 3);
-  const double radius = std::min(d.real(0.03, 0.12), 0.3 * height / steps);
-  std::vector<Eigen::Vector2d> p{{bore, 0}};
-  double r = 1, z = 0;
-  for (int s = 0; s < steps; ++s) {
-    const double top = height * (s + 1) / steps;
-    arc(p, {r - radius, z + radius}, radius, -kPi / 2, 0, 4);
-    arc(p, {r - radius, top - radius}, radius, 0, kPi / 2, 4);
-    z = top;
-    if (s + 1 < steps) r = bore + (r - bore) * d.real(0.5, 0.8);
-  }
-  p.emplace_back(bore, height);
-  const double step = d.real(0.03, 0.08);
-  const int around = std::clamp(static_cast<int>(8000 / (2 * (2 * (1 - bore) + 2 * height) / step)), 20, 96);
-  return revolve(p, step, around);
-}
-
-// Fine detail: a blob with higher-frequency harmonics.
-TriMesh detailed_blob(Draw d) {
-  const std::uint64_t seed = d.rng();
-  const double amplitude = d.real(0.15, 0.5);
-  return bumpy(4, seed, amplitude, d.integer(6, 14));
-}
-
-// Anisotropic tessellation: a blob or a part scaled unevenly along the axes.
-TriMesh stretched(TriMesh m, Draw& d) {
-  const double sy = d.real(0.25, 0.8), sz = d.real(0.5, 1.5);
-  m.V.col(1) *= sy;
-  m.V.col(2) *= sz;
-  return m;
-}
-
-// Flat facets meeting at creases of many angles: a coarse blob, midpoint-subdivided.
-TriMesh faceted(Draw d) {
-  const bool fine = d.chance(0.5);
-  const std::uint64_t seed = d.rng();
-  const double amplitude = d.real(0.3, 1.0);
-  TriMesh m = bumpy(fine ? 2 : 1, seed, amplitude, d.integer(2, 4));
-  for (int k = 0; k < (fine ? 2 : 3); ++k) m = bench::midpoint_subdivide(m);
-  return m;
-}
-
-// A height field with creases (sums of |sin|): ridges between smooth slopes.
-TriMesh ridged(Draw d) {
-  struct Wave { double fx, fy, phase, amp; };
-  std::vector<Wave> waves;
-  for (int k = 0; k < 3; ++k) {
-    Wave w{};
-    w.fx = d.real(-4, 4);
-    w.fy = d.real(-4, 4);
-    w.phase = d.real(0, kPi);
-    w.amp = d.real(0.05, 0.2);
-    waves.push_back(w);
-  }
-  const int nu = d.integer(20, 55), nv = d.integer(20, 55);
-  return test::parametric(nu, nv, false, false, [waves](double u, double v) {
-    const double x = 2 * u - 1, y = 2 * v - 1;
-    double z = 0;
-    for (const Wave& w : waves) z += w.amp * std::abs(std::sin(w.fx * x + w.fy * y + w.phase));
-    return Vec3(x, y, z);
-  });
-}
-
 }  // namespace
 
 std::vector<Generated> generated_shapes() {
@@ -185,8 +116,8 @@ std::vector<Generated> generated_shapes() {
       out.push_back({"gen_" + kind + "_" + std::to_string(k), family, [make, seed] { return make(Draw{std::mt19937_64(seed)}); }});
     }
   };
-  add("revolve", 14, "cad", revolved_part);
-  add("extrude", 16, "cad", extruded_part);
+  add("revolve", 10, "cad", revolved_part);
+  add("extrude", 12, "cad", extruded_part);
   add("fillet", 10, "cad", filleted_box);
   // Every draw is its own statement: the order of a call's arguments is unspecified.
   add("fold", 5, "cad", [](Draw d) {
@@ -212,26 +143,6 @@ std::vector<Generated> generated_shapes() {
     const int nu = d.integer(30, 90), nv = d.integer(12, 36);
     return test::torus(nu, nv, d.real(0.15, 0.6));
   });
-  // The second batch (decision 35).
-  add("rounded_revolve", 8, "cad", rounded_revolve);
-  add("detail", 12, "organic", detailed_blob);
-  add("stretched_blob", 6, "organic", [](Draw d) {
-    const std::uint64_t seed = d.rng();
-    const double amplitude = d.real(0.3, 1.0);
-    TriMesh m = bumpy(4, seed, amplitude, d.integer(2, 6));
-    return stretched(std::move(m), d);
-  });
-  add("stretched_part", 6, "cad", [](Draw d) {
-    TriMesh m = d.chance(0.5) ? filleted_box(Draw{std::mt19937_64(d.rng())}) : revolved_part(Draw{std::mt19937_64(d.rng())});
-    return stretched(std::move(m), d);
-  });
-  add("irregular_blob", 8, "organic", [](Draw d) {
-    const std::uint64_t seed = d.rng();
-    const double amplitude = d.real(0.3, 1.2);
-    return irregular(bumpy(3, seed, amplitude, d.integer(2, 7)));
-  });
-  add("faceted", 8, "cad", faceted);
-  add("ridged", 6, "organic", ridged);
   return out;
 }
 
