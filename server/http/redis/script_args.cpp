@@ -33,7 +33,7 @@ Argv SubmitArgs::to_argv() const {
 Argv SubmitStartArgs::to_argv() const {
   static const std::string text = join({"finish_helpers", "start_job", "submit_job", "submit_start"});
   Argv a = start_argv(text, stream, start);
-  a[2] = "4";  // KEYS: stream, hash, input, idem
+  a[2] = std::string(1, '4');  // KEYS: stream, hash, input, idem (not = "4": GCC 12 warns falsely, -Wrestrict)
   a.insert(a.begin() + 4, {hash, input, idem});
   a.insert(a.end(), {job.id, job.input_length, job.format, job.params, job.created_ms, job.capacity, job.fingerprint,
                      job.has_key});  // ARGV[11] to ARGV[18]
