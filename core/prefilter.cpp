@@ -503,130 +503,6 @@ FaceClusters cluster_faces(const Vertices& P, const Triangles& F, int k, std::ui
   return out;
 }
 
-namespace {
-// Eq. 2's system M X = B, M = I + beta L^T L, applied without assembling it (decision 38): L is
-// the uniform Laplacian of the whole mesh restricted to the unknown rows, read from the one-ring
-// lists (topo.vv, symmetric), so L^T y is again a gather over the one-ring: (L^T y)_u = y_u -
-// sum over unknown neighbours j of y_j / deg(j). row_vertex[r]: the vertex of unknown r;
-// unknown[v]: v's row, or -1 where v is fixed; inv_deg[r]: 1 / deg, 0 for an isolated vertex
-// (no Laplacian row). Row r of L x is x_r - inv_deg[r] sum of x over r's unknown neighbours.
-struct RegionOperator {
-  const Topology* topo;
-  const std::vector<std::int32_t>* row_vertex;
-  const std::vector<std::int32_t>* unknown;
-  Eigen::VectorXd inv_deg;
-  double beta;
-  Executor* executor;  // nullptr: serial
-
-  static constexpr std::int64_t kGrain = 8192;
-  void parallel(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& fn, std::int64_t grain = kGrain) const {
-    if (executor && n >= 32768)  // smaller: dispatch costs more than it saves
-      executor->parallel_for(n, grain, fn);
-    else
-      fn(0, n);
-  }
-  template <class Body>
-  detail::Sums blocked_sums(std::int64_t n, const Body& body) const {
-    return detail::blocked_sums(
-        n, kGrain / detail::kSumBlock,
-        [&](std::int64_t count, const std::function<void(std::int64_t, std::int64_t)>& fn, std::int64_t grain) {
-          parallel(count, fn, grain);
-        },
-        body);
-  }
-  // The sum over row r's unknown neighbours j of scale(j) x.row(j).
-  template <class Scale>
-  Eigen::RowVector3d ring_sum(std::int64_t r, const Eigen::MatrixXd& x, const Scale& scale) const {
-    const std::int32_t v = (*row_vertex)[static_cast<std::size_t>(r)];
-    Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
-    for (std::int32_t s = topo->vv_offsets[static_cast<std::size_t>(v)]; s < topo->vv_offsets[static_cast<std::size_t>(v) + 1]; ++s) {
-      const std::int32_t j = (*unknown)[static_cast<std::size_t>(topo->vv_vertices[static_cast<std::size_t>(s)])];
-      if (j >= 0) sum += scale(j) * x.row(j);
-    }
-    return sum;
-  }
-  // y = L x (0 on an isolated vertex's row).
-  void laplacian(const Eigen::MatrixXd& x, Eigen::MatrixXd& y) const {
-    parallel(x.rows(), [&](std::int64_t begin, std::int64_t end) {
-      for (std::int64_t r = begin; r < end; ++r) {
-        const double d = inv_deg(r);
-        y.row(r) = d > 0 ? Eigen::RowVector3d(x.row(r) - d * ring_sum(r, x, [](std::int32_t) { return 1.0; }))
-                         : Eigen::RowVector3d::Zero();
-      }
-    });
-  }
-  // (L^T y)_r.
-  Eigen::RowVector3d transpose_row(std::int64_t r, const Eigen::MatrixXd& y) const {
-    return y.row(r) - ring_sum(r, y, [&](std::int32_t j) { return inv_deg(j); });
-  }
-  // diag(M)_r = 1 + beta (1 if r has a row, + sum over unknown neighbours j of 1 / deg(j)^2).
-  double diagonal(std::int64_t r) const {
-    const double own = inv_deg(r) > 0 ? 1.0 : 0.0;
-    const auto v = (*row_vertex)[static_cast<std::size_t>(r)];
-    double sum = 0;
-    for (std::int32_t s = topo->vv_offsets[static_cast<std::size_t>(v)]; s < topo->vv_offsets[static_cast<std::size_t>(v) + 1]; ++s) {
-      const std::int32_t j = (*unknown)[static_cast<std::size_t>(topo->vv_vertices[static_cast<std::size_t>(s)])];
-      if (j >= 0) sum += inv_deg(j) * inv_deg(j);
-    }
-    return 1 + beta * (own + sum);
-  }
-};
-
-// Jacobi-preconditioned CG on M X = B from X (decision 4's iteration, in double), until every
-// column's residual is at most kRegionTolerance x ||B column||. Dot products in decision 11's
-// fixed blocks, so the result does not depend on the number of threads.
-constexpr double kRegionTolerance = 1e-10;
-void solve_region(const RegionOperator& op, const Eigen::MatrixXd& B, Eigen::MatrixXd& X) {
-  using Sums = detail::Sums;
-  const Eigen::Index m = B.rows();
-  Eigen::VectorXd inv_diag(m);
-  op.parallel(m, [&](std::int64_t begin, std::int64_t end) {
-    for (std::int64_t r = begin; r < end; ++r) inv_diag(r) = 1.0 / op.diagonal(r);
-  });
-  Eigen::MatrixXd y(m, 3), r(m, 3), p(m, 3), Ap(m, 3);
-  // Ap = M x = x + beta L^T (L x), and x . Ap in the same sweep.
-  auto apply = [&](const Eigen::MatrixXd& x) {
-    op.laplacian(x, y);
-    return op.blocked_sums(m, [&](std::int64_t i, Sums& sum) {
-                Ap.row(i) = x.row(i) + op.beta * op.transpose_row(i, y);
-                sum.col(0) += x.row(i).array().transpose() * Ap.row(i).array().transpose();
-              }).col(0).eval();
-  };
-  apply(X);
-  const Sums start = op.blocked_sums(m, [&](std::int64_t i, Sums& sum) {
-    r.row(i) = B.row(i) - Ap.row(i);
-    p.row(i) = inv_diag(i) * r.row(i);
-    sum.col(0) += r.row(i).array().transpose() * p.row(i).array().transpose();
-    sum.col(1) += r.row(i).array().transpose() * r.row(i).array().transpose();
-  });
-  Eigen::Array3d rz = start.col(0), r_norm2 = start.col(1);
-  const Eigen::Array3d threshold = (kRegionTolerance * kRegionTolerance) *
-                                   op.blocked_sums(m, [&](std::int64_t i, Sums& sum) {
-                                       sum.col(0) += B.row(i).array().transpose().square();
-                                     }).col(0).max(1e-300);
-  const int max_iterations = static_cast<int>(std::max<Eigen::Index>(1000, m));
-  for (int it = 0; it < max_iterations; ++it) {
-    const Eigen::Array3d active = (r_norm2 > threshold).cast<double>();  // converged columns are frozen
-    if ((active == 0).all()) return;
-    const Eigen::Array3d step = active * rz / apply(p).max(1e-300);
-    const Sums rz_rr = op.blocked_sums(m, [&](std::int64_t i, Sums& sum) {
-      X.row(i) += (step * p.row(i).array().transpose()).transpose().matrix();
-      r.row(i) -= (step * Ap.row(i).array().transpose()).transpose().matrix();
-      sum.col(0) += inv_diag(i) * r.row(i).array().transpose().square();
-      sum.col(1) += r.row(i).array().transpose().square();
-    });
-    const Eigen::Array3d beta = active * rz_rr.col(0) / rz.max(1e-300);
-    op.parallel(m, [&](std::int64_t begin, std::int64_t end) {
-      for (std::int64_t i = begin; i < end; ++i)
-        p.row(i) = (inv_diag(i) * r.row(i).array().transpose() + beta * p.row(i).array().transpose()).transpose().matrix();
-    });
-    rz = active * rz_rr.col(0) + (1 - active) * rz;
-    r_norm2 = rz_rr.col(1);
-  }
-  throw SolverError("conjugate gradients did not converge on the region pre-filter (Eq. 2)");
-}
-}  // namespace
-
 // Eq. 2 on the vertices of `faces`; all other vertices are fixed and enter the
 // Laplacian rows of their unknown neighbours as constants.
 Vertices region_prefilter(const Vertices& P, const Triangles& F, const Topology& topo,
@@ -651,7 +527,7 @@ Vertices region_prefilter(const Vertices& P, const Triangles& F, const Topology&
 
   // L_U: one row per unknown r: x_r - mean of its one-ring; fixed neighbours go to c.
   const auto m = static_cast<Eigen::Index>(vertices.size());
-  RegionOperator op{&topo, &vertices, &unknown, Eigen::VectorXd(m), beta, executor};
+  detail::RegionSystem op{&topo, &vertices, &unknown, Eigen::VectorXd(m), beta, executor};
   Eigen::MatrixXd c(m, 3), X(m, 3);
   op.parallel(m, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t r = begin; r < end; ++r) {
@@ -672,7 +548,7 @@ Vertices region_prefilter(const Vertices& P, const Triangles& F, const Topology&
   op.parallel(m, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t r = begin; r < end; ++r) B.row(r) = X.row(r) - beta * op.transpose_row(r, c);
   });
-  solve_region(op, B, X);
+  detail::solve_region(op, B, X);
   if (!X.allFinite()) throw SolverError("region pre-filter (Eq. 2) produced non-finite positions");
   for (Eigen::Index r = 0; r < m; ++r) out.row(vertices[static_cast<std::size_t>(r)]) = X.row(r);
   return out;

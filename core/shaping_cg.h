@@ -4,19 +4,18 @@
 // dot products are summed in double with decision 11's fixed blocking, and the iterate x is
 // double. ShapingSolver checks the true residual in double afterwards and continues in double
 // where it is above the tolerance.
+// Also Eq. 2's system (the region pre-filter, Sec. 4.2), matrix-free in double (decision 38).
 #pragma once
 
 #include <Eigen/Core>
 #include <algorithm>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "core/mesh.h"
+#include "core/parallel.h"
 #include "core/topology.h"
-
-namespace mdn {
-class Executor;
-}
 
 namespace mdn::detail {
 
@@ -73,5 +72,78 @@ class SingleCG {
   Sums step(const ShapingIncidence& op, const Eigen::Array3d& step, Vertices& x);
   std::vector<float> ws_, s_, r_, p_, ap_, inv_diag_;
 };
+
+// Eq. 2's system M X = B, M = I + beta L^T L, applied without assembling it (decision 38): L is
+// the uniform Laplacian of the whole mesh restricted to the unknown rows, read from the one-ring
+// lists (topo.vv, symmetric), so L^T y is again a gather over the one-ring: (L^T y)_u = y_u -
+// sum over unknown neighbours j of y_j / deg(j). row_vertex[r]: the vertex of unknown r;
+// unknown[v]: v's row, or -1 where v is fixed; inv_deg[r]: 1 / deg, 0 for an isolated vertex
+// (no Laplacian row). Row r of L x is x_r - inv_deg[r] sum of x over r's unknown neighbours.
+struct RegionSystem {
+  const Topology* topo;
+  const std::vector<std::int32_t>* row_vertex;
+  const std::vector<std::int32_t>* unknown;
+  Eigen::VectorXd inv_deg;
+  double beta;
+  Executor* executor;  // nullptr: serial
+
+  static constexpr std::int64_t kGrain = 8192;
+  void parallel(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& fn, std::int64_t grain = kGrain) const {
+    if (executor && n >= 32768)  // smaller: dispatch costs more than it saves
+      executor->parallel_for(n, grain, fn);
+    else
+      fn(0, n);
+  }
+  template <class Body>
+  detail::Sums blocked_sums(std::int64_t n, const Body& body) const {
+    return detail::blocked_sums(
+        n, kGrain / detail::kSumBlock,
+        [&](std::int64_t count, const std::function<void(std::int64_t, std::int64_t)>& fn, std::int64_t grain) {
+          parallel(count, fn, grain);
+        },
+        body);
+  }
+  // The sum over row r's unknown neighbours j of scale(j) x.row(j).
+  template <class Scale>
+  Eigen::RowVector3d ring_sum(std::int64_t r, const Eigen::MatrixXd& x, const Scale& scale) const {
+    const std::int32_t v = (*row_vertex)[static_cast<std::size_t>(r)];
+    Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
+    for (std::int32_t s = topo->vv_offsets[static_cast<std::size_t>(v)]; s < topo->vv_offsets[static_cast<std::size_t>(v) + 1]; ++s) {
+      const std::int32_t j = (*unknown)[static_cast<std::size_t>(topo->vv_vertices[static_cast<std::size_t>(s)])];
+      if (j >= 0) sum += scale(j) * x.row(j);
+    }
+    return sum;
+  }
+  // y = L x (0 on an isolated vertex's row).
+  void laplacian(const Eigen::MatrixXd& x, Eigen::MatrixXd& y) const {
+    parallel(x.rows(), [&](std::int64_t begin, std::int64_t end) {
+      for (std::int64_t r = begin; r < end; ++r) {
+        const double d = inv_deg(r);
+        y.row(r) = d > 0 ? Eigen::RowVector3d(x.row(r) - d * ring_sum(r, x, [](std::int32_t) { return 1.0; }))
+                         : Eigen::RowVector3d::Zero();
+      }
+    });
+  }
+  // (L^T y)_r.
+  Eigen::RowVector3d transpose_row(std::int64_t r, const Eigen::MatrixXd& y) const {
+    return y.row(r) - ring_sum(r, y, [&](std::int32_t j) { return inv_deg(j); });
+  }
+  // diag(M)_r = 1 + beta (1 if r has a row, + sum over unknown neighbours j of 1 / deg(j)^2).
+  double diagonal(std::int64_t r) const {
+    const double own = inv_deg(r) > 0 ? 1.0 : 0.0;
+    const auto v = (*row_vertex)[static_cast<std::size_t>(r)];
+    double sum = 0;
+    for (std::int32_t s = topo->vv_offsets[static_cast<std::size_t>(v)]; s < topo->vv_offsets[static_cast<std::size_t>(v) + 1]; ++s) {
+      const std::int32_t j = (*unknown)[static_cast<std::size_t>(topo->vv_vertices[static_cast<std::size_t>(s)])];
+      if (j >= 0) sum += inv_deg(j) * inv_deg(j);
+    }
+    return 1 + beta * (own + sum);
+  }
+};
+
+// Jacobi-preconditioned CG on M X = B from X (decision 4's iteration, in double), until every
+// column's residual is at most 1e-10 x ||B column||; throws SolverError if it does not converge.
+// Dot products in decision 11's fixed blocks, so the result does not depend on the threads.
+void solve_region(const RegionSystem& op, const Eigen::MatrixXd& B, Eigen::MatrixXd& X);
 
 }  // namespace mdn::detail
