@@ -528,7 +528,7 @@ Vertices region_prefilter(const Vertices& P, const Triangles& F, const Topology&
   // L_U: one row per unknown r: x_r - mean of its one-ring; fixed neighbours go to c.
   const auto m = static_cast<Eigen::Index>(vertices.size());
   detail::RegionSystem op{&topo, &vertices, &unknown, Eigen::VectorXd(m), beta, executor};
-  Eigen::MatrixXd c(m, 3), X(m, 3);
+  Vertices c(m, 3), X(m, 3);
   op.parallel(m, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t r = begin; r < end; ++r) {
       const auto v = static_cast<std::size_t>(vertices[static_cast<std::size_t>(r)]);
@@ -544,7 +544,7 @@ Vertices region_prefilter(const Vertices& P, const Triangles& F, const Topology&
   });
   // argmin ||X - P_U||^2 + beta ||L X + c||^2  <=>  (I + beta L^T L) X = P_U - beta L^T c,
   // solved by CG from X = P_U (decision 38).
-  Eigen::MatrixXd B(m, 3);
+  Vertices B(m, 3);
   op.parallel(m, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t r = begin; r < end; ++r) B.row(r) = X.row(r) - beta * op.transpose_row(r, c);
   });

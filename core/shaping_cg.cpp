@@ -171,16 +171,16 @@ void SingleCG::release() {
 
 // Eq. 2 (decision 38): decision 4's relative residual.
 constexpr double kRegionTolerance = 1e-10;
-void solve_region(const RegionSystem& op, const Eigen::MatrixXd& B, Eigen::MatrixXd& X) {
+void solve_region(const RegionSystem& op, const Vertices& B, Vertices& X) {
   using Sums = detail::Sums;
   const Eigen::Index m = B.rows();
   Eigen::VectorXd inv_diag(m);
   op.parallel(m, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t r = begin; r < end; ++r) inv_diag(r) = 1.0 / op.diagonal(r);
   });
-  Eigen::MatrixXd y(m, 3), r(m, 3), p(m, 3), Ap(m, 3);
+  Vertices y(m, 3), r(m, 3), p(m, 3), Ap(m, 3);
   // Ap = M x = x + beta L^T (L x), and x . Ap in the same sweep.
-  auto apply = [&](const Eigen::MatrixXd& x) {
+  auto apply = [&](const Vertices& x) {
     op.laplacian(x, y);
     return op.blocked_sums(m, [&](std::int64_t i, Sums& sum) {
                 Ap.row(i) = x.row(i) + op.beta * op.transpose_row(i, y);

@@ -105,7 +105,7 @@ struct RegionSystem {
   }
   // The sum over row r's unknown neighbours j of scale(j) x.row(j).
   template <class Scale>
-  Eigen::RowVector3d ring_sum(std::int64_t r, const Eigen::MatrixXd& x, const Scale& scale) const {
+  Eigen::RowVector3d ring_sum(std::int64_t r, const Vertices& x, const Scale& scale) const {
     const std::int32_t v = (*row_vertex)[static_cast<std::size_t>(r)];
     Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
     for (std::int32_t s = topo->vv_offsets[static_cast<std::size_t>(v)]; s < topo->vv_offsets[static_cast<std::size_t>(v) + 1]; ++s) {
@@ -115,7 +115,7 @@ struct RegionSystem {
     return sum;
   }
   // y = L x (0 on an isolated vertex's row).
-  void laplacian(const Eigen::MatrixXd& x, Eigen::MatrixXd& y) const {
+  void laplacian(const Vertices& x, Vertices& y) const {
     parallel(x.rows(), [&](std::int64_t begin, std::int64_t end) {
       for (std::int64_t r = begin; r < end; ++r) {
         const double d = inv_deg(r);
@@ -125,7 +125,7 @@ struct RegionSystem {
     });
   }
   // (L^T y)_r.
-  Eigen::RowVector3d transpose_row(std::int64_t r, const Eigen::MatrixXd& y) const {
+  Eigen::RowVector3d transpose_row(std::int64_t r, const Vertices& y) const {
     return y.row(r) - ring_sum(r, y, [&](std::int32_t j) { return inv_deg(j); });
   }
   // diag(M)_r = 1 + beta (1 if r has a row, + sum over unknown neighbours j of 1 / deg(j)^2).
@@ -144,6 +144,6 @@ struct RegionSystem {
 // Jacobi-preconditioned CG on M X = B from X (decision 4's iteration, in double), until every
 // column's residual is at most 1e-10 x ||B column||; throws SolverError if it does not converge.
 // Dot products in decision 11's fixed blocks, so the result does not depend on the threads.
-void solve_region(const RegionSystem& op, const Eigen::MatrixXd& B, Eigen::MatrixXd& X);
+void solve_region(const RegionSystem& op, const Vertices& B, Vertices& X);
 
 }  // namespace mdn::detail
