@@ -204,12 +204,12 @@ struct ShapingSolver::Impl {
 
   // From x (the anchor P, or single's result): the first residual is formed in double, so a
   // start that already meets the tolerance returns after one product.
-  Vertices solve_cg(const Vertices& P, double alpha, const Eigen::VectorXd& weights, Vertices x) {
-    const Eigen::Index n = P.rows();
-    // Jacobi preconditioner: diag(A)_v = 1 + alpha sum_{e containing v} w_e (coefficients +-1).
+  // Jacobi preconditioner into inv_diag_buf: diag(A)_v = 1 + alpha sum_{e containing v} w_e
+  // (coefficients +-1). Formed once per solve, for the float CG and the double check.
+  void jacobi_preconditioner(double alpha, const Eigen::VectorXd& weights) {
     Eigen::VectorXd& inv_diag = inv_diag_buf;
-    inv_diag.resize(n);
-    parallel(n, [&](std::int64_t begin, std::int64_t end) {
+    inv_diag.resize(topo->num_vertices);
+    parallel(inv_diag.size(), [&](std::int64_t begin, std::int64_t end) {
       for (std::int64_t v = begin; v < end; ++v) {
         double d = 1;
         for (std::int32_t k = ve_offsets[static_cast<std::size_t>(v)]; k < ve_offsets[static_cast<std::size_t>(v) + 1]; ++k)
@@ -217,6 +217,12 @@ struct ShapingSolver::Impl {
         inv_diag(v) = 1.0 / d;
       }
     });
+  }
+
+  // Needs jacobi_preconditioner(alpha, weights) first.
+  Vertices solve_cg(const Vertices& P, double alpha, const Eigen::VectorXd& weights, Vertices x) {
+    const Eigen::Index n = P.rows();
+    const Eigen::VectorXd& inv_diag = inv_diag_buf;
 
     Vertices &s = s_buf, &r = r_buf, &p = p_buf, &Ap = Ap_buf;
     s.resize(topo->num_interior_edges(), 3);
@@ -271,7 +277,8 @@ struct ShapingSolver::Impl {
     } else {  // start from the anchor: A = I + (small) so P is already close
       Executor* threads = executor && topo->num_vertices >= kParallelRows ? executor : nullptr;
       const detail::ShapingIncidence op{topo, &ve_offsets, &ve_edges, &ve_split, threads};
-      const int single_iterations = single.solve(op, P, alpha, weights, cg_tolerance, 1000, x);
+      jacobi_preconditioner(alpha, weights);
+      const int single_iterations = single.solve(op, P, alpha, weights, inv_diag_buf, cg_tolerance, 1000, x);
       x = solve_cg(P, alpha, weights, std::move(x));
       last_iterations += single_iterations;
     }

@@ -55,24 +55,21 @@ Row4f to4f(const Eigen::Array3d& a) {
 }
 }  // namespace
 
-void SingleCG::prepare(const ShapingIncidence& op, double alpha, const Eigen::VectorXd& weights) {
+void SingleCG::prepare(const ShapingIncidence& op, double alpha, const Eigen::VectorXd& weights,
+                       const Eigen::VectorXd& inv_diag) {
   const auto E = op.topo->num_interior_edges();
   const auto n = static_cast<std::int64_t>(op.topo->num_vertices);
   ws_.resize(static_cast<std::size_t>(E));
-  for (Eigen::Index e = 0; e < E; ++e) ws_[static_cast<std::size_t>(e)] = static_cast<float>(alpha * (weights.size() ? weights(e) : 1.0));
+  parallel(op, E, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t e = begin; e < end; ++e) ws_[static_cast<std::size_t>(e)] = static_cast<float>(alpha * (weights.size() ? weights(e) : 1.0));
+  });
   inv_diag_.resize(static_cast<std::size_t>(n));
   parallel(op, n, [&](std::int64_t begin, std::int64_t end) {
-    for (std::int64_t v = begin; v < end; ++v) {
-      double d = 1;  // diag(A)_v = 1 + alpha sum_{e containing v} w_e, in double
-      for (std::int32_t k = (*op.offsets)[static_cast<std::size_t>(v)]; k < (*op.offsets)[static_cast<std::size_t>(v) + 1]; ++k)
-        d += alpha * (weights.size() ? weights((*op.edges)[static_cast<std::size_t>(k)] >> 1) : 1.0);
-      inv_diag_[static_cast<std::size_t>(v)] = static_cast<float>(1.0 / d);
-    }
+    for (std::int64_t v = begin; v < end; ++v) inv_diag_[static_cast<std::size_t>(v)] = static_cast<float>(inv_diag(v));
   });
-  s_.assign(static_cast<std::size_t>(4 * E), 0.0f);
-  r_.assign(static_cast<std::size_t>(4 * n), 0.0f);
-  p_.assign(static_cast<std::size_t>(4 * n), 0.0f);
-  ap_.assign(static_cast<std::size_t>(4 * n), 0.0f);
+  // Every row of these is written, all four lanes, before it is read (initial_residual, apply):
+  // kept from the last solve, not cleared.
+  for (auto* v : {&s_, &r_, &p_, &ap_}) v->resize(static_cast<std::size_t>(4 * (v == &s_ ? E : n)));
 }
 
 // r = P - A P = -alpha D^T W D P with S(e) formed in double from P (the coordinates are ~1 and
@@ -137,9 +134,9 @@ Sums SingleCG::step(const ShapingIncidence& op, const Eigen::Array3d& step, Vert
 }
 
 int SingleCG::solve(const ShapingIncidence& op, const Vertices& P, double alpha, const Eigen::VectorXd& weights,
-                    double tolerance, int max_iterations, Vertices& x) {
+                    const Eigen::VectorXd& inv_diag, double tolerance, int max_iterations, Vertices& x) {
   const Eigen::Index n = P.rows();
-  prepare(op, alpha, weights);
+  prepare(op, alpha, weights, inv_diag);
   x = P;
   const Sums rz_rr0 = initial_residual(op, P, alpha, weights);
   Eigen::Array3d rz = rz_rr0.col(0), r_norm2 = rz_rr0.col(1);
