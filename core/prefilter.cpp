@@ -434,39 +434,54 @@ Features seed_centers(const Features& X, int k, std::uint64_t seed) {
 }
 
 // Lloyd iterations from `centers` until no label changes (at most max_iterations); the labels
-// into `label` (#F, all 0 on entry).
+// into `label` (#F, all 0 on entry). One pass per iteration (decision 40): each block of kBlock
+// faces takes its faces' nearest centres, counts the changed labels and sums the features per
+// new label; the blocks' sums are added in block order, so the centres do not depend on the
+// number of threads. (At 1.2M faces Lloyd runs ~60 iterations; the serial sum over all faces
+// after each parallel assignment was the larger half of the stage.)
 void lloyd_iterations(const Features& X, Features& centers, int max_iterations, Executor* executor,
                       std::vector<std::int32_t>& label) {
-  const auto nf = static_cast<std::size_t>(X.rows());
+  constexpr std::int64_t kBlock = 8192;
+  const auto nf = static_cast<std::int64_t>(X.rows());
   const auto k = static_cast<int>(centers.rows());
-  std::vector<std::int64_t> count(static_cast<std::size_t>(k));
-  std::vector<std::int32_t> nearest(nf);
+  const std::int64_t blocks = (nf + kBlock - 1) / kBlock;
+  std::vector<Features> block_sum(static_cast<std::size_t>(blocks), Features::Zero(k, 4));
+  std::vector<std::int64_t> block_count(static_cast<std::size_t>(blocks * (k + 1)));  // per cluster, then changes
   for (int it = 0; it < max_iterations; ++it) {
-    // Assignment step, per face (parallel); the change count is taken serially.
-    auto assign = [&](std::int64_t begin, std::int64_t end) {
-      for (std::int64_t i = begin; i < end; ++i) {
-        int best = 0;
-        double best_d = std::numeric_limits<double>::infinity();
-        for (int c = 0; c < k; ++c) {
-          const double d = (X.row(static_cast<Eigen::Index>(i)) - centers.row(c)).squaredNorm();
-          if (d < best_d) best_d = d, best = c;
+    auto assign = [&](std::int64_t first, std::int64_t last) {
+      for (std::int64_t blk = first; blk < last; ++blk) {
+        Features& sum = block_sum[static_cast<std::size_t>(blk)];
+        std::int64_t* count = &block_count[static_cast<std::size_t>(blk * (k + 1))];
+        sum.setZero();
+        std::fill(count, count + k + 1, 0);
+        for (std::int64_t i = blk * kBlock; i < std::min(nf, (blk + 1) * kBlock); ++i) {
+          int best = 0;
+          double best_d = std::numeric_limits<double>::infinity();
+          for (int c = 0; c < k; ++c) {
+            const double d = (X.row(i) - centers.row(c)).squaredNorm();
+            if (d < best_d) best_d = d, best = c;
+          }
+          std::int32_t& l = label[static_cast<std::size_t>(i)];
+          count[k] += l != best;
+          l = best;
+          sum.row(best) += X.row(i);
+          ++count[best];
         }
-        nearest[static_cast<std::size_t>(i)] = best;
       }
     };
     if (executor && nf >= 32768)  // smaller: dispatch costs more than it saves
-      executor->parallel_for(static_cast<std::int64_t>(nf), assign);
+      executor->parallel_for(blocks, 1, assign);
     else
-      assign(0, static_cast<std::int64_t>(nf));
-    const bool changed = nearest != label;
-    label.swap(nearest);
-    if (!changed && it > 0) break;
+      assign(0, blocks);
+    std::int64_t changed = 0;
     centers.setZero();
-    std::fill(count.begin(), count.end(), 0);
-    for (std::size_t i = 0; i < nf; ++i) {
-      centers.row(label[i]) += X.row(static_cast<Eigen::Index>(i));
-      ++count[static_cast<std::size_t>(label[i])];
+    std::vector<std::int64_t> count(static_cast<std::size_t>(k), 0);
+    for (std::int64_t blk = 0; blk < blocks; ++blk) {
+      centers += block_sum[static_cast<std::size_t>(blk)];
+      for (int c = 0; c < k; ++c) count[static_cast<std::size_t>(c)] += block_count[static_cast<std::size_t>(blk * (k + 1) + c)];
+      changed += block_count[static_cast<std::size_t>(blk * (k + 1) + k)];
     }
+    if (changed == 0 && it > 0) break;
     for (int c = 0; c < k; ++c)
       if (count[static_cast<std::size_t>(c)] > 0) centers.row(c) /= static_cast<double>(count[static_cast<std::size_t>(c)]);
   }

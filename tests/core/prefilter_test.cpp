@@ -139,6 +139,21 @@ TEST(ClusterFaces, SeparatesTheDenselySampledHalf) {
   EXPECT_LT(cluster_faces(regular.V, regular.F, 2, 1).area_ratio, 2.0);
 }
 
+// Lloyd's sums are taken per block of faces and added in block order (decision 40): the same
+// clusters for any thread count (in parallel from 32768 faces).
+TEST(ClusterFaces, SameForAnyThreadCount) {
+  const TriMesh m = test::irregular_sphere(5);
+  ASSERT_GT(m.F.rows(), 32768);
+  const FaceClusters serial = cluster_faces(m.V, m.F, 2, 1);
+  EXPECT_GT(serial.area_ratio, 4.0);
+  for (int threads : {2, 3}) {
+    Executor ex(threads);
+    const FaceClusters c = cluster_faces(m.V, m.F, 2, 1, 100, &ex);
+    EXPECT_EQ(c.label, serial.label) << threads;
+    EXPECT_EQ(c.area_ratio, serial.area_ratio) << threads;
+  }
+}
+
 TEST(RegionPrefilter, SmoothsOnlyTheClusterAndKeepsOthersFixed) {
   const TriMesh clean = test::irregular_plane(6, 8);
   NoiseSpec spec;
