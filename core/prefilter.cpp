@@ -434,7 +434,7 @@ Features seed_centers(const Features& X, int k, std::uint64_t seed) {
 }
 
 // Lloyd iterations from `centers` until no label changes (at most max_iterations); the labels
-// into `label` (#F, all 0 on entry). One pass per iteration (decision 40): each block of kBlock
+// into `label` (#F, all 0 on entry). One pass per iteration (decision 39): each block of kBlock
 // faces takes its faces' nearest centres, counts the changed labels and sums the features per
 // new label; the blocks' sums are added in block order, so the centres do not depend on the
 // number of threads. (At 1.2M faces Lloyd runs ~60 iterations; the serial sum over all faces

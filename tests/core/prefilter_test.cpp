@@ -139,7 +139,7 @@ TEST(ClusterFaces, SeparatesTheDenselySampledHalf) {
   EXPECT_LT(cluster_faces(regular.V, regular.F, 2, 1).area_ratio, 2.0);
 }
 
-// Lloyd's sums are taken per block of faces and added in block order (decision 40): the same
+// Lloyd's sums are taken per block of faces and added in block order (decision 39): the same
 // clusters for any thread count (in parallel from 32768 faces).
 TEST(ClusterFaces, SameForAnyThreadCount) {
   const TriMesh m = test::irregular_sphere(5);
