@@ -154,16 +154,27 @@ TEST(ClusterFaces, SameForAnyThreadCount) {
   }
 }
 
+// The faces of m whose centroid c satisfies keep(c).
+template <class Keep>
+std::vector<std::int32_t> faces_where(const TriMesh& m, const Keep& keep) {
+  std::vector<std::int32_t> faces;
+  const Vertices C = face_centroids(m.V, m.F);
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+    if (keep(Eigen::RowVector3d(C.row(f)))) faces.push_back(static_cast<std::int32_t>(f));
+  return faces;
+}
+
+Vertices with_noise(const TriMesh& m, double sigma) {
+  NoiseSpec spec;
+  spec.sigma = sigma;
+  return add_noise(m, spec);
+}
+
 TEST(RegionPrefilter, SmoothsOnlyTheClusterAndKeepsOthersFixed) {
   const TriMesh clean = test::irregular_plane(6, 8);
-  NoiseSpec spec;
-  spec.sigma = 0.5;
-  const Vertices noisy = add_noise(clean, spec);
+  const Vertices noisy = with_noise(clean, 0.5);
   const Topology t = topology_of(clean);
-  std::vector<std::int32_t> left;
-  const Vertices C = face_centroids(clean.V, clean.F);
-  for (Eigen::Index f = 0; f < clean.F.rows(); ++f)
-    if (C(f, 0) < 0.25) left.push_back(static_cast<std::int32_t>(f));
+  const std::vector<std::int32_t> left = faces_where(clean, [](const Eigen::RowVector3d& c) { return c(0) < 0.25; });
   std::int64_t unknowns = 0;
   const Vertices out = region_prefilter(noisy, clean.F, t, left, 6.0, &unknowns);
   EXPECT_GT(unknowns, 0);
@@ -183,14 +194,9 @@ TEST(RegionPrefilter, SmoothsOnlyTheClusterAndKeepsOthersFixed) {
 // = P_U - beta L^T c, L the uniform Laplacian rows of the unknowns, fixed neighbours in c.
 TEST(RegionPrefilter, MatchesTheAssembledSystem) {
   const TriMesh clean = test::irregular_sphere(3);
-  NoiseSpec spec;
-  spec.sigma = 0.3;
-  const Vertices noisy = add_noise(clean, spec);
+  const Vertices noisy = with_noise(clean, 0.3);
   const Topology t = topology_of(clean);
-  std::vector<std::int32_t> faces;
-  const Vertices C = face_centroids(clean.V, clean.F);
-  for (Eigen::Index f = 0; f < clean.F.rows(); ++f)
-    if (C(f, 2) > 0.1) faces.push_back(static_cast<std::int32_t>(f));
+  const std::vector<std::int32_t> faces = faces_where(clean, [](const Eigen::RowVector3d& c) { return c(2) > 0.1; });
   const double beta = 6;
   const Vertices out = region_prefilter(noisy, clean.F, t, faces, beta);
 
@@ -236,9 +242,7 @@ TEST(RegionPrefilter, MatchesTheAssembledSystem) {
 // passes run in parallel from 32768 unknowns).
 TEST(RegionPrefilter, SameForAnyThreadCount) {
   const TriMesh m = test::plane(200);
-  NoiseSpec spec;
-  spec.sigma = 0.3;
-  const Vertices noisy = add_noise(m, spec);
+  const Vertices noisy = with_noise(m, 0.3);
   const Topology t = topology_of(m);
   std::vector<std::int32_t> faces(static_cast<std::size_t>(m.F.rows()));
   for (std::size_t f = 0; f < faces.size(); ++f) faces[f] = static_cast<std::int32_t>(f);
