@@ -562,7 +562,8 @@ Vertices region_prefilter(const Vertices& P, const Triangles& F, const Topology&
 
   // L_U: one row per unknown r: x_r - mean of its one-ring; fixed neighbours go to c.
   const auto m = static_cast<Eigen::Index>(vertices.size());
-  detail::RegionSystem op{&topo, &vertices, &unknown, Eigen::VectorXd(m), beta, executor};
+  detail::RegionSystem op{&topo, &vertices, &unknown, Eigen::VectorXd(m), beta, executor, {}, {}};
+  op.index_neighbours();
   Vertices c(m, 3), X(m, 3);
   op.parallel(m, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t r = begin; r < end; ++r) {

@@ -87,6 +87,32 @@ struct RegionSystem {
   Eigen::VectorXd inv_deg;
   double beta;
   Executor* executor;  // nullptr: serial
+  // Each row's unknown neighbours as rows, in one-ring order (index_neighbours): the products
+  // gather from these without looking each neighbour up in `unknown`.
+  std::vector<std::int32_t> nb_offsets, nb_rows;
+
+  void index_neighbours() {
+    const auto m = static_cast<std::int64_t>(row_vertex->size());
+    nb_offsets.assign(static_cast<std::size_t>(m) + 1, 0);
+    for (std::int64_t r = 0; r < m; ++r) {
+      const auto v = static_cast<std::size_t>((*row_vertex)[static_cast<std::size_t>(r)]);
+      std::int32_t count = 0;
+      for (std::int32_t s = topo->vv_offsets[v]; s < topo->vv_offsets[v + 1]; ++s)
+        count += (*unknown)[static_cast<std::size_t>(topo->vv_vertices[static_cast<std::size_t>(s)])] >= 0;
+      nb_offsets[static_cast<std::size_t>(r) + 1] = nb_offsets[static_cast<std::size_t>(r)] + count;
+    }
+    nb_rows.resize(static_cast<std::size_t>(nb_offsets.back()));
+    parallel(m, [&](std::int64_t begin, std::int64_t end) {
+      for (std::int64_t r = begin; r < end; ++r) {
+        const auto v = static_cast<std::size_t>((*row_vertex)[static_cast<std::size_t>(r)]);
+        std::int32_t slot = nb_offsets[static_cast<std::size_t>(r)];
+        for (std::int32_t s = topo->vv_offsets[v]; s < topo->vv_offsets[v + 1]; ++s) {
+          const std::int32_t j = (*unknown)[static_cast<std::size_t>(topo->vv_vertices[static_cast<std::size_t>(s)])];
+          if (j >= 0) nb_rows[static_cast<std::size_t>(slot++)] = j;
+        }
+      }
+    });
+  }
 
   static constexpr std::int64_t kGrain = 8192;
   void parallel(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& fn, std::int64_t grain = kGrain) const {
@@ -107,11 +133,10 @@ struct RegionSystem {
   // The sum over row r's unknown neighbours j of scale(j) x.row(j).
   template <class Scale>
   Eigen::RowVector3d ring_sum(std::int64_t r, const Vertices& x, const Scale& scale) const {
-    const std::int32_t v = (*row_vertex)[static_cast<std::size_t>(r)];
     Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
-    for (std::int32_t s = topo->vv_offsets[static_cast<std::size_t>(v)]; s < topo->vv_offsets[static_cast<std::size_t>(v) + 1]; ++s) {
-      const std::int32_t j = (*unknown)[static_cast<std::size_t>(topo->vv_vertices[static_cast<std::size_t>(s)])];
-      if (j >= 0) sum += scale(j) * x.row(j);
+    for (std::int32_t s = nb_offsets[static_cast<std::size_t>(r)]; s < nb_offsets[static_cast<std::size_t>(r) + 1]; ++s) {
+      const std::int32_t j = nb_rows[static_cast<std::size_t>(s)];
+      sum += scale(j) * x.row(j);
     }
     return sum;
   }
@@ -132,12 +157,9 @@ struct RegionSystem {
   // diag(M)_r = 1 + beta (1 if r has a row, + sum over unknown neighbours j of 1 / deg(j)^2).
   double diagonal(std::int64_t r) const {
     const double own = inv_deg(r) > 0 ? 1.0 : 0.0;
-    const auto v = (*row_vertex)[static_cast<std::size_t>(r)];
     double sum = 0;
-    for (std::int32_t s = topo->vv_offsets[static_cast<std::size_t>(v)]; s < topo->vv_offsets[static_cast<std::size_t>(v) + 1]; ++s) {
-      const std::int32_t j = (*unknown)[static_cast<std::size_t>(topo->vv_vertices[static_cast<std::size_t>(s)])];
-      if (j >= 0) sum += inv_deg(j) * inv_deg(j);
-    }
+    for (std::int32_t s = nb_offsets[static_cast<std::size_t>(r)]; s < nb_offsets[static_cast<std::size_t>(r) + 1]; ++s)
+      sum += inv_deg(nb_rows[static_cast<std::size_t>(s)]) * inv_deg(nb_rows[static_cast<std::size_t>(s)]);
     return 1 + beta * (own + sum);
   }
 };
