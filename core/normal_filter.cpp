@@ -33,6 +33,15 @@ void range_weights(float* range, std::int64_t n, float inv_range, float sw, bool
   }
 }
 
+// out[q] = a[q] exp(y[q]) (y <= 0) rounded to float: the spatial weights (Eq. 6) of a block of
+// neighbour entries. Branch-free, compiled for AVX2 too (the same IEEE operations).
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__) && !defined(__SANITIZE_ADDRESS__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+void area_times_exp(const double* a, const double* y, float* out, std::int64_t n) {
+  for (std::int64_t q = 0; q < n; ++q) out[q] = static_cast<float>(a[q] * detail::exp_nonpositive(y[q]));
+}
+
 // sigma_c = factor x mean distance between centroids of edge-adjacent faces (Eq. 6).
 double sigma_c_of(const Vertices& centroid, const Topology& topo, std::int64_t nf, double sigma_c_factor) {
   double mean_dist = 0;
@@ -61,13 +70,23 @@ std::vector<float> spatial_weights(const Vertices& V, const Triangles& F, const 
   const double sigma_c = sigma_c_of(centroid, topo, nf, sigma_c_factor);
   std::vector<float> spatial(topo.ff_faces.size());  // computed in double, stored in float (decision 36)
   const double inv_sigma_c2 = 1.0 / (sigma_c * sigma_c);
+  // Per block of entries: the exponents and the areas gathered, then the products in one
+  // vectorised loop.
+  constexpr std::int32_t kBlock = 1024;
   ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
-    for (std::int64_t i = begin; i < end; ++i)
-      for (std::int32_t k = topo.ff_offsets[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k) {
-        const std::int32_t j = topo.ff_faces[static_cast<std::size_t>(k)];
-        const double d2 = (centroid.row(i) - centroid.row(j)).squaredNorm();
-        spatial[static_cast<std::size_t>(k)] = static_cast<float>(area(j) * detail::exp_nonpositive(-d2 * inv_sigma_c2));
-      }
+    std::vector<double> y, a;
+    for (std::int64_t i = begin; i < end;) {
+      const std::int32_t k0 = topo.ff_offsets[static_cast<std::size_t>(i)];
+      y.clear();
+      a.clear();
+      for (; i < end && (y.empty() || topo.ff_offsets[static_cast<std::size_t>(i) + 1] - k0 <= kBlock); ++i)
+        for (std::int32_t k = topo.ff_offsets[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k) {
+          const std::int32_t j = topo.ff_faces[static_cast<std::size_t>(k)];
+          y.push_back(-(centroid.row(i) - centroid.row(j)).squaredNorm() * inv_sigma_c2);
+          a.push_back(area(j));
+        }
+      area_times_exp(a.data(), y.data(), spatial.data() + k0, static_cast<std::int64_t>(y.size()));
+    }
   });
   return spatial;
 }

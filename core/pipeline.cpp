@@ -44,7 +44,7 @@ Vertices prefilter_stage(const Vertices& input, const Triangles& F, const Topolo
       std::vector<std::int32_t> small;
       for (std::size_t f = 0; f < clusters.label.size(); ++f)
         if (clusters.label[f] == clusters.smallest) small.push_back(static_cast<std::int32_t>(f));
-      P = region_prefilter(P, F, topo, small, params.beta, &report.region_vertices);
+      P = region_prefilter(P, F, topo, small, params.beta, &report.region_vertices, &executor);
       report.region_prefilter_applied = true;
     }
   }

@@ -204,12 +204,12 @@ struct ShapingSolver::Impl {
 
   // From x (the anchor P, or single's result): the first residual is formed in double, so a
   // start that already meets the tolerance returns after one product.
-  Vertices solve_cg(const Vertices& P, double alpha, const Eigen::VectorXd& weights, Vertices x) {
-    const Eigen::Index n = P.rows();
-    // Jacobi preconditioner: diag(A)_v = 1 + alpha sum_{e containing v} w_e (coefficients +-1).
+  // Jacobi preconditioner into inv_diag_buf: diag(A)_v = 1 + alpha sum_{e containing v} w_e
+  // (coefficients +-1). Formed once per solve, for the float CG and the double check.
+  void jacobi_preconditioner(double alpha, const Eigen::VectorXd& weights) {
     Eigen::VectorXd& inv_diag = inv_diag_buf;
-    inv_diag.resize(n);
-    parallel(n, [&](std::int64_t begin, std::int64_t end) {
+    inv_diag.resize(topo->num_vertices);
+    parallel(inv_diag.size(), [&](std::int64_t begin, std::int64_t end) {
       for (std::int64_t v = begin; v < end; ++v) {
         double d = 1;
         for (std::int32_t k = ve_offsets[static_cast<std::size_t>(v)]; k < ve_offsets[static_cast<std::size_t>(v) + 1]; ++k)
@@ -217,6 +217,12 @@ struct ShapingSolver::Impl {
         inv_diag(v) = 1.0 / d;
       }
     });
+  }
+
+  // Needs jacobi_preconditioner(alpha, weights) first.
+  Vertices solve_cg(const Vertices& P, double alpha, const Eigen::VectorXd& weights, Vertices x) {
+    const Eigen::Index n = P.rows();
+    const Eigen::VectorXd& inv_diag = inv_diag_buf;
 
     Vertices &s = s_buf, &r = r_buf, &p = p_buf, &Ap = Ap_buf;
     s.resize(topo->num_interior_edges(), 3);
@@ -271,7 +277,8 @@ struct ShapingSolver::Impl {
     } else {  // start from the anchor: A = I + (small) so P is already close
       Executor* threads = executor && topo->num_vertices >= kParallelRows ? executor : nullptr;
       const detail::ShapingIncidence op{topo, &ve_offsets, &ve_edges, &ve_split, threads};
-      const int single_iterations = single.solve(op, P, alpha, weights, cg_tolerance, 1000, x);
+      jacobi_preconditioner(alpha, weights);
+      const int single_iterations = single.solve(op, P, alpha, weights, inv_diag_buf, cg_tolerance, 1000, x);
       x = solve_cg(P, alpha, weights, std::move(x));
       last_iterations += single_iterations;
     }
@@ -304,25 +311,38 @@ Vertices initial_prefilter(const Vertices& P, const Topology& topo, double alpha
 }
 
 namespace {
+// w_e = b^-((1 - cos theta) / (1 - cos sigma_theta)) from y_e = -ln b (1 - cos theta) / (1 - cos
+// sigma_theta) <= 0, in place; y_e > 0 marks an edge with a degenerate face, whose w_e is 1.
+// Branch-free so that it vectorises (the same IEEE operations as the scalar exp_nonpositive:
+// no FMA contraction), compiled for AVX2 too and picked at run time.
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__) && !defined(__SANITIZE_ADDRESS__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+void edge_weights_from_exponents(double* w, std::int64_t n) {
+  for (std::int64_t e = 0; e < n; ++e) w[e] = w[e] > 0 ? 1.0 : detail::exp_nonpositive(w[e]);
+}
+
 // Eq. 4 into w (#E), with the face normals of P in N (both kept by the caller across passes),
 // over the executor's threads if given. A degenerate face has no normal; its edges get w_e = 1
-// (smoothed like flat ones).
+// (smoothed like flat ones). Per chunk: the exponents from the normals (gathers), then the exp
+// over the chunk in one vectorised loop.
 void edge_weights_into(const Vertices& P, const Triangles& F, const Topology& topo, double sigma_theta_deg, double b,
                        Executor* executor, Vertices& N, Eigen::VectorXd& w) {
   face_normals(P, F, N, executor);
   const double inv = 1.0 / (1.0 - std::cos(sigma_theta_deg * kDegToRad));
-  const double log_b = std::log(b);
+  const double log_b = std::log(b);  // b >= 1 (params.h), so the exponents are <= 0
   w.resize(topo.num_interior_edges());
   auto body = [&](std::int64_t begin, std::int64_t end) {
     for (Eigen::Index e = begin; e < end; ++e) {
       const auto n1 = N.row(topo.edge_faces(e, 0)), n2 = N.row(topo.edge_faces(e, 1));
       if (n1.squaredNorm() == 0 || n2.squaredNorm() == 0) {
-        w(e) = 1;
+        w(e) = 1;  // marks w_e = 1
         continue;
       }
       const double cos_theta = std::clamp(n1.dot(n2), -1.0, 1.0);
-      w(e) = detail::exp_nonpositive(-log_b * (1.0 - cos_theta) * inv);  // b^-((1 - cos theta) / (1 - cos sigma_theta))
+      w(e) = -log_b * (1.0 - cos_theta) * inv;
     }
+    edge_weights_from_exponents(w.data() + begin, end - begin);
   };
   if (executor)
     executor->parallel_for(w.size(), 8192, body);
@@ -427,39 +447,54 @@ Features seed_centers(const Features& X, int k, std::uint64_t seed) {
 }
 
 // Lloyd iterations from `centers` until no label changes (at most max_iterations); the labels
-// into `label` (#F, all 0 on entry).
+// into `label` (#F, all 0 on entry). One pass per iteration (decision 39): each block of kBlock
+// faces takes its faces' nearest centres, counts the changed labels and sums the features per
+// new label; the blocks' sums are added in block order, so the centres do not depend on the
+// number of threads. (At 1.2M faces Lloyd runs ~60 iterations; the serial sum over all faces
+// after each parallel assignment was the larger half of the stage.)
 void lloyd_iterations(const Features& X, Features& centers, int max_iterations, Executor* executor,
                       std::vector<std::int32_t>& label) {
-  const auto nf = static_cast<std::size_t>(X.rows());
+  constexpr std::int64_t kBlock = 8192;
+  const auto nf = static_cast<std::int64_t>(X.rows());
   const auto k = static_cast<int>(centers.rows());
-  std::vector<std::int64_t> count(static_cast<std::size_t>(k));
-  std::vector<std::int32_t> nearest(nf);
+  const std::int64_t blocks = (nf + kBlock - 1) / kBlock;
+  std::vector<Features> block_sum(static_cast<std::size_t>(blocks), Features::Zero(k, 4));
+  std::vector<std::int64_t> block_count(static_cast<std::size_t>(blocks * (k + 1)));  // per cluster, then changes
   for (int it = 0; it < max_iterations; ++it) {
-    // Assignment step, per face (parallel); the change count is taken serially.
-    auto assign = [&](std::int64_t begin, std::int64_t end) {
-      for (std::int64_t i = begin; i < end; ++i) {
-        int best = 0;
-        double best_d = std::numeric_limits<double>::infinity();
-        for (int c = 0; c < k; ++c) {
-          const double d = (X.row(static_cast<Eigen::Index>(i)) - centers.row(c)).squaredNorm();
-          if (d < best_d) best_d = d, best = c;
+    auto assign = [&](std::int64_t first, std::int64_t last) {
+      for (std::int64_t blk = first; blk < last; ++blk) {
+        Features& sum = block_sum[static_cast<std::size_t>(blk)];
+        std::int64_t* count = &block_count[static_cast<std::size_t>(blk * (k + 1))];
+        sum.setZero();
+        std::fill(count, count + k + 1, 0);
+        for (std::int64_t i = blk * kBlock; i < std::min(nf, (blk + 1) * kBlock); ++i) {
+          int best = 0;
+          double best_d = std::numeric_limits<double>::infinity();
+          for (int c = 0; c < k; ++c) {
+            const double d = (X.row(i) - centers.row(c)).squaredNorm();
+            if (d < best_d) best_d = d, best = c;
+          }
+          std::int32_t& l = label[static_cast<std::size_t>(i)];
+          count[k] += l != best;
+          l = best;
+          sum.row(best) += X.row(i);
+          ++count[best];
         }
-        nearest[static_cast<std::size_t>(i)] = best;
       }
     };
     if (executor && nf >= 32768)  // smaller: dispatch costs more than it saves
-      executor->parallel_for(static_cast<std::int64_t>(nf), assign);
+      executor->parallel_for(blocks, 1, assign);
     else
-      assign(0, static_cast<std::int64_t>(nf));
-    const bool changed = nearest != label;
-    label.swap(nearest);
-    if (!changed && it > 0) break;
+      assign(0, blocks);
+    std::int64_t changed = 0;
     centers.setZero();
-    std::fill(count.begin(), count.end(), 0);
-    for (std::size_t i = 0; i < nf; ++i) {
-      centers.row(label[i]) += X.row(static_cast<Eigen::Index>(i));
-      ++count[static_cast<std::size_t>(label[i])];
+    std::vector<std::int64_t> count(static_cast<std::size_t>(k), 0);
+    for (std::int64_t blk = 0; blk < blocks; ++blk) {
+      centers += block_sum[static_cast<std::size_t>(blk)];
+      for (int c = 0; c < k; ++c) count[static_cast<std::size_t>(c)] += block_count[static_cast<std::size_t>(blk * (k + 1) + c)];
+      changed += block_count[static_cast<std::size_t>(blk * (k + 1) + k)];
     }
+    if (changed == 0 && it > 0) break;
     for (int c = 0; c < k; ++c)
       if (count[static_cast<std::size_t>(c)] > 0) centers.row(c) /= static_cast<double>(count[static_cast<std::size_t>(c)]);
   }
@@ -506,7 +541,8 @@ FaceClusters cluster_faces(const Vertices& P, const Triangles& F, int k, std::ui
 // Eq. 2 on the vertices of `faces`; all other vertices are fixed and enter the
 // Laplacian rows of their unknown neighbours as constants.
 Vertices region_prefilter(const Vertices& P, const Triangles& F, const Topology& topo,
-                          const std::vector<std::int32_t>& faces, double beta, std::int64_t* num_unknowns) {
+                          const std::vector<std::int32_t>& faces, double beta, std::int64_t* num_unknowns,
+                          Executor* executor) {
   const auto nv = static_cast<std::size_t>(P.rows());
   std::vector<std::int32_t> unknown(nv, -1);
   std::vector<std::int32_t> vertices;
@@ -524,35 +560,31 @@ Vertices region_prefilter(const Vertices& P, const Triangles& F, const Topology&
   Vertices out = P;
   if (vertices.empty()) return out;
 
-  // L_U: one row per unknown u: x_u - mean of its one-ring; fixed neighbours go to c.
+  // L_U: one row per unknown r: x_r - mean of its one-ring; fixed neighbours go to c.
   const auto m = static_cast<Eigen::Index>(vertices.size());
-  std::vector<Eigen::Triplet<double>> triplets;
-  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(m, 3);
-  Eigen::MatrixXd P_u(m, 3);
-  for (Eigen::Index r = 0; r < m; ++r) {
-    const auto v = static_cast<std::size_t>(vertices[static_cast<std::size_t>(r)]);
-    P_u.row(r) = P.row(static_cast<Eigen::Index>(v));
-    const std::int32_t begin = topo.vv_offsets[v], end = topo.vv_offsets[v + 1];
-    if (begin == end) continue;  // isolated: no Laplacian row
-    const double inv_deg = 1.0 / static_cast<double>(end - begin);
-    triplets.emplace_back(r, r, 1.0);
-    for (std::int32_t s = begin; s < end; ++s) {
-      const auto j = static_cast<std::size_t>(topo.vv_vertices[static_cast<std::size_t>(s)]);
-      if (unknown[j] >= 0)
-        triplets.emplace_back(r, unknown[j], -inv_deg);
-      else
-        c.row(r) -= inv_deg * P.row(static_cast<Eigen::Index>(j));
+  detail::RegionSystem op{&topo, &vertices, &unknown, Eigen::VectorXd(m), beta, executor, {}, {}};
+  op.index_neighbours();
+  Vertices c(m, 3), X(m, 3);
+  op.parallel(m, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t r = begin; r < end; ++r) {
+      const auto v = static_cast<std::size_t>(vertices[static_cast<std::size_t>(r)]);
+      X.row(r) = P.row(static_cast<Eigen::Index>(v));
+      c.row(r).setZero();
+      const std::int32_t deg = topo.vv_offsets[v + 1] - topo.vv_offsets[v];
+      op.inv_deg(r) = deg > 0 ? 1.0 / static_cast<double>(deg) : 0.0;  // isolated: no Laplacian row
+      for (std::int32_t s = topo.vv_offsets[v]; s < topo.vv_offsets[v + 1]; ++s) {
+        const auto j = static_cast<std::size_t>(topo.vv_vertices[static_cast<std::size_t>(s)]);
+        if (unknown[j] < 0) c.row(r) -= op.inv_deg(r) * P.row(static_cast<Eigen::Index>(j));
+      }
     }
-  }
-  SparseMatrix L(m, m);
-  L.setFromTriplets(triplets.begin(), triplets.end());
-  SparseMatrix I(m, m);
-  I.setIdentity();
-  // argmin ||X - P_U||^2 + beta ||L X + c||^2  <=>  (I + beta L^T L) X = P_U - beta L^T c.
-  const SparseMatrix M = I + beta * SparseMatrix(L.transpose() * L);
-  Eigen::SimplicialLDLT<SparseMatrix> ldlt(M);
-  if (ldlt.info() != Eigen::Success) throw SolverError("LDLT factorisation of the region pre-filter (Eq. 2) failed");
-  const Eigen::MatrixXd X = ldlt.solve(Eigen::MatrixXd(P_u - beta * (L.transpose() * c)));
+  });
+  // argmin ||X - P_U||^2 + beta ||L X + c||^2  <=>  (I + beta L^T L) X = P_U - beta L^T c,
+  // solved by CG from X = P_U (decision 38).
+  Vertices B(m, 3);
+  op.parallel(m, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t r = begin; r < end; ++r) B.row(r) = X.row(r) - beta * op.transpose_row(r, c);
+  });
+  detail::solve_region(op, B, X);
   if (!X.allFinite()) throw SolverError("region pre-filter (Eq. 2) produced non-finite positions");
   for (Eigen::Index r = 0; r < m; ++r) out.row(vertices[static_cast<std::size_t>(r)]) = X.row(r);
   return out;

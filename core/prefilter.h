@@ -78,8 +78,10 @@ FaceClusters cluster_faces(const Vertices& P, const Triangles& F, int k, std::ui
 // Eq. 2 on one set of faces: their vertices are unknowns, every other vertex is fixed.
 // Minimises ||P~ - P||^2 + beta ||L P~||^2 over the unknowns, L the uniform Laplacian of
 // the whole mesh restricted to the unknown rows. Returns the new positions of all vertices.
+// Solved matrix-free by Jacobi-preconditioned CG to a relative residual of 1e-10 per column
+// (decision 38), over the executor's threads if given (the result does not depend on them).
 Vertices region_prefilter(const Vertices& P, const Triangles& F, const Topology& topo,
                           const std::vector<std::int32_t>& faces, double beta,
-                          std::int64_t* num_unknowns = nullptr);
+                          std::int64_t* num_unknowns = nullptr, Executor* executor = nullptr);
 
 }  // namespace mdn

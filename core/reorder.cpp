@@ -70,21 +70,25 @@ std::vector<std::int32_t> breadth_first_order(const Triangles& F, std::int64_t n
       for (int c = 0; c < 3; ++c)
         faces[static_cast<std::size_t>(cursor[static_cast<std::size_t>(F(f, c))]++)] = static_cast<std::int32_t>(f);
   }
+  // A vertex's list is walked once: after that every face on it is already queued, so a later
+  // walk would add nothing (the order is the same; a third of the face checks).
   std::vector<std::int32_t> order;
   order.reserve(nf);
-  std::vector<bool> seen(nf, false);
+  std::vector<std::uint8_t> seen(nf, 0), walked(static_cast<std::size_t>(nv), 0);
   for (std::size_t root = 0; root < nf; ++root) {
     if (seen[root]) continue;
-    seen[root] = true;
+    seen[root] = 1;
     order.push_back(static_cast<std::int32_t>(root));
     for (std::size_t head = order.size() - 1; head < order.size(); ++head) {
       const std::int32_t f = order[head];
       for (int c = 0; c < 3; ++c) {
         const auto v = static_cast<std::size_t>(F(f, c));
+        if (walked[v]) continue;
+        walked[v] = 1;
         for (std::int32_t k = offsets[v]; k < offsets[v + 1]; ++k) {
           const auto g = static_cast<std::size_t>(faces[static_cast<std::size_t>(k)]);
           if (!seen[g]) {
-            seen[g] = true;
+            seen[g] = 1;
             order.push_back(static_cast<std::int32_t>(g));
           }
         }

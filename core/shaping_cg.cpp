@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <functional>
 
+#include "core/errors.h"
 #include "core/parallel.h"
 
 namespace mdn::detail {
@@ -54,24 +55,21 @@ Row4f to4f(const Eigen::Array3d& a) {
 }
 }  // namespace
 
-void SingleCG::prepare(const ShapingIncidence& op, double alpha, const Eigen::VectorXd& weights) {
+void SingleCG::prepare(const ShapingIncidence& op, double alpha, const Eigen::VectorXd& weights,
+                       const Eigen::VectorXd& inv_diag) {
   const auto E = op.topo->num_interior_edges();
   const auto n = static_cast<std::int64_t>(op.topo->num_vertices);
   ws_.resize(static_cast<std::size_t>(E));
-  for (Eigen::Index e = 0; e < E; ++e) ws_[static_cast<std::size_t>(e)] = static_cast<float>(alpha * (weights.size() ? weights(e) : 1.0));
+  parallel(op, E, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t e = begin; e < end; ++e) ws_[static_cast<std::size_t>(e)] = static_cast<float>(alpha * (weights.size() ? weights(e) : 1.0));
+  });
   inv_diag_.resize(static_cast<std::size_t>(n));
   parallel(op, n, [&](std::int64_t begin, std::int64_t end) {
-    for (std::int64_t v = begin; v < end; ++v) {
-      double d = 1;  // diag(A)_v = 1 + alpha sum_{e containing v} w_e, in double
-      for (std::int32_t k = (*op.offsets)[static_cast<std::size_t>(v)]; k < (*op.offsets)[static_cast<std::size_t>(v) + 1]; ++k)
-        d += alpha * (weights.size() ? weights((*op.edges)[static_cast<std::size_t>(k)] >> 1) : 1.0);
-      inv_diag_[static_cast<std::size_t>(v)] = static_cast<float>(1.0 / d);
-    }
+    for (std::int64_t v = begin; v < end; ++v) inv_diag_[static_cast<std::size_t>(v)] = static_cast<float>(inv_diag(v));
   });
-  s_.assign(static_cast<std::size_t>(4 * E), 0.0f);
-  r_.assign(static_cast<std::size_t>(4 * n), 0.0f);
-  p_.assign(static_cast<std::size_t>(4 * n), 0.0f);
-  ap_.assign(static_cast<std::size_t>(4 * n), 0.0f);
+  // Every row of these is written, all four lanes, before it is read (initial_residual, apply):
+  // kept from the last solve, not cleared.
+  for (auto* v : {&s_, &r_, &p_, &ap_}) v->resize(static_cast<std::size_t>(4 * (v == &s_ ? E : n)));
 }
 
 // r = P - A P = -alpha D^T W D P with S(e) formed in double from P (the coordinates are ~1 and
@@ -136,9 +134,9 @@ Sums SingleCG::step(const ShapingIncidence& op, const Eigen::Array3d& step, Vert
 }
 
 int SingleCG::solve(const ShapingIncidence& op, const Vertices& P, double alpha, const Eigen::VectorXd& weights,
-                    double tolerance, int max_iterations, Vertices& x) {
+                    const Eigen::VectorXd& inv_diag, double tolerance, int max_iterations, Vertices& x) {
   const Eigen::Index n = P.rows();
-  prepare(op, alpha, weights);
+  prepare(op, alpha, weights, inv_diag);
   x = P;
   const Sums rz_rr0 = initial_residual(op, P, alpha, weights);
   Eigen::Array3d rz = rz_rr0.col(0), r_norm2 = rz_rr0.col(1);
@@ -166,6 +164,58 @@ int SingleCG::solve(const ShapingIncidence& op, const Vertices& P, double alpha,
 
 void SingleCG::release() {
   for (auto* v : {&ws_, &s_, &r_, &p_, &ap_, &inv_diag_}) *v = std::vector<float>();
+}
+
+// Eq. 2 (decision 38): decision 4's relative residual.
+constexpr double kRegionTolerance = 1e-10;
+void solve_region(const RegionSystem& op, const Vertices& B, Vertices& X) {
+  using Sums = detail::Sums;
+  const Eigen::Index m = B.rows();
+  Eigen::VectorXd inv_diag(m);
+  op.parallel(m, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t r = begin; r < end; ++r) inv_diag(r) = 1.0 / op.diagonal(r);
+  });
+  Vertices y(m, 3), r(m, 3), p(m, 3), Ap(m, 3);
+  // Ap = M x = x + beta L^T (L x), and x . Ap in the same sweep.
+  auto apply = [&](const Vertices& x) {
+    op.laplacian(x, y);
+    return op.blocked_sums(m, [&](std::int64_t i, Sums& sum) {
+                Ap.row(i) = x.row(i) + op.beta * op.transpose_row(i, y);
+                sum.col(0) += x.row(i).array().transpose() * Ap.row(i).array().transpose();
+              }).col(0).eval();
+  };
+  apply(X);
+  const Sums start = op.blocked_sums(m, [&](std::int64_t i, Sums& sum) {
+    r.row(i) = B.row(i) - Ap.row(i);
+    p.row(i) = inv_diag(i) * r.row(i);
+    sum.col(0) += r.row(i).array().transpose() * p.row(i).array().transpose();
+    sum.col(1) += r.row(i).array().transpose() * r.row(i).array().transpose();
+  });
+  Eigen::Array3d rz = start.col(0), r_norm2 = start.col(1);
+  const Eigen::Array3d threshold = (kRegionTolerance * kRegionTolerance) *
+                                   op.blocked_sums(m, [&](std::int64_t i, Sums& sum) {
+                                       sum.col(0) += B.row(i).array().transpose().square();
+                                     }).col(0).max(1e-300);
+  const int max_iterations = static_cast<int>(std::max<Eigen::Index>(1000, m));
+  for (int it = 0; it < max_iterations; ++it) {
+    const Eigen::Array3d active = (r_norm2 > threshold).cast<double>();  // converged columns are frozen
+    if ((active == 0).all()) return;
+    const Eigen::Array3d step = active * rz / apply(p).max(1e-300);
+    const Sums rz_rr = op.blocked_sums(m, [&](std::int64_t i, Sums& sum) {
+      X.row(i) += (step * p.row(i).array().transpose()).transpose().matrix();
+      r.row(i) -= (step * Ap.row(i).array().transpose()).transpose().matrix();
+      sum.col(0) += inv_diag(i) * r.row(i).array().transpose().square();
+      sum.col(1) += r.row(i).array().transpose().square();
+    });
+    const Eigen::Array3d beta = active * rz_rr.col(0) / rz.max(1e-300);
+    op.parallel(m, [&](std::int64_t begin, std::int64_t end) {
+      for (std::int64_t i = begin; i < end; ++i)
+        p.row(i) = (inv_diag(i) * r.row(i).array().transpose() + beta * p.row(i).array().transpose()).transpose().matrix();
+    });
+    rz = active * rz_rr.col(0) + (1 - active) * rz;
+    r_norm2 = rz_rr.col(1);
+  }
+  throw SolverError("conjugate gradients did not converge on the region pre-filter (Eq. 2)");
 }
 
 }  // namespace mdn::detail

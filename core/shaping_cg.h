@@ -4,19 +4,18 @@
 // dot products are summed in double with decision 11's fixed blocking, and the iterate x is
 // double. ShapingSolver checks the true residual in double afterwards and continues in double
 // where it is above the tolerance.
+// Also Eq. 2's system (the region pre-filter, Sec. 4.2), matrix-free in double (decision 38).
 #pragma once
 
 #include <Eigen/Core>
 #include <algorithm>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "core/mesh.h"
+#include "core/parallel.h"
 #include "core/topology.h"
-
-namespace mdn {
-class Executor;
-}
 
 namespace mdn::detail {
 
@@ -60,18 +59,114 @@ class SingleCG {
  public:
   // Jacobi-preconditioned CG on A x = P started from x = P, until the (recurrence) residual of
   // every column is at most tolerance x ||P column|| or after max_iterations. weights: #E, or
-  // empty for W = I. Returns the iterations run; x is #V x 3.
+  // empty for W = I; inv_diag: #V, 1 / diag(A) in double (ShapingSolver's, shared with its
+  // double check), used rounded to float. Returns the iterations run; x is #V x 3.
   int solve(const ShapingIncidence& op, const Vertices& P, double alpha, const Eigen::VectorXd& weights,
-            double tolerance, int max_iterations, Vertices& x);
+            const Eigen::VectorXd& inv_diag, double tolerance, int max_iterations, Vertices& x);
   // Frees the work vectors (the next solve allocates them again).
   void release();
 
  private:
-  void prepare(const ShapingIncidence& op, double alpha, const Eigen::VectorXd& weights);
+  void prepare(const ShapingIncidence& op, double alpha, const Eigen::VectorXd& weights, const Eigen::VectorXd& inv_diag);
   Sums initial_residual(const ShapingIncidence& op, const Vertices& P, double alpha, const Eigen::VectorXd& weights);
   Eigen::Array3d apply(const ShapingIncidence& op);
   Sums step(const ShapingIncidence& op, const Eigen::Array3d& step, Vertices& x);
   std::vector<float> ws_, s_, r_, p_, ap_, inv_diag_;
 };
+
+// Eq. 2's system M X = B, M = I + beta L^T L, applied without assembling it (decision 38): L is
+// the uniform Laplacian of the whole mesh restricted to the unknown rows, read from the one-ring
+// lists (topo.vv, symmetric), so L^T y is again a gather over the one-ring: (L^T y)_u = y_u -
+// sum over unknown neighbours j of y_j / deg(j). row_vertex[r]: the vertex of unknown r;
+// unknown[v]: v's row, or -1 where v is fixed; inv_deg[r]: 1 / deg, 0 for an isolated vertex
+// (no Laplacian row). Row r of L x is x_r - inv_deg[r] sum of x over r's unknown neighbours.
+struct RegionSystem {
+  const Topology* topo;
+  const std::vector<std::int32_t>* row_vertex;
+  const std::vector<std::int32_t>* unknown;
+  Eigen::VectorXd inv_deg;
+  double beta;
+  Executor* executor;  // nullptr: serial
+  // Each row's unknown neighbours as rows, in one-ring order (index_neighbours): the products
+  // gather from these without looking each neighbour up in `unknown`.
+  std::vector<std::int32_t> nb_offsets, nb_rows;
+
+  void index_neighbours() {
+    const auto m = static_cast<std::int64_t>(row_vertex->size());
+    nb_offsets.assign(static_cast<std::size_t>(m) + 1, 0);
+    for (std::int64_t r = 0; r < m; ++r) {
+      const auto v = static_cast<std::size_t>((*row_vertex)[static_cast<std::size_t>(r)]);
+      std::int32_t count = 0;
+      for (std::int32_t s = topo->vv_offsets[v]; s < topo->vv_offsets[v + 1]; ++s)
+        count += (*unknown)[static_cast<std::size_t>(topo->vv_vertices[static_cast<std::size_t>(s)])] >= 0;
+      nb_offsets[static_cast<std::size_t>(r) + 1] = nb_offsets[static_cast<std::size_t>(r)] + count;
+    }
+    nb_rows.resize(static_cast<std::size_t>(nb_offsets.back()));
+    parallel(m, [&](std::int64_t begin, std::int64_t end) {
+      for (std::int64_t r = begin; r < end; ++r) {
+        const auto v = static_cast<std::size_t>((*row_vertex)[static_cast<std::size_t>(r)]);
+        std::int32_t slot = nb_offsets[static_cast<std::size_t>(r)];
+        for (std::int32_t s = topo->vv_offsets[v]; s < topo->vv_offsets[v + 1]; ++s) {
+          const std::int32_t j = (*unknown)[static_cast<std::size_t>(topo->vv_vertices[static_cast<std::size_t>(s)])];
+          if (j >= 0) nb_rows[static_cast<std::size_t>(slot++)] = j;
+        }
+      }
+    });
+  }
+
+  static constexpr std::int64_t kGrain = 8192;
+  void parallel(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& fn, std::int64_t grain = kGrain) const {
+    if (executor && n >= 32768)  // smaller: dispatch costs more than it saves
+      executor->parallel_for(n, grain, fn);
+    else
+      fn(0, n);
+  }
+  template <class Body>
+  detail::Sums blocked_sums(std::int64_t n, const Body& body) const {
+    return detail::blocked_sums(
+        n, kGrain / detail::kSumBlock,
+        [&](std::int64_t count, const std::function<void(std::int64_t, std::int64_t)>& fn, std::int64_t grain) {
+          parallel(count, fn, grain);
+        },
+        body);
+  }
+  // The sum over row r's unknown neighbours j of scale(j) x.row(j).
+  template <class Scale>
+  Eigen::RowVector3d ring_sum(std::int64_t r, const Vertices& x, const Scale& scale) const {
+    Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
+    for (std::int32_t s = nb_offsets[static_cast<std::size_t>(r)]; s < nb_offsets[static_cast<std::size_t>(r) + 1]; ++s) {
+      const std::int32_t j = nb_rows[static_cast<std::size_t>(s)];
+      sum += scale(j) * x.row(j);
+    }
+    return sum;
+  }
+  // y = L x (0 on an isolated vertex's row).
+  void laplacian(const Vertices& x, Vertices& y) const {
+    parallel(x.rows(), [&](std::int64_t begin, std::int64_t end) {
+      for (std::int64_t r = begin; r < end; ++r) {
+        const double d = inv_deg(r);
+        y.row(r) = d > 0 ? Eigen::RowVector3d(x.row(r) - d * ring_sum(r, x, [](std::int32_t) { return 1.0; }))
+                         : Eigen::RowVector3d::Zero();
+      }
+    });
+  }
+  // (L^T y)_r.
+  Eigen::RowVector3d transpose_row(std::int64_t r, const Vertices& y) const {
+    return y.row(r) - ring_sum(r, y, [&](std::int32_t j) { return inv_deg(j); });
+  }
+  // diag(M)_r = 1 + beta (1 if r has a row, + sum over unknown neighbours j of 1 / deg(j)^2).
+  double diagonal(std::int64_t r) const {
+    const double own = inv_deg(r) > 0 ? 1.0 : 0.0;
+    double sum = 0;
+    for (std::int32_t s = nb_offsets[static_cast<std::size_t>(r)]; s < nb_offsets[static_cast<std::size_t>(r) + 1]; ++s)
+      sum += inv_deg(nb_rows[static_cast<std::size_t>(s)]) * inv_deg(nb_rows[static_cast<std::size_t>(s)]);
+    return 1 + beta * (own + sum);
+  }
+};
+
+// Jacobi-preconditioned CG on M X = B from X (decision 4's iteration, in double), until every
+// column's residual is at most 1e-10 x ||B column||; throws SolverError if it does not converge.
+// Dot products in decision 11's fixed blocks, so the result does not depend on the threads.
+void solve_region(const RegionSystem& op, const Vertices& B, Vertices& X);
 
 }  // namespace mdn::detail

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/SparseCholesky>
 #include <cmath>
 
 #include "core/noise.h"
@@ -138,16 +139,42 @@ TEST(ClusterFaces, SeparatesTheDenselySampledHalf) {
   EXPECT_LT(cluster_faces(regular.V, regular.F, 2, 1).area_ratio, 2.0);
 }
 
+// Lloyd's sums are taken per block of faces and added in block order (decision 39): the same
+// clusters for any thread count (in parallel from 32768 faces).
+TEST(ClusterFaces, SameForAnyThreadCount) {
+  const TriMesh m = test::irregular_sphere(5);
+  ASSERT_GT(m.F.rows(), 32768);
+  const FaceClusters serial = cluster_faces(m.V, m.F, 2, 1);
+  EXPECT_GT(serial.area_ratio, 4.0);
+  for (int threads : {2, 3}) {
+    Executor ex(threads);
+    const FaceClusters c = cluster_faces(m.V, m.F, 2, 1, 100, &ex);
+    EXPECT_EQ(c.label, serial.label) << threads;
+    EXPECT_EQ(c.area_ratio, serial.area_ratio) << threads;
+  }
+}
+
+// The faces of m whose centroid c satisfies keep(c).
+template <class Keep>
+std::vector<std::int32_t> faces_where(const TriMesh& m, const Keep& keep) {
+  std::vector<std::int32_t> faces;
+  const Vertices C = face_centroids(m.V, m.F);
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+    if (keep(Eigen::RowVector3d(C.row(f)))) faces.push_back(static_cast<std::int32_t>(f));
+  return faces;
+}
+
+Vertices with_noise(const TriMesh& m, double sigma) {
+  NoiseSpec spec;
+  spec.sigma = sigma;
+  return add_noise(m, spec);
+}
+
 TEST(RegionPrefilter, SmoothsOnlyTheClusterAndKeepsOthersFixed) {
   const TriMesh clean = test::irregular_plane(6, 8);
-  NoiseSpec spec;
-  spec.sigma = 0.5;
-  const Vertices noisy = add_noise(clean, spec);
+  const Vertices noisy = with_noise(clean, 0.5);
   const Topology t = topology_of(clean);
-  std::vector<std::int32_t> left;
-  const Vertices C = face_centroids(clean.V, clean.F);
-  for (Eigen::Index f = 0; f < clean.F.rows(); ++f)
-    if (C(f, 0) < 0.25) left.push_back(static_cast<std::int32_t>(f));
+  const std::vector<std::int32_t> left = faces_where(clean, [](const Eigen::RowVector3d& c) { return c(0) < 0.25; });
   std::int64_t unknowns = 0;
   const Vertices out = region_prefilter(noisy, clean.F, t, left, 6.0, &unknowns);
   EXPECT_GT(unknowns, 0);
@@ -161,6 +188,69 @@ TEST(RegionPrefilter, SmoothsOnlyTheClusterAndKeepsOthersFixed) {
     }
   }
   EXPECT_LT(after, 0.5 * before);
+}
+
+// Eq. 2 matrix-free (decision 38) against the system assembled and factored: (I + beta L^T L) X
+// = P_U - beta L^T c, L the uniform Laplacian rows of the unknowns, fixed neighbours in c.
+TEST(RegionPrefilter, MatchesTheAssembledSystem) {
+  const TriMesh clean = test::irregular_sphere(3);
+  const Vertices noisy = with_noise(clean, 0.3);
+  const Topology t = topology_of(clean);
+  const std::vector<std::int32_t> faces = faces_where(clean, [](const Eigen::RowVector3d& c) { return c(2) > 0.1; });
+  const double beta = 6;
+  const Vertices out = region_prefilter(noisy, clean.F, t, faces, beta);
+
+  std::vector<std::int32_t> row(static_cast<std::size_t>(noisy.rows()), -1), vertices;
+  for (std::int32_t f : faces)
+    for (int k = 0; k < 3; ++k) row[static_cast<std::size_t>(clean.F(f, k))] = 0;
+  for (std::int32_t v = 0; v < noisy.rows(); ++v)
+    if (row[static_cast<std::size_t>(v)] == 0) {
+      row[static_cast<std::size_t>(v)] = static_cast<std::int32_t>(vertices.size());
+      vertices.push_back(v);
+    }
+  const auto m = static_cast<Eigen::Index>(vertices.size());
+  ASSERT_GT(m, 100);
+  ASSERT_LT(m, noisy.rows());
+  std::vector<Eigen::Triplet<double>> entries;
+  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(m, 3), P_u(m, 3);
+  for (Eigen::Index r = 0; r < m; ++r) {
+    const auto v = static_cast<std::size_t>(vertices[static_cast<std::size_t>(r)]);
+    P_u.row(r) = noisy.row(static_cast<Eigen::Index>(v));
+    const double inv_deg = 1.0 / (t.vv_offsets[v + 1] - t.vv_offsets[v]);
+    entries.emplace_back(r, r, 1.0);
+    for (std::int32_t s = t.vv_offsets[v]; s < t.vv_offsets[v + 1]; ++s) {
+      const auto j = static_cast<std::size_t>(t.vv_vertices[static_cast<std::size_t>(s)]);
+      if (row[j] >= 0)
+        entries.emplace_back(r, row[j], -inv_deg);
+      else
+        c.row(r) -= inv_deg * noisy.row(static_cast<Eigen::Index>(j));
+    }
+  }
+  Eigen::SparseMatrix<double> L(m, m), I(m, m);
+  L.setFromTriplets(entries.begin(), entries.end());
+  I.setIdentity();
+  const Eigen::SparseMatrix<double> M = I + beta * Eigen::SparseMatrix<double>(L.transpose() * L);
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(M);
+  const Eigen::MatrixXd X = ldlt.solve(Eigen::MatrixXd(P_u - beta * (L.transpose() * c)));
+  double worst = 0;
+  for (Eigen::Index r = 0; r < m; ++r) worst = std::max(worst, (out.row(vertices[static_cast<std::size_t>(r)]) - X.row(r)).cwiseAbs().maxCoeff());
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_GT((X - P_u).cwiseAbs().maxCoeff(), 1e-3);  // the solve did move the region
+}
+
+// Eq. 2 over threads (decision 38): the same positions bit for bit for any thread count (the
+// passes run in parallel from 32768 unknowns).
+TEST(RegionPrefilter, SameForAnyThreadCount) {
+  const TriMesh m = test::plane(200);
+  const Vertices noisy = with_noise(m, 0.3);
+  const Topology t = topology_of(m);
+  std::vector<std::int32_t> faces(static_cast<std::size_t>(m.F.rows()));
+  for (std::size_t f = 0; f < faces.size(); ++f) faces[f] = static_cast<std::int32_t>(f);
+  const Vertices serial = region_prefilter(noisy, m.F, t, faces, 6.0);
+  for (int threads : {2, 3}) {
+    Executor ex(threads);
+    EXPECT_TRUE((region_prefilter(noisy, m.F, t, faces, 6.0, nullptr, &ex).array() == serial.array()).all()) << threads;
+  }
 }
 
 }  // namespace

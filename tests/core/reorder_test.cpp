@@ -46,6 +46,43 @@ double mean_neighbour_distance(const Triangles& F, std::int64_t nv) {
   return sum / static_cast<double>(topo.edge_faces.rows());
 }
 
+// Breadth-first as specified (each component from its lowest-numbered face, every face's three
+// vertex lists in order, every list walked each time): LocalityOrder walks each vertex's list
+// once, which must give this order exactly.
+std::vector<std::int32_t> plain_breadth_first(const TriMesh& m) {
+  std::vector<std::vector<std::int32_t>> faces_of(static_cast<std::size_t>(m.num_vertices()));
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) faces_of[static_cast<std::size_t>(m.F(f, c))].push_back(static_cast<std::int32_t>(f));
+  std::vector<std::int32_t> order;
+  std::vector<bool> seen(static_cast<std::size_t>(m.num_faces()), false);
+  for (std::size_t root = 0; root < seen.size(); ++root) {
+    if (seen[root]) continue;
+    seen[root] = true;
+    order.push_back(static_cast<std::int32_t>(root));
+    for (std::size_t head = order.size() - 1; head < order.size(); ++head)
+      for (int c = 0; c < 3; ++c)
+        for (std::int32_t g : faces_of[static_cast<std::size_t>(m.F(order[head], c))])
+          if (!seen[static_cast<std::size_t>(g)]) {
+            seen[static_cast<std::size_t>(g)] = true;
+            order.push_back(g);
+          }
+  }
+  return order;
+}
+
+TEST(LocalityOrder, BreadthFirstIsThePlainWalk) {
+  TriMesh two = test::sphere(3);  // two components: a sphere and a shifted torus
+  const TriMesh torus = test::torus(24, 12, 0.3);
+  const auto nv = two.V.rows();
+  two.V.conservativeResize(nv + torus.V.rows(), 3);
+  two.V.bottomRows(torus.V.rows()) = torus.V.rowwise() + Eigen::RowVector3d(3, 0, 0);
+  const auto nf = two.F.rows();
+  two.F.conservativeResize(nf + torus.F.rows(), 3);
+  two.F.bottomRows(torus.F.rows()) = torus.F.array() + static_cast<std::int32_t>(nv);
+  for (const TriMesh& m : {two, shuffled(two, 3), shuffled(test::irregular_sphere(3), 7)})
+    EXPECT_EQ(LocalityOrder::of(m, OrderKind::BreadthFirst).face_of(), plain_breadth_first(m));
+}
+
 TEST(LocalityOrder, IsAPermutationThatKeepsEveryFace) {
   TriMesh m = test::sphere(2);
   m.V.conservativeResize(m.V.rows() + 2, 3);  // two isolated vertices
