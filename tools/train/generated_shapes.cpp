@@ -3,7 +3,6 @@
 // changing one never changes another shape. Sizes stay under 12,000 faces, so every shape
 // gets all the corpus's noise kinds.
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -143,36 +142,6 @@ std::vector<Generated> generated_shapes() {
   add("torus", 5, "organic", [](Draw d) {
     const int nu = d.integer(30, 90), nv = d.integer(12, 36);
     return test::torus(nu, nv, d.real(0.15, 0.6));
-  });
-  // Smooth open patches without a crease, like one view of a scanned surface: a piece of a
-  // paraboloid, a cylinder, a saddle or a few wide bumps, on a grid of nu x nv quads (often
-  // stretched), some refined irregularly.
-  add("patch", 10, "organic", [](Draw d) {
-    const int kind = d.integer(0, 3), nu = d.integer(14, 64), nv = d.integer(14, 64);
-    const double a = d.real(0.15, 0.8), b = d.real(-0.3, 0.3), aspect = d.real(0.5, 1.0);
-    std::vector<std::array<double, 4>> bumps(3);
-    for (auto& bump : bumps) {
-      bump[0] = d.real(-0.8, 0.8);
-      bump[1] = d.real(-0.8, 0.8);
-      bump[2] = d.real(-0.3, 0.3);
-      bump[3] = d.real(1.5, 5);
-    }
-    const bool refine = d.chance(0.3);
-    // irregular() multiplies the faces by about 5.5: keep the shape under 12,000 faces.
-    const double shrink = refine ? std::min(1.0, std::sqrt(1000.0 / (nu * nv))) : 1.0;
-    TriMesh m = test::parametric(std::max(8, static_cast<int>(nu * shrink)), std::max(8, static_cast<int>(nv * shrink)), false, false, [&](double u, double v) {
-      const double x = 2 * u - 1, y = aspect * (2 * v - 1);
-      double z = 0;
-      switch (kind) {
-        case 0: z = 0.5 * a * (x * x + y * y) + b * x * y; break;
-        case 1: z = 0.6 * a * x * x + 0.2 * b * y; break;
-        case 2: z = 0.5 * a * (x * x - y * y) + 0.2 * b * x; break;
-        default:
-          for (const auto& bump : bumps) z += bump[2] * std::exp(-bump[3] * ((x - bump[0]) * (x - bump[0]) + (y - bump[1]) * (y - bump[1])));
-      }
-      return Vec3(x, y, z);
-    });
-    return refine ? irregular(m) : m;
   });
   return out;
 }
