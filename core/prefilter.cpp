@@ -92,34 +92,17 @@ struct ShapingSolver::Impl {
     }
   }
 
-  // Below this many rows a CG step is a few microseconds and dispatching it to threads costs
-  // more than it saves (measured on Fandisk: Eq. 1 6.0 ms serial, 7.1 ms on two threads).
-  static constexpr std::int64_t kParallelRows = 32768;
-
-  // Chunks of kGrain rows (or edges) claimed by free threads (decision 28): a chunk's vectors
-  // stay in L2, and a core shared with another process takes fewer of them.
-  static constexpr std::int64_t kGrain = 8192;
-  void parallel(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& fn, std::int64_t grain = kGrain) const {
-    if (executor && topo->num_vertices >= kParallelRows)
-      executor->parallel_for(n, grain, fn);
-    else
-      fn(0, n);
+  // Serial below detail::kParallelRows vertices, chunked above (shaping_cg.h).
+  Executor* threads() const { return detail::threads_for(executor, topo->num_vertices); }
+  void parallel(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& fn) const {
+    detail::chunked(threads(), n, fn);
   }
 
-  // Column-wise dot products with a fixed blocking, so the rounding does not depend on the
-  // number of threads: blocks are summed in parallel, block sums serially in order.
-  // blocked_sums runs body(i, sums) for every row i, block by block in parallel, and returns the
-  // in-order total of the blocks' sums; passes that update a vector take its dot products in
-  // the same sweep (the same sums, in the same order, as a separate dot3).
+  // Column sums in decision 11's fixed blocks (shaping_cg.h), on this solver's threads.
   using Sums = detail::Sums;
   template <class Body>
   Sums blocked_sums(std::int64_t n, const Body& body) const {
-    return detail::blocked_sums(
-        n, kGrain / detail::kSumBlock,
-        [&](std::int64_t count, const std::function<void(std::int64_t, std::int64_t)>& fn, std::int64_t grain) {
-          parallel(count, fn, grain);
-        },
-        body);
+    return detail::blocked_sums(threads(), n, body);
   }
   Eigen::Array3d dot3(const Vertices& a, const Vertices& b) const {
     return blocked_sums(a.rows(), [&](std::int64_t i, Sums& sum) {
@@ -275,8 +258,7 @@ struct ShapingSolver::Impl {
     if (kind == LinearSolver::Ldlt) {
       x = solve_ldlt(P, alpha, weights);
     } else {  // start from the anchor: A = I + (small) so P is already close
-      Executor* threads = executor && topo->num_vertices >= kParallelRows ? executor : nullptr;
-      const detail::ShapingIncidence op{topo, &ve_offsets, &ve_edges, &ve_split, threads};
+      const detail::ShapingIncidence op{topo, &ve_offsets, &ve_edges, &ve_split, threads()};
       jacobi_preconditioner(alpha, weights);
       const int single_iterations = single.solve(op, P, alpha, weights, inv_diag_buf, cg_tolerance, 1000, x);
       x = solve_cg(P, alpha, weights, std::move(x));
@@ -482,8 +464,8 @@ void lloyd_iterations(const Features& X, Features& centers, int max_iterations, 
         }
       }
     };
-    if (executor && nf >= 32768)  // smaller: dispatch costs more than it saves
-      executor->parallel_for(blocks, 1, assign);
+    if (Executor* threads = detail::threads_for(executor, nf))  // serial where dispatch costs more
+      threads->parallel_for(blocks, 1, assign);
     else
       assign(0, blocks);
     std::int64_t changed = 0;
@@ -562,10 +544,10 @@ Vertices region_prefilter(const Vertices& P, const Triangles& F, const Topology&
 
   // L_U: one row per unknown r: x_r - mean of its one-ring; fixed neighbours go to c.
   const auto m = static_cast<Eigen::Index>(vertices.size());
-  detail::RegionSystem op{&topo, &vertices, &unknown, Eigen::VectorXd(m), beta, executor, {}, {}};
+  detail::RegionSystem op{&topo, &vertices, &unknown, Eigen::VectorXd(m), beta, detail::threads_for(executor, m), {}, {}};
   op.index_neighbours();
   Vertices c(m, 3), X(m, 3);
-  op.parallel(m, [&](std::int64_t begin, std::int64_t end) {
+  detail::chunked(op.executor, m, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t r = begin; r < end; ++r) {
       const auto v = static_cast<std::size_t>(vertices[static_cast<std::size_t>(r)]);
       X.row(r) = P.row(static_cast<Eigen::Index>(v));
@@ -581,7 +563,7 @@ Vertices region_prefilter(const Vertices& P, const Triangles& F, const Topology&
   // argmin ||X - P_U||^2 + beta ||L X + c||^2  <=>  (I + beta L^T L) X = P_U - beta L^T c,
   // solved by CG from X = P_U (decision 38).
   Vertices B(m, 3);
-  op.parallel(m, [&](std::int64_t begin, std::int64_t end) {
+  detail::chunked(op.executor, m, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t r = begin; r < end; ++r) B.row(r) = X.row(r) - beta * op.transpose_row(r, c);
   });
   detail::solve_region(op, B, X);

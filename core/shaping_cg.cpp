@@ -12,30 +12,6 @@ namespace {
 using Row4f = Eigen::Array4f;
 using Ref4f = Eigen::Map<Row4f, Eigen::Aligned16>;
 using ConstRef4f = Eigen::Map<const Row4f, Eigen::Aligned16>;
-// The same thresholds as ShapingSolver's double CG: serial under 32768 vertices, chunks of
-// 8192 rows claimed by free threads (decision 28), dot products in blocks of 2048 rows summed
-// in order (decision 11: the result does not depend on the number of threads).
-constexpr std::int64_t kParallelRows = 32768;
-constexpr std::int64_t kGrain = 8192;
-
-void parallel(const ShapingIncidence& op, std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& fn,
-              std::int64_t grain = kGrain) {
-  if (op.executor && op.topo->num_vertices >= kParallelRows)
-    op.executor->parallel_for(n, grain, fn);
-  else
-    fn(0, n);
-}
-
-template <class Body>
-Sums blocked_sums(const ShapingIncidence& op, std::int64_t n, const Body& body) {
-  return detail::blocked_sums(
-      n, kGrain / kSumBlock,
-      [&](std::int64_t count, const std::function<void(std::int64_t, std::int64_t)>& fn, std::int64_t grain) {
-        parallel(op, count, fn, grain);
-      },
-      body);
-}
-
 // The signed sum over v's incident edges of the 4-float rows of s: the +1 entries, less the
 // -1 entries (two independent sums, no multiply by the sign). Raw pointers and local sums, so
 // that nothing is reloaded or stored inside the loops.
@@ -60,11 +36,11 @@ void SingleCG::prepare(const ShapingIncidence& op, double alpha, const Eigen::Ve
   const auto E = op.topo->num_interior_edges();
   const auto n = static_cast<std::int64_t>(op.topo->num_vertices);
   ws_.resize(static_cast<std::size_t>(E));
-  parallel(op, E, [&](std::int64_t begin, std::int64_t end) {
+  chunked(op.executor, E, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t e = begin; e < end; ++e) ws_[static_cast<std::size_t>(e)] = static_cast<float>(alpha * (weights.size() ? weights(e) : 1.0));
   });
   inv_diag_.resize(static_cast<std::size_t>(n));
-  parallel(op, n, [&](std::int64_t begin, std::int64_t end) {
+  chunked(op.executor, n, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t v = begin; v < end; ++v) inv_diag_[static_cast<std::size_t>(v)] = static_cast<float>(inv_diag(v));
   });
   // Every row of these is written, all four lanes, before it is read (initial_residual, apply):
@@ -77,14 +53,14 @@ void SingleCG::prepare(const ShapingIncidence& op, double alpha, const Eigen::Ve
 // p = z = D^-1 r. Returns r . z and r . r in double.
 Sums SingleCG::initial_residual(const ShapingIncidence& op, const Vertices& P, double alpha, const Eigen::VectorXd& weights) {
   const auto& ie = op.topo->interior_edges;
-  parallel(op, op.topo->num_interior_edges(), [&](std::int64_t begin, std::int64_t end) {
+  chunked(op.executor, op.topo->num_interior_edges(), [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t e = begin; e < end; ++e) {
       const double w = alpha * (weights.size() ? weights(e) : 1.0);
       const Eigen::RowVector3d se = w * (P.row(ie(e, 0)) - P.row(ie(e, 1)) + P.row(ie(e, 2)) - P.row(ie(e, 3)));
       Ref4f(s_.data() + 4 * e) << static_cast<float>(se(0)), static_cast<float>(se(1)), static_cast<float>(se(2)), 0.0f;
     }
   });
-  return blocked_sums(op, P.rows(), [&](std::int64_t v, Sums& sum) {
+  return blocked_sums(op.executor, P.rows(), [&](std::int64_t v, Sums& sum) {
     Ref4f r(r_.data() + 4 * v), p(p_.data() + 4 * v);
     r = -gather(op, s_.data(), v);
     p = inv_diag_[static_cast<std::size_t>(v)] * r;
@@ -96,7 +72,7 @@ Sums SingleCG::initial_residual(const ShapingIncidence& op, const Vertices& P, d
 // Ap = A p = p + D^T (ws .* (D p)), all in float; returns p . Ap in double.
 Eigen::Array3d SingleCG::apply(const ShapingIncidence& op) {
   const auto& ie = op.topo->interior_edges;
-  parallel(op, op.topo->num_interior_edges(), [&](std::int64_t begin, std::int64_t end) {
+  chunked(op.executor, op.topo->num_interior_edges(), [&](std::int64_t begin, std::int64_t end) {
     const float* p = p_.data();
     const float* ws = ws_.data();
     const std::int32_t* quad = ie.data();  // row-major #E x 4
@@ -108,7 +84,7 @@ Eigen::Array3d SingleCG::apply(const ShapingIncidence& op) {
     }
   });
   const float* s = s_.data();
-  return blocked_sums(op, op.topo->num_vertices, [&](std::int64_t v, Sums& sum) {
+  return blocked_sums(op.executor, op.topo->num_vertices, [&](std::int64_t v, Sums& sum) {
            const ConstRef4f p(p_.data() + 4 * v);
            Ref4f ap(ap_.data() + 4 * v);
            ap = p + gather(op, s, v);
@@ -122,7 +98,7 @@ Sums SingleCG::step(const ShapingIncidence& op, const Eigen::Array3d& step, Vert
   const float *p = p_.data(), *ap = ap_.data(), *inv_diag = inv_diag_.data();
   float* r = r_.data();
   double* xd = x.data();  // row-major #V x 3
-  return blocked_sums(op, x.rows(), [&](std::int64_t v, Sums& sum) {
+  return blocked_sums(op.executor, x.rows(), [&](std::int64_t v, Sums& sum) {
     const Row4f pv = ConstRef4f(p + 4 * v);
     for (int c = 0; c < 3; ++c) xd[3 * v + c] += step(c) * static_cast<double>(pv[c]);
     Ref4f rv(r + 4 * v);
@@ -141,7 +117,7 @@ int SingleCG::solve(const ShapingIncidence& op, const Vertices& P, double alpha,
   const Sums rz_rr0 = initial_residual(op, P, alpha, weights);
   Eigen::Array3d rz = rz_rr0.col(0), r_norm2 = rz_rr0.col(1);
   const Eigen::Array3d threshold =
-      (tolerance * tolerance) * blocked_sums(op, n, [&](std::int64_t v, Sums& sum) {
+      (tolerance * tolerance) * blocked_sums(op.executor, n, [&](std::int64_t v, Sums& sum) {
                                   sum.col(0) += P.row(v).array().transpose().square();
                                 }).col(0).max(1e-300);
   for (int it = 0; it < max_iterations; ++it) {
@@ -151,7 +127,7 @@ int SingleCG::solve(const ShapingIncidence& op, const Vertices& P, double alpha,
     const Sums rz_rr = step(op, active * rz / pAp.max(1e-300), x);
     const Eigen::Array3d rz_new = rz_rr.col(0);
     const Row4f beta = to4f(active * rz_new / rz.max(1e-300));
-    parallel(op, n, [&](std::int64_t begin, std::int64_t end) {
+    chunked(op.executor, n, [&](std::int64_t begin, std::int64_t end) {
       const float *r = r_.data(), *inv_diag = inv_diag_.data();
       float* p = p_.data();
       for (std::int64_t v = begin; v < end; ++v) Ref4f(p + 4 * v) = inv_diag[v] * ConstRef4f(r + 4 * v) + beta * ConstRef4f(p + 4 * v);
@@ -172,20 +148,20 @@ void solve_region(const RegionSystem& op, const Vertices& B, Vertices& X) {
   using Sums = detail::Sums;
   const Eigen::Index m = B.rows();
   Eigen::VectorXd inv_diag(m);
-  op.parallel(m, [&](std::int64_t begin, std::int64_t end) {
+  chunked(op.executor, m, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t r = begin; r < end; ++r) inv_diag(r) = 1.0 / op.diagonal(r);
   });
   Vertices y(m, 3), r(m, 3), p(m, 3), Ap(m, 3);
   // Ap = M x = x + beta L^T (L x), and x . Ap in the same sweep.
   auto apply = [&](const Vertices& x) {
     op.laplacian(x, y);
-    return op.blocked_sums(m, [&](std::int64_t i, Sums& sum) {
+    return blocked_sums(op.executor, m, [&](std::int64_t i, Sums& sum) {
                 Ap.row(i) = x.row(i) + op.beta * op.transpose_row(i, y);
                 sum.col(0) += x.row(i).array().transpose() * Ap.row(i).array().transpose();
               }).col(0).eval();
   };
   apply(X);
-  const Sums start = op.blocked_sums(m, [&](std::int64_t i, Sums& sum) {
+  const Sums start = blocked_sums(op.executor, m, [&](std::int64_t i, Sums& sum) {
     r.row(i) = B.row(i) - Ap.row(i);
     p.row(i) = inv_diag(i) * r.row(i);
     sum.col(0) += r.row(i).array().transpose() * p.row(i).array().transpose();
@@ -193,7 +169,7 @@ void solve_region(const RegionSystem& op, const Vertices& B, Vertices& X) {
   });
   Eigen::Array3d rz = start.col(0), r_norm2 = start.col(1);
   const Eigen::Array3d threshold = (kRegionTolerance * kRegionTolerance) *
-                                   op.blocked_sums(m, [&](std::int64_t i, Sums& sum) {
+                                   blocked_sums(op.executor, m, [&](std::int64_t i, Sums& sum) {
                                        sum.col(0) += B.row(i).array().transpose().square();
                                      }).col(0).max(1e-300);
   const int max_iterations = static_cast<int>(std::max<Eigen::Index>(1000, m));
@@ -201,14 +177,14 @@ void solve_region(const RegionSystem& op, const Vertices& B, Vertices& X) {
     const Eigen::Array3d active = (r_norm2 > threshold).cast<double>();  // converged columns are frozen
     if ((active == 0).all()) return;
     const Eigen::Array3d step = active * rz / apply(p).max(1e-300);
-    const Sums rz_rr = op.blocked_sums(m, [&](std::int64_t i, Sums& sum) {
+    const Sums rz_rr = blocked_sums(op.executor, m, [&](std::int64_t i, Sums& sum) {
       X.row(i) += (step * p.row(i).array().transpose()).transpose().matrix();
       r.row(i) -= (step * Ap.row(i).array().transpose()).transpose().matrix();
       sum.col(0) += inv_diag(i) * r.row(i).array().transpose().square();
       sum.col(1) += r.row(i).array().transpose().square();
     });
     const Eigen::Array3d beta = active * rz_rr.col(0) / rz.max(1e-300);
-    op.parallel(m, [&](std::int64_t begin, std::int64_t end) {
+    chunked(op.executor, m, [&](std::int64_t begin, std::int64_t end) {
       for (std::int64_t i = begin; i < end; ++i)
         p.row(i) = (inv_diag(i) * r.row(i).array().transpose() + beta * p.row(i).array().transpose()).transpose().matrix();
     });

@@ -27,21 +27,39 @@ struct ShapingIncidence {
   const std::vector<std::int32_t>* offsets = nullptr;
   const std::vector<std::int32_t>* edges = nullptr;
   const std::vector<std::int32_t>* split = nullptr;
-  Executor* executor = nullptr;  // nullptr: serial
+  Executor* executor = nullptr;  // threads_for(...): nullptr is serial
 };
 
+// The threading of every pre-filter system (Eq. 1-3, both CGs). Below kParallelRows rows a CG
+// step is a few microseconds and dispatching it to threads costs more than it saves (measured
+// on Fandisk: Eq. 1 6.0 ms serial, 7.1 ms on two threads). Above, chunks of kGrain rows (or
+// edges) are claimed by free threads (decision 28): a chunk's vectors stay in L2, and a core
+// shared with another process takes fewer of them.
+inline constexpr std::int64_t kParallelRows = 32768;
+inline constexpr std::int64_t kGrain = 8192;
+// The executor a system of `rows` rows runs on: nullptr (serial) below kParallelRows.
+inline Executor* threads_for(Executor* executor, std::int64_t rows) { return rows >= kParallelRows ? executor : nullptr; }
+// fn over [0, n): in chunks of `grain` on `threads`, or in one call where threads is nullptr.
+inline void chunked(Executor* threads, std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& fn,
+                    std::int64_t grain = kGrain) {
+  if (threads)
+    threads->parallel_for(n, grain, fn);
+  else
+    fn(0, n);
+}
+
 // Column sums of a sweep with a fixed blocking (decision 11): body(i, sums) runs for every row
-// i of [0, n), block by block (kSumBlock rows), the blocks handed to run(blocks, fn, grain)
-// (in parallel or not), and the blocks' sums are added in order, so the rounding does not
-// depend on the number of threads. Shared by both CGs.
+// i of [0, n), block by block (kSumBlock rows; the blocks chunked on `threads`), and the blocks'
+// sums are added in order, so the rounding does not depend on the number of threads. Passes
+// that update a vector take its dot products in the same sweep.
 using Sums = Eigen::Array<double, 3, 2>;
 constexpr std::int64_t kSumBlock = 2048;
-template <class Run, class Body>
-Sums blocked_sums(std::int64_t n, std::int64_t grain, const Run& run, const Body& body) {
+template <class Body>
+Sums blocked_sums(Executor* threads, std::int64_t n, const Body& body) {
   const std::int64_t blocks = (n + kSumBlock - 1) / kSumBlock;
   std::vector<Sums> partial(static_cast<std::size_t>(blocks), Sums::Zero());
-  run(
-      blocks,
+  chunked(
+      threads, blocks,
       [&](std::int64_t begin, std::int64_t end) {
         for (std::int64_t blk = begin; blk < end; ++blk) {
           Sums sum = Sums::Zero();
@@ -49,7 +67,7 @@ Sums blocked_sums(std::int64_t n, std::int64_t grain, const Run& run, const Body
           partial[static_cast<std::size_t>(blk)] = sum;
         }
       },
-      grain);
+      kGrain / kSumBlock);
   Sums total = Sums::Zero();
   for (const auto& p : partial) total += p;
   return total;
@@ -86,7 +104,7 @@ struct RegionSystem {
   const std::vector<std::int32_t>* unknown;
   Eigen::VectorXd inv_deg;
   double beta;
-  Executor* executor;  // nullptr: serial
+  Executor* executor;  // threads_for(executor, rows): nullptr is serial
   // Each row's unknown neighbours as rows, in one-ring order (index_neighbours): the products
   // gather from these without looking each neighbour up in `unknown`.
   std::vector<std::int32_t> nb_offsets, nb_rows;
@@ -102,7 +120,7 @@ struct RegionSystem {
       nb_offsets[static_cast<std::size_t>(r) + 1] = nb_offsets[static_cast<std::size_t>(r)] + count;
     }
     nb_rows.resize(static_cast<std::size_t>(nb_offsets.back()));
-    parallel(m, [&](std::int64_t begin, std::int64_t end) {
+    chunked(executor, m, [&](std::int64_t begin, std::int64_t end) {
       for (std::int64_t r = begin; r < end; ++r) {
         const auto v = static_cast<std::size_t>((*row_vertex)[static_cast<std::size_t>(r)]);
         std::int32_t slot = nb_offsets[static_cast<std::size_t>(r)];
@@ -114,22 +132,6 @@ struct RegionSystem {
     });
   }
 
-  static constexpr std::int64_t kGrain = 8192;
-  void parallel(std::int64_t n, const std::function<void(std::int64_t, std::int64_t)>& fn, std::int64_t grain = kGrain) const {
-    if (executor && n >= 32768)  // smaller: dispatch costs more than it saves
-      executor->parallel_for(n, grain, fn);
-    else
-      fn(0, n);
-  }
-  template <class Body>
-  detail::Sums blocked_sums(std::int64_t n, const Body& body) const {
-    return detail::blocked_sums(
-        n, kGrain / detail::kSumBlock,
-        [&](std::int64_t count, const std::function<void(std::int64_t, std::int64_t)>& fn, std::int64_t grain) {
-          parallel(count, fn, grain);
-        },
-        body);
-  }
   // The sum over row r's unknown neighbours j of scale(j) x.row(j).
   template <class Scale>
   Eigen::RowVector3d ring_sum(std::int64_t r, const Vertices& x, const Scale& scale) const {
@@ -142,7 +144,7 @@ struct RegionSystem {
   }
   // y = L x (0 on an isolated vertex's row).
   void laplacian(const Vertices& x, Vertices& y) const {
-    parallel(x.rows(), [&](std::int64_t begin, std::int64_t end) {
+    chunked(executor, x.rows(), [&](std::int64_t begin, std::int64_t end) {
       for (std::int64_t r = begin; r < end; ++r) {
         const double d = inv_deg(r);
         y.row(r) = d > 0 ? Eigen::RowVector3d(x.row(r) - d * ring_sum(r, x, [](std::int32_t) { return 1.0; }))
