@@ -5,6 +5,15 @@
 #include <cmath>
 #include <cstdint>
 
+// Before a loop function: compile it for AVX2 as well and pick the version at run time (GCC on
+// x86-64; not under ASan, which does not support the resolver). Without FMA contraction both
+// versions do the same IEEE operations.
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__) && !defined(__SANITIZE_ADDRESS__)
+#define MDN_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
+#else
+#define MDN_AVX2_CLONE
+#endif
+
 namespace mdn::detail {
 
 // exp(y) for y <= 0, within 2 ulp of std::exp (tested), inlined and branch-light so the

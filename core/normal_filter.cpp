@@ -20,9 +20,7 @@ namespace {
 // Single precision (decision 36). Branch-free so that it vectorises; compiled for AVX2 too and
 // picked at run time. Without FMA contraction (-ffp-contract=off) both versions do the same
 // IEEE operations, so the weights are identical on every x86-64 machine.
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__) && !defined(__SANITIZE_ADDRESS__)
-__attribute__((target_clones("avx2", "default")))
-#endif
+MDN_AVX2_CLONE
 void range_weights(float* range, std::int64_t n, float inv_range, float sw, bool l1_median) {
   const float half_inv_range = 0.5f * inv_range;
   for (std::int64_t q = 0; q < n; ++q) {
@@ -35,9 +33,7 @@ void range_weights(float* range, std::int64_t n, float inv_range, float sw, bool
 
 // out[q] = a[q] exp(y[q]) (y <= 0) rounded to float: the spatial weights (Eq. 6) of a block of
 // neighbour entries. Branch-free, compiled for AVX2 too (the same IEEE operations).
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__) && !defined(__SANITIZE_ADDRESS__)
-__attribute__((target_clones("avx2", "default")))
-#endif
+MDN_AVX2_CLONE
 void area_times_exp(const double* a, const double* y, float* out, std::int64_t n) {
   for (std::int64_t q = 0; q < n; ++q) out[q] = static_cast<float>(a[q] * detail::exp_nonpositive(y[q]));
 }

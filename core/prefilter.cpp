@@ -297,9 +297,7 @@ namespace {
 // sigma_theta) <= 0, in place; y_e > 0 marks an edge with a degenerate face, whose w_e is 1.
 // Branch-free so that it vectorises (the same IEEE operations as the scalar exp_nonpositive:
 // no FMA contraction), compiled for AVX2 too and picked at run time.
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__) && !defined(__SANITIZE_ADDRESS__)
-__attribute__((target_clones("avx2", "default")))
-#endif
+MDN_AVX2_CLONE
 void edge_weights_from_exponents(double* w, std::int64_t n) {
   for (std::int64_t e = 0; e < n; ++e) w[e] = w[e] > 0 ? 1.0 : detail::exp_nonpositive(w[e]);
 }
