@@ -148,17 +148,38 @@ std::uint64_t hash_name(const std::string& text) {
   return h;
 }
 
-std::string split_of(const std::string& shape) { return hash_name("split/" + shape) % 5 == 0 ? "holdout" : "train"; }
+namespace {
+// A retessellated copy of a shape is named PARENT~tess (docs/experiments/2026-12-03-retessellated-corpus.md); it is the parent's
+// surface, so it follows the parent's split.
+constexpr const char* kTessSuffix = "~tess";
+std::string parent_of(const std::string& shape) { return shape.substr(0, shape.find('~')); }
+bool gets_retessellated(const std::string& shape) { return hash_name("tess/" + shape) % 3 == 0; }
+}  // namespace
+
+std::string split_of(const std::string& shape) {
+  return hash_name("split/" + parent_of(shape)) % 5 == 0 ? "holdout" : "train";
+}
 
 std::vector<std::string> shape_names(const std::filesystem::path& cgal_dir) {
   std::vector<std::string> names;
   for (const auto& [name, _] : procedural()) names.push_back(name);
   for (const std::string& name : kCgalTraining)
     if (!cgal_dir.empty() && std::filesystem::exists(cgal_dir / (name + ".off"))) names.push_back("cgal_" + name);
+  const std::size_t parents = names.size();
+  for (std::size_t i = 0; i < parents; ++i)
+    if (gets_retessellated(names[i])) names.push_back(names[i] + kTessSuffix);
   return names;
 }
 
 Shape make_shape(const std::string& name, const std::filesystem::path& cgal_dir) {
+  if (name.size() > std::string(kTessSuffix).size() && name.ends_with(kTessSuffix)) {
+    const std::string parent = parent_of(name);
+    if (parent + kTessSuffix != name || !gets_retessellated(parent)) throw std::invalid_argument("unknown shape: " + name);
+    Shape s = make_shape(parent, cgal_dir);
+    s.name = name;
+    s.mesh = retessellate(s.mesh, hash_name("tess/" + parent));
+    return s;
+  }
   for (const auto& [n, entry] : procedural())
     if (n == name) return {name, entry.first, entry.second()};
   if (name.rfind("cgal_", 0) == 0) {

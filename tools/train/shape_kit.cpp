@@ -2,7 +2,10 @@
 #include "shape_kit.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
+#include <set>
 #include <numbers>
 #include <random>
 
@@ -201,6 +204,162 @@ TriMesh irregular(const TriMesh& m) {
   const double cut = lo + 0.3 * (hi - lo);
   const auto slab = [cut](const Vec3& c) { return c.x() < cut; };
   return test::refine_where(test::refine_where(m, slab), slab);
+}
+
+namespace {
+
+using Edge = std::pair<int, int>;
+Edge edge_key(int a, int b) { return {std::min(a, b), std::max(a, b)}; }
+Vec3 vertex(const TriMesh& m, int i) { return m.V.row(i).transpose(); }
+Vec3 face_cross(const Vec3& a, const Vec3& b, const Vec3& c) { return (b - a).cross(c - a); }
+
+double min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const auto angle = [](const Vec3& p, const Vec3& q, const Vec3& r) {
+    return std::atan2((q - p).cross(r - p).norm(), (q - p).dot(r - p));
+  };
+  return std::min({angle(a, b, c), angle(b, c, a), angle(c, a, b)});
+}
+
+TriMesh from_lists(const std::vector<Vec3>& v, const std::vector<std::array<int, 3>>& f) {
+  TriMesh m;
+  m.V.resize(static_cast<Eigen::Index>(v.size()), 3);
+  for (std::size_t i = 0; i < v.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = v[i].transpose();
+  m.F.resize(static_cast<Eigen::Index>(f.size()), 3);
+  for (std::size_t i = 0; i < f.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << f[i][0], f[i][1], f[i][2];
+  return m;
+}
+
+}  // namespace
+
+TriMesh split_along(const TriMesh& m, const Vec3& dir, double max_angle_deg) {
+  const Vec3 d = dir.normalized();
+  const double cos_min = std::cos(max_angle_deg * kPi / 180);
+  std::vector<Vec3> v;
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i) v.push_back(vertex(m, static_cast<int>(i)));
+  std::map<Edge, int> mid;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = m.F(f, k), b = m.F(f, (k + 1) % 3);
+      const Vec3 e = v[static_cast<std::size_t>(b)] - v[static_cast<std::size_t>(a)];
+      if (std::abs(e.dot(d)) >= cos_min * e.norm() && !mid.count(edge_key(a, b))) {
+        mid[edge_key(a, b)] = static_cast<int>(v.size());
+        v.push_back(0.5 * (v[static_cast<std::size_t>(a)] + v[static_cast<std::size_t>(b)]));
+      }
+    }
+  std::vector<std::array<int, 3>> out;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f) {
+    const int c[3] = {m.F(f, 0), m.F(f, 1), m.F(f, 2)};
+    int s[3];  // s[k]: the midpoint of edge c[k] c[k+1], or -1
+    int count = 0;
+    for (int k = 0; k < 3; ++k) {
+      const auto it = mid.find(edge_key(c[k], c[(k + 1) % 3]));
+      s[k] = it == mid.end() ? -1 : it->second;
+      count += s[k] >= 0;
+    }
+    if (count == 0) {
+      out.push_back({c[0], c[1], c[2]});
+    } else if (count == 3) {
+      out.push_back({c[0], s[0], s[2]});
+      out.push_back({c[1], s[1], s[0]});
+      out.push_back({c[2], s[2], s[1]});
+      out.push_back({s[0], s[1], s[2]});
+    } else {
+      // Rotate so that edge 0 is split (count 1) or edge 2 is the unsplit one (count 2).
+      int r = 0;
+      if (count == 1) while (s[r] < 0) ++r;
+      else while (s[(r + 2) % 3] >= 0) ++r;
+      const int a = c[r], b = c[(r + 1) % 3], e = c[(r + 2) % 3];
+      const int ab = s[r], bc = s[(r + 1) % 3];
+      if (count == 1) {
+        out.push_back({a, ab, e});
+        out.push_back({ab, b, e});
+      } else {
+        out.push_back({ab, b, bc});
+        // The quad a, ab, bc, e: the shorter diagonal.
+        const auto len = [&](int p, int q) { return (v[static_cast<std::size_t>(p)] - v[static_cast<std::size_t>(q)]).norm(); };
+        if (len(a, bc) <= len(ab, e)) {
+          out.push_back({a, ab, bc});
+          out.push_back({a, bc, e});
+        } else {
+          out.push_back({a, ab, e});
+          out.push_back({ab, bc, e});
+        }
+      }
+    }
+  }
+  return from_lists(v, out);
+}
+
+TriMesh flip_random(const TriMesh& m, std::uint64_t seed, double p, double max_dihedral_deg) {
+  std::vector<std::array<int, 3>> f(static_cast<std::size_t>(m.F.rows()));
+  for (std::size_t i = 0; i < f.size(); ++i)
+    for (int k = 0; k < 3; ++k) f[i][static_cast<std::size_t>(k)] = m.F(static_cast<Eigen::Index>(i), k);
+  std::map<Edge, std::vector<int>> faces_of;
+  for (std::size_t i = 0; i < f.size(); ++i)
+    for (int k = 0; k < 3; ++k) faces_of[edge_key(f[i][static_cast<std::size_t>(k)], f[i][static_cast<std::size_t>((k + 1) % 3)])].push_back(static_cast<int>(i));
+  std::vector<Edge> edges;
+  for (const auto& [e, fs] : faces_of)
+    if (fs.size() == 2) edges.push_back(e);
+  std::mt19937_64 rng(seed);
+  std::shuffle(edges.begin(), edges.end(), rng);
+  std::set<Edge> existing;
+  for (const auto& [e, _] : faces_of) existing.insert(e);
+  std::vector<bool> touched(f.size(), false);
+  const double cos_max = std::cos(max_dihedral_deg * kPi / 180), min_new = 2 * kPi / 180;
+  std::uniform_real_distribution<double> u(0, 1);
+  for (const Edge& e : edges) {
+    if (u(rng) >= p) continue;
+    const std::vector<int>& fs = faces_of[e];
+    const int f1 = fs[0], f2 = fs[1];
+    if (touched[static_cast<std::size_t>(f1)] || touched[static_cast<std::size_t>(f2)]) continue;
+    // Orient so that f1 holds a -> b and f2 holds b -> a; c and d are the opposite corners.
+    const auto& t1 = f[static_cast<std::size_t>(f1)];
+    const auto& t2 = f[static_cast<std::size_t>(f2)];
+    int k1 = 0;
+    while (!((t1[static_cast<std::size_t>(k1)] == e.first || t1[static_cast<std::size_t>(k1)] == e.second) &&
+             (t1[static_cast<std::size_t>((k1 + 1) % 3)] == e.first || t1[static_cast<std::size_t>((k1 + 1) % 3)] == e.second)))
+      ++k1;
+    const int a = t1[static_cast<std::size_t>(k1)], b = t1[static_cast<std::size_t>((k1 + 1) % 3)], c = t1[static_cast<std::size_t>((k1 + 2) % 3)];
+    int d = -1;
+    for (int k = 0; k < 3; ++k)
+      if (t2[static_cast<std::size_t>(k)] != a && t2[static_cast<std::size_t>(k)] != b) d = t2[static_cast<std::size_t>(k)];
+    if (d < 0 || c == d || existing.count(edge_key(c, d))) continue;
+    const Vec3 A = vertex(m, a), B = vertex(m, b), C = vertex(m, c), D = vertex(m, d);
+    const Vec3 n1 = face_cross(A, B, C).normalized(), n2 = face_cross(B, A, D).normalized();
+    if (n1.dot(n2) < cos_max) continue;
+    // The new faces (c, a, d) and (c, d, b) keep the orientation (shape_kit.h).
+    const Vec3 m1 = face_cross(C, A, D), m2 = face_cross(C, D, B);
+    if (m1.norm() <= 0 || m2.norm() <= 0) continue;
+    const Vec3 old_n = (n1 + n2).normalized();
+    if (m1.normalized().dot(old_n) < cos_max || m2.normalized().dot(old_n) < cos_max) continue;
+    if (min_angle(C, A, D) < min_new || min_angle(C, D, B) < min_new) continue;
+    f[static_cast<std::size_t>(f1)] = {c, a, d};
+    f[static_cast<std::size_t>(f2)] = {c, d, b};
+    touched[static_cast<std::size_t>(f1)] = touched[static_cast<std::size_t>(f2)] = true;
+    existing.erase(e);
+    existing.insert(edge_key(c, d));
+  }
+  std::vector<Vec3> v;
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i) v.push_back(vertex(m, static_cast<int>(i)));
+  return from_lists(v, f);
+}
+
+TriMesh retessellate(const TriMesh& m, std::uint64_t seed, std::string* tag) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const int style = std::uniform_int_distribution<int>(0, 3)(rng);
+  Vec3 dir(u(rng), u(rng), u(rng));
+  if (dir.norm() < 1e-3) dir = Vec3::UnitX();
+  const double spread = std::uniform_real_distribution<double>(25, 40)(rng);
+  const std::uint64_t flip_seed = rng();
+  static const char* const kTags[] = {"aniso1", "aniso2", "flip", "aniso1+flip"};
+  if (tag) *tag = kTags[style];
+  switch (style) {
+    case 0: return split_along(m, dir, spread);
+    case 1: return split_along(split_along(m, dir, spread), dir, spread);
+    case 2: return flip_random(m, flip_seed, 0.6, 8);
+    default: return flip_random(split_along(m, dir, spread), flip_seed, 0.6, 8);
+  }
 }
 
 }  // namespace mdn::train::kit

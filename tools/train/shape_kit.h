@@ -32,6 +32,19 @@ TriMesh terrain(std::uint64_t seed, int n);
 TriMesh tube(double swell, double lift, int turns, int nu, int nv);
 // Refines the slab x < min + 0.3 extent twice (16x denser): an irregular tessellation.
 TriMesh irregular(const TriMesh& m);
+// Splits at its midpoint every edge within about `max_angle_deg` of the line `dir`, and
+// re-triangulates each face to match (the surface is unchanged): faces become shorter along
+// `dir` only, an anisotropic tessellation.
+TriMesh split_along(const TriMesh& m, const Vec3& dir, double max_angle_deg);
+// Flips, in a seeded random order, each edge with probability `p` where its two faces are
+// within `max_dihedral_deg` of coplanar and both new faces keep an angle over 2 degrees and a
+// normal within `max_dihedral_deg` of the old ones: irregular valences on nearly the same
+// surface.
+TriMesh flip_random(const TriMesh& m, std::uint64_t seed, double p, double max_dihedral_deg);
+// One of four seeded retessellations of `m` (docs/experiments/2026-12-03-retessellated-corpus.md): split along a random direction once
+// or twice, random flips, or both. The tag names the one chosen ("aniso1", "aniso2", "flip",
+// "aniso1+flip").
+TriMesh retessellate(const TriMesh& m, std::uint64_t seed, std::string* tag = nullptr);
 
 struct Generated {
   std::string name;
