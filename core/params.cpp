@@ -84,7 +84,7 @@ const std::array<ParamSpec, 15> kSpecs{{
     {"b", false, 1, 100, 1.7320508075688772, 1.7320508075688772, "", "Eq. 4", "base of the exponential edge weight", &P::b, nullptr},
     {"bilateral_switch", false, 0, 2, 1e-3, 1e-3, "", "Eq. 7", "||n_i - n_j|| below which bilateral weights are used", &P::bilateral_switch, nullptr},
     {"sigma_c_factor", false, 0.01, 100, 1.5, 1.5, "", "Eq. 6", "sigma_c in multiples of the mean centroid distance of adjacent faces", &P::sigma_c_factor, nullptr},
-    {"cg_tolerance", false, 1e-16, 1e-2, 1e-10, 1e-10, "", "", "relative residual of the conjugate-gradient solver", &P::cg_tolerance, nullptr},
+    {"cg_tolerance", false, 1e-16, 1e-2, 1e-8, 1e-8, "", "", "relative residual of the conjugate-gradient solver", &P::cg_tolerance, nullptr},
 }};
 
 std::string format_number(double v) {

@@ -78,7 +78,7 @@ struct DenoiseParams {
 
   // --- Numerics (do not change the result beyond solver tolerance) ---
   LinearSolver solver = LinearSolver::ConjugateGradient;
-  double cg_tolerance = 1e-10;    // relative residual for LinearSolver::ConjugateGradient
+  double cg_tolerance = 1e-8;     // relative residual for LinearSolver::ConjugateGradient (decision 41)
 
   // Throws InvalidParamsError naming the first field outside its accepted range.
   void validate() const;

@@ -251,16 +251,17 @@ struct ShapingSolver::Impl {
     throw SolverError("conjugate gradients did not converge on the pre-filter system");
   }
 
-  Vertices solve(const Vertices& P, double alpha, const Eigen::VectorXd& weights) {
+  Vertices solve(const Vertices& P, double alpha, const Eigen::VectorXd& weights, std::optional<Vertices> start) {
     if (weights.size() != 0 && weights.size() != topo->num_interior_edges())
       throw std::invalid_argument("ShapingSolver: one weight per interior edge expected");
     Vertices x;
     if (kind == LinearSolver::Ldlt) {
       x = solve_ldlt(P, alpha, weights);
-    } else {  // start from the anchor: A = I + (small) so P is already close
+    } else {  // start from the anchor (A = I + (small), so P is already close) or the caller's start
       const detail::ShapingIncidence op{topo, &ve_offsets, &ve_edges, &ve_split, threads()};
       jacobi_preconditioner(alpha, weights);
-      const int single_iterations = single.solve(op, P, alpha, weights, inv_diag_buf, cg_tolerance, 1000, x);
+      if (start) x = std::move(*start);
+      const int single_iterations = single.solve(op, P, alpha, weights, inv_diag_buf, cg_tolerance, 1000, x, start.has_value());
       x = solve_cg(P, alpha, weights, std::move(x));
       last_iterations += single_iterations;
     }
@@ -272,8 +273,9 @@ struct ShapingSolver::Impl {
 ShapingSolver::ShapingSolver(const Topology& topo, LinearSolver kind, double cg_tolerance, Executor* executor)
     : impl_(std::make_unique<Impl>(topo, kind, cg_tolerance, executor)) {}
 ShapingSolver::~ShapingSolver() = default;
-Vertices ShapingSolver::solve(const Vertices& P, double alpha, const Eigen::VectorXd& weights) {
-  return impl_->solve(P, alpha, weights);
+Vertices ShapingSolver::solve(const Vertices& P, double alpha, const Eigen::VectorXd& weights,
+                               std::optional<Vertices> start) {
+  return impl_->solve(P, alpha, weights, std::move(start));
 }
 int ShapingSolver::last_iterations() const { return impl_->last_iterations; }
 Executor* ShapingSolver::executor() const { return impl_->executor; }
@@ -339,7 +341,11 @@ Eigen::VectorXd anisotropic_edge_weights(const Vertices& P, const Triangles& F, 
   return w;
 }
 
-// Eq. 3, iterated: each step anchored to the previous output, w_e recomputed from it.
+// Eq. 3, iterated: each step anchored to the previous output, w_e recomputed from it. From the
+// second pass on, CG starts from P_k + (P_k - P_k-1), the last pass's step repeated (decision
+// 42): the weights change little from pass to pass, so the step does too, and the start is
+// nearer the solution than the anchor (1.2M faces, heavy: 126 -> 104 CG iterations over 16
+// passes).
 Vertices anisotropic_prefilter(const Vertices& P, const Triangles& F, const Topology& topo,
                                const DenoiseParams& params, ShapingSolver* solver, ProgressObserver* progress,
                                const IterationHook& on_iteration) {
@@ -349,13 +355,22 @@ Vertices anisotropic_prefilter(const Vertices& P, const Triangles& F, const Topo
     solver = own.get();
   }
   Vertices current = P;
-  Vertices normals;  // reused by every pass
+  Vertices previous;  // the last pass's anchor, then (in place) the next pass's start
+  Vertices normals;   // reused by every pass
   Eigen::VectorXd w;
   if (on_iteration) on_iteration(0, current);
   for (int it = 0; it < params.n_aniso; ++it) {
     checkpoint(progress, Stage::AnisotropicPrefilter, static_cast<double>(it) / params.n_aniso);
     edge_weights_into(current, F, topo, params.sigma_theta, params.b, solver->executor(), normals, w);
-    current = solver->solve(current, params.alpha, w);
+    Vertices next;
+    if (it == 0) {
+      next = solver->solve(current, params.alpha, w);
+    } else {
+      previous = 2 * current - previous;  // taken over by the solve: no third array is held
+      next = solver->solve(current, params.alpha, w, std::move(previous));
+    }
+    previous = std::move(current);
+    current = std::move(next);
     if (on_iteration) on_iteration(it + 1, current);
   }
   return current;

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "core/mesh.h"
@@ -26,8 +27,10 @@ class ShapingSolver {
   // executor: optional threads for the CG solver (results do not depend on the count).
   ShapingSolver(const Topology& topo, LinearSolver kind, double cg_tolerance, Executor* executor = nullptr);
   ~ShapingSolver();
-  // Returns the solution P~ (#V by 3). weights: #E edge weights, or empty for W = I.
-  Vertices solve(const Vertices& P, double alpha, const Eigen::VectorXd& weights);
+  // Returns the solution P~ (#V by 3). weights: #E edge weights, or empty for W = I. start:
+  // CG's first iterate (#V by 3; none: P itself), taken over as its iterate; LDLT ignores it.
+  Vertices solve(const Vertices& P, double alpha, const Eigen::VectorXd& weights,
+                 std::optional<Vertices> start = std::nullopt);
   // CG iterations of the last solve: single-precision and double ones together (decision 37;
   // 0 for LDLT).
   int last_iterations() const;
@@ -53,7 +56,8 @@ Eigen::VectorXd anisotropic_edge_weights(const Vertices& P, const Triangles& F, 
                                          double sigma_theta_deg, double b);
 
 // Eq. 3, iterated `iterations` times, each anchored to the previous output with w_e
-// recomputed. `solver` is reused across calls if given. Checks `progress` for
+// recomputed; from the second pass on, CG starts from the last pass's step repeated
+// (decision 42). `solver` is reused across calls if given. Checks `progress` for
 // cancellation before every iteration (throws CancelledError).
 Vertices anisotropic_prefilter(const Vertices& P, const Triangles& F, const Topology& topo,
                                const DenoiseParams& params, ShapingSolver* solver = nullptr,

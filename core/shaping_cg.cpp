@@ -48,21 +48,27 @@ void SingleCG::prepare(const ShapingIncidence& op, double alpha, const Eigen::Ve
   for (auto* v : {&s_, &r_, &p_, &ap_}) v->resize(static_cast<std::size_t>(4 * (v == &s_ ? E : n)));
 }
 
-// r = P - A P = -alpha D^T W D P with S(e) formed in double from P (the coordinates are ~1 and
-// S(e) ~ an edge length: in float the difference would lose four digits), then rounded;
-// p = z = D^-1 r. Returns r . z and r . r in double.
-Sums SingleCG::initial_residual(const ShapingIncidence& op, const Vertices& P, double alpha, const Eigen::VectorXd& weights) {
+// r = P - A x0 = (P - x0) - alpha D^T W D x0, x0 = start or P (then r = -alpha D^T W D P), with
+// S(e) and P - x0 formed in double (the coordinates are ~1 and S(e) ~ an edge length: in float
+// the difference would lose four digits), then rounded; p = z = D^-1 r. Returns r . z and
+// r . r in double.
+Sums SingleCG::initial_residual(const ShapingIncidence& op, const Vertices& P, const Vertices* start, double alpha,
+                                const Eigen::VectorXd& weights) {
   const auto& ie = op.topo->interior_edges;
+  const Vertices& x0 = start ? *start : P;
   chunked(op.executor, op.topo->num_interior_edges(), [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t e = begin; e < end; ++e) {
       const double w = alpha * (weights.size() ? weights(e) : 1.0);
-      const Eigen::RowVector3d se = w * (P.row(ie(e, 0)) - P.row(ie(e, 1)) + P.row(ie(e, 2)) - P.row(ie(e, 3)));
+      const Eigen::RowVector3d se = w * (x0.row(ie(e, 0)) - x0.row(ie(e, 1)) + x0.row(ie(e, 2)) - x0.row(ie(e, 3)));
       Ref4f(s_.data() + 4 * e) << static_cast<float>(se(0)), static_cast<float>(se(1)), static_cast<float>(se(2)), 0.0f;
     }
   });
   return blocked_sums(op.executor, P.rows(), [&](std::int64_t v, Sums& sum) {
     Ref4f r(r_.data() + 4 * v), p(p_.data() + 4 * v);
-    r = -gather(op, s_.data(), v);
+    if (start)
+      r = to4f((P.row(v) - start->row(v)).array().transpose()) - gather(op, s_.data(), v);
+    else
+      r = -gather(op, s_.data(), v);
     p = inv_diag_[static_cast<std::size_t>(v)] * r;
     sum.col(0) += xyz(r) * xyz(p);
     sum.col(1) += xyz(r) * xyz(r);
@@ -110,11 +116,11 @@ Sums SingleCG::step(const ShapingIncidence& op, const Eigen::Array3d& step, Vert
 }
 
 int SingleCG::solve(const ShapingIncidence& op, const Vertices& P, double alpha, const Eigen::VectorXd& weights,
-                    const Eigen::VectorXd& inv_diag, double tolerance, int max_iterations, Vertices& x) {
+                    const Eigen::VectorXd& inv_diag, double tolerance, int max_iterations, Vertices& x, bool from_x) {
   const Eigen::Index n = P.rows();
   prepare(op, alpha, weights, inv_diag);
-  x = P;
-  const Sums rz_rr0 = initial_residual(op, P, alpha, weights);
+  if (!from_x) x = P;
+  const Sums rz_rr0 = initial_residual(op, P, from_x ? &x : nullptr, alpha, weights);
   Eigen::Array3d rz = rz_rr0.col(0), r_norm2 = rz_rr0.col(1);
   const Eigen::Array3d threshold =
       (tolerance * tolerance) * blocked_sums(op.executor, n, [&](std::int64_t v, Sums& sum) {

@@ -75,18 +75,20 @@ Sums blocked_sums(Executor* threads, std::int64_t n, const Body& body) {
 
 class SingleCG {
  public:
-  // Jacobi-preconditioned CG on A x = P started from x = P, until the (recurrence) residual of
-  // every column is at most tolerance x ||P column|| or after max_iterations. weights: #E, or
-  // empty for W = I; inv_diag: #V, 1 / diag(A) in double (ShapingSolver's, shared with its
-  // double check), used rounded to float. Returns the iterations run; x is #V x 3.
+  // Jacobi-preconditioned CG on A x = P started from x as given where from_x (#V x 3), else
+  // from x = P, until the (recurrence) residual of every column is at most tolerance x ||P
+  // column|| or after max_iterations. weights: #E, or empty for W = I; inv_diag: #V, 1 /
+  // diag(A) in double (ShapingSolver's, shared with its double check), used rounded to float.
+  // Returns the iterations run; x is #V x 3.
   int solve(const ShapingIncidence& op, const Vertices& P, double alpha, const Eigen::VectorXd& weights,
-            const Eigen::VectorXd& inv_diag, double tolerance, int max_iterations, Vertices& x);
+            const Eigen::VectorXd& inv_diag, double tolerance, int max_iterations, Vertices& x, bool from_x = false);
   // Frees the work vectors (the next solve allocates them again).
   void release();
 
  private:
   void prepare(const ShapingIncidence& op, double alpha, const Eigen::VectorXd& weights, const Eigen::VectorXd& inv_diag);
-  Sums initial_residual(const ShapingIncidence& op, const Vertices& P, double alpha, const Eigen::VectorXd& weights);
+  Sums initial_residual(const ShapingIncidence& op, const Vertices& P, const Vertices* start, double alpha,
+                        const Eigen::VectorXd& weights);  // start: nullptr where x0 = P
   Eigen::Array3d apply(const ShapingIncidence& op);
   Sums step(const ShapingIncidence& op, const Eigen::Array3d& step, Vertices& x);
   std::vector<float> ws_, s_, r_, p_, ap_, inv_diag_;

@@ -20,7 +20,7 @@ Method:
    descriptors; auto runs the set of lowest prediction. Clean cases count --clean-weight times.
    --alpha is the networks' L2 penalty: 0.1 rather than 0.01 gives up a little on the holdout
    shapes for a steadier result on shapes unlike the corpus's (decision 40). Sixteen members
-   rather than three average away most of the seed-to-seed spread of the picks (decision 44).
+   rather than three average away most of the seed-to-seed spread of the picks (decision 43).
 Splits are by shape (`split` column, corpus.cpp): the network sees only "train" shapes; the
 figures printed and recorded are those of the "holdout" shapes.
 """
@@ -138,7 +138,7 @@ def main():
     ap.add_argument("--hidden", type=int, default=64)
     ap.add_argument("--alpha", type=float, default=0.1, help="L2 penalty of the networks (decision 40)")
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--members", type=int, default=16, help="networks averaged (different seeds; decision 44)")
+    ap.add_argument("--members", type=int, default=16, help="networks averaged (different seeds; decision 43)")
     ap.add_argument("--clean-weight", type=int, default=4, help="times each clean case is repeated in training")
     ap.add_argument("--report")
     a = ap.parse_args()
