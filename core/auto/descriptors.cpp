@@ -60,7 +60,7 @@ const std::vector<std::string>& descriptor_names() {
       "dev2_p90",         "dihedral_median",  "dihedral_p75",     "dihedral_p90",     "dihedral_p99",
       "dihedral_over20",  "dihedral_over60",  "dihedral_over130", "edge_cv",          "edge_log_p90_p10",
       "min_angle_median", "sliver_share",     "boundary_share",   "dev_over_dihedral",
-      "dihedral_flat_share", "dihedral_p10",  "dev_p10"};
+      "dihedral_flat_share", "dihedral_p10",  "dev_p10",  "devl_median", "devl_p90", "devl_over_dev"};
   return names;
 }
 
@@ -94,9 +94,10 @@ struct Read {
 };
 
 // Per scored face: the angle to its ring's mean normal (noise with no recorruption), the same
-// after one more mean filter (what survives smoothing: features), the triangle's smallest angle.
+// after one more mean filter (what survives smoothing: features), the same between one and four
+// mean filters (decision 45), the triangle's smallest angle.
 struct FaceReadings {
-  std::vector<double> dev, dev2, min_angle, dihedral, edges;
+  std::vector<double> dev, dev2, devl, min_angle, dihedral, edges;
 };
 
 FaceReadings read_faces(const Read& r, Executor& executor) {
@@ -108,12 +109,22 @@ FaceReadings read_faces(const Read& r, Executor& executor) {
   executor.parallel_for(F.rows(), [&](std::int64_t b, std::int64_t e) {
     for (std::int64_t f = b; f < e; ++f) M.row(f) = ring_mean(*r.topo, N, A, f).transpose();
   });
+  // Decision 45: three more mean filters; the angle between M and that (devl) is what survives
+  // heavy smoothing, a feature's reading at a scale the noise no longer reaches.
+  Vertices L = M, L2(F.rows(), 3);
+  for (int pass = 0; pass < 3; ++pass) {
+    executor.parallel_for(F.rows(), [&](std::int64_t b, std::int64_t e) {
+      for (std::int64_t f = b; f < e; ++f) L2.row(f) = ring_mean(*r.topo, L, A, f).transpose();
+    });
+    L.swap(L2);
+  }
   std::vector<std::int32_t> faces;
   for (std::int64_t f = 0; f < F.rows(); ++f)
     if (r.scored(f)) faces.push_back(static_cast<std::int32_t>(f));
   FaceReadings out;
   out.dev.resize(faces.size());
   out.dev2.resize(faces.size());
+  out.devl.resize(faces.size());
   out.min_angle.resize(faces.size());
   executor.parallel_for(static_cast<std::int64_t>(faces.size()), [&](std::int64_t b, std::int64_t e) {
     for (std::int64_t k = b; k < e; ++k) {
@@ -121,6 +132,7 @@ FaceReadings read_faces(const Read& r, Executor& executor) {
       const auto i = static_cast<std::size_t>(k);
       out.dev[i] = angle(N.row(f).transpose(), M.row(f).transpose());
       out.dev2[i] = angle(M.row(f).transpose(), ring_mean(*r.topo, M, A, f));
+      out.devl[i] = angle(M.row(f).transpose(), L.row(f).transpose());
       double smallest = M_PI;
       for (int c = 0; c < 3; ++c) {
         const Vec3 a = P.row(F(f, c)).transpose(), b2 = P.row(F(f, (c + 1) % 3)).transpose(), c2 = P.row(F(f, (c + 2) % 3)).transpose();
@@ -186,7 +198,10 @@ std::vector<double> values_of(std::int64_t faces, double boundary_share, const N
           // already tilts them by degrees) and the low tails.
           1 - share_above(r.dihedral, 0.01 * deg),
           lg(quantile(r.dihedral, 0.1)),
-          lg(quantile(r.dev, 0.1))};
+          lg(quantile(r.dev, 0.1)),
+          lg(quantile(r.devl, 0.5)),
+          lg(quantile(r.devl, 0.9)),
+          dev_median > 0 ? std::log(std::max(quantile(r.devl, 0.9), 1e-6) / dev_median) : 0};
 }
 
 }  // namespace
