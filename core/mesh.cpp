@@ -74,6 +74,15 @@ void face_normals_range(const Vertices& V, const Triangles& F, Vertices& N, std:
 }
 }  // namespace
 
+TriMesh tri_mesh_from_lists(const std::vector<Vec3>& positions, const std::vector<std::array<int, 3>>& faces) {
+  TriMesh m;
+  m.V.resize(static_cast<Eigen::Index>(positions.size()), 3);
+  for (std::size_t i = 0; i < positions.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = positions[i].transpose();
+  m.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  for (std::size_t i = 0; i < faces.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << faces[i][0], faces[i][1], faces[i][2];
+  return m;
+}
+
 Vertices face_normals(const Vertices& V, const Triangles& F) {
   Vertices N(F.rows(), 3);
   face_normals_range(V, F, N, 0, F.rows());

@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>  // cross products
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <vector>
@@ -41,6 +42,9 @@ void validate_mesh(const TriMesh& mesh);
 // Converts a polygon mesh whose faces are all triangles. Throws InvalidMeshError naming
 // the first face that is not a triangle, or an index outside [0, #V) / beyond int32.
 TriMesh to_tri_mesh(const PolygonMesh& poly);
+
+// A TriMesh from lists of positions and corner indices (shapes made in code: tests, tools/train).
+TriMesh tri_mesh_from_lists(const std::vector<Vec3>& positions, const std::vector<std::array<int, 3>>& faces);
 
 // Per-face unit normals (#F by 3). A degenerate (zero-area) face gets the zero vector.
 Vertices face_normals(const Vertices& V, const Triangles& F);

@@ -111,12 +111,7 @@ inline TriMesh sphere(int levels) {
     }
     f.swap(next);
   }
-  TriMesh m;
-  m.V.resize(static_cast<Eigen::Index>(v.size()), 3);
-  for (std::size_t i = 0; i < v.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = v[i].transpose();
-  m.F.resize(static_cast<Eigen::Index>(f.size()), 3);
-  for (std::size_t i = 0; i < f.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << f[i][0], f[i][1], f[i][2];
-  return m;
+  return tri_mesh_from_lists(v, f);
 }
 
 // A folded sheet: two planar n x n wings meeting at the crease x = 0 with the given dihedral
@@ -281,12 +276,7 @@ TriMesh refine_where(const TriMesh& in, Select select) {
     }
     if (!done) out.push_back({a, b, c});
   }
-  TriMesh m;
-  m.V.resize(static_cast<Eigen::Index>(v.size()), 3);
-  for (std::size_t i = 0; i < v.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = v[i].transpose();
-  m.F.resize(static_cast<Eigen::Index>(out.size()), 3);
-  for (std::size_t i = 0; i < out.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << out[i][0], out[i][1], out[i][2];
-  return m;
+  return tri_mesh_from_lists(v, out);
 }
 
 // A unit sphere whose upper cap (z > 0.2) is sampled 16 times more densely (two conforming

@@ -220,15 +220,6 @@ double min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
   return std::min({angle(a, b, c), angle(b, c, a), angle(c, a, b)});
 }
 
-TriMesh from_lists(const std::vector<Vec3>& v, const std::vector<std::array<int, 3>>& f) {
-  TriMesh m;
-  m.V.resize(static_cast<Eigen::Index>(v.size()), 3);
-  for (std::size_t i = 0; i < v.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = v[i].transpose();
-  m.F.resize(static_cast<Eigen::Index>(f.size()), 3);
-  for (std::size_t i = 0; i < f.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) << f[i][0], f[i][1], f[i][2];
-  return m;
-}
-
 }  // namespace
 
 TriMesh split_along(const TriMesh& m, const Vec3& dir, double max_angle_deg) {
@@ -287,7 +278,7 @@ TriMesh split_along(const TriMesh& m, const Vec3& dir, double max_angle_deg) {
       }
     }
   }
-  return from_lists(v, out);
+  return tri_mesh_from_lists(v, out);
 }
 
 TriMesh flip_random(const TriMesh& m, std::uint64_t seed, double p, double max_dihedral_deg) {
@@ -341,7 +332,7 @@ TriMesh flip_random(const TriMesh& m, std::uint64_t seed, double p, double max_d
   }
   std::vector<Vec3> v;
   for (Eigen::Index i = 0; i < m.V.rows(); ++i) v.push_back(vertex(m, static_cast<int>(i)));
-  return from_lists(v, f);
+  return tri_mesh_from_lists(v, f);
 }
 
 TriMesh retessellate(const TriMesh& m, std::uint64_t seed, std::string* tag) {
