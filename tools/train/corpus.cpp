@@ -149,7 +149,7 @@ std::uint64_t hash_name(const std::string& text) {
 }
 
 namespace {
-// A retessellated copy of a shape is named PARENT~tess (docs/experiments/2026-12-03-retessellated-corpus.md); it is the parent's
+// A retessellated copy of a shape is named PARENT~tess (decision 44); it is the parent's
 // surface, so it follows the parent's split.
 constexpr const char* kTessSuffix = "~tess";
 std::string parent_of(const std::string& shape) { return shape.substr(0, shape.find('~')); }

@@ -41,7 +41,7 @@ TriMesh split_along(const TriMesh& m, const Vec3& dir, double max_angle_deg);
 // normal within `max_dihedral_deg` of the old ones: irregular valences on nearly the same
 // surface.
 TriMesh flip_random(const TriMesh& m, std::uint64_t seed, double p, double max_dihedral_deg);
-// One of four seeded retessellations of `m` (docs/experiments/2026-12-03-retessellated-corpus.md): split along a random direction once
+// One of four seeded retessellations of `m` (decision 44): split along a random direction once
 // or twice, random flips, or both. The tag names the one chosen ("aniso1", "aniso2", "flip",
 // "aniso1+flip").
 TriMesh retessellate(const TriMesh& m, std::uint64_t seed, std::string* tag = nullptr);

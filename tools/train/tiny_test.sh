@@ -30,7 +30,7 @@ grep -v '~tess' "$work/shapes.1" > "$work/generated.1"
 awk '/^gen_/ && ($4 > 12000 || $4 < 200) { bad = 1 } END { exit bad }' "$work/generated.1" \
   || fail "a generated shape is outside 200-12,000 faces"
 [ "$(grep '^gen_' "$work/generated.1" | grep -c holdout)" -ge 8 ] || fail "too few generated holdout shapes"
-# A retessellated shape (docs/experiments/2026-12-03-retessellated-corpus.md) is in its parent's split: the same surface never in both.
+# A retessellated shape (decision 44) is in its parent's split: the same surface never in both.
 awk '{ split_of[$1] = $3 } END { for (s in split_of) if (s ~ /~tess$/) { p = s; sub(/~tess$/, "", p);
        if (!(p in split_of) || split_of[p] != split_of[s]) { print s; bad = 1 } } exit bad }' "$work/shapes.1" \
   || fail "a retessellated shape is not in its parent's split"
