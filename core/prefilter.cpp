@@ -104,11 +104,6 @@ struct ShapingSolver::Impl {
   Sums blocked_sums(std::int64_t n, const Body& body) const {
     return detail::blocked_sums(threads(), n, body);
   }
-  Eigen::Array3d dot3(const Vertices& a, const Vertices& b) const {
-    return blocked_sums(a.rows(), [&](std::int64_t i, Sums& sum) {
-             sum.col(0) += a.row(i).array().transpose() * b.row(i).array().transpose();
-           }).col(0);
-  }
 
   void build_pattern() {
     const Topology& t = *topo;
@@ -163,7 +158,7 @@ struct ShapingSolver::Impl {
   }
 
   // y = A x = x + alpha D^T W D x: s_e = alpha w_e S(e) per edge, then a gather per vertex.
-  // Returns x . y (column-wise, blocked as dot3). Measured and not kept (decision 29): forming
+  // Returns x . y (column-wise, in decision 11's blocks). Measured and not kept (decision 29): forming
   // s_e at each of its four vertices instead of storing it (bit-identical) cost 8% more CPU in
   // the pre-filter at 75k faces and 23% on Fandisk, and saved 3% at 1.2M: the arrays sit in L3
   // here, and the arithmetic is what the pass pays for.
@@ -185,8 +180,6 @@ struct ShapingSolver::Impl {
            }).col(0);
   }
 
-  // From x (the anchor P, or single's result): the first residual is formed in double, so a
-  // start that already meets the tolerance returns after one product.
   // Jacobi preconditioner into inv_diag_buf: diag(A)_v = 1 + alpha sum_{e containing v} w_e
   // (coefficients +-1). Formed once per solve, for the float CG and the double check.
   void jacobi_preconditioner(double alpha, const Eigen::VectorXd& weights) {
@@ -202,53 +195,15 @@ struct ShapingSolver::Impl {
     });
   }
 
-  // Needs jacobi_preconditioner(alpha, weights) first.
+  // The shared double CG (shaping_cg.h) from x (the anchor P, or single's result): the first
+  // residual is formed in double, so a start that already meets the tolerance returns after one
+  // product. Needs jacobi_preconditioner(alpha, weights) first.
   Vertices solve_cg(const Vertices& P, double alpha, const Eigen::VectorXd& weights, Vertices x) {
-    const Eigen::Index n = P.rows();
-    const Eigen::VectorXd& inv_diag = inv_diag_buf;
-
-    Vertices &s = s_buf, &r = r_buf, &p = p_buf, &Ap = Ap_buf;
-    s.resize(topo->num_interior_edges(), 3);
-    r.resize(n, 3);
-    p.resize(n, 3);
-    Ap.resize(n, 3);
-    apply(x, alpha, weights, s, Ap);
-    // r = P - A x, z = D^-1 r (= p), and r . z in the same sweep (dot3's blocks and order).
-    const Sums rz_rr0 = blocked_sums(n, [&](std::int64_t v, Sums& sum) {
-      r.row(v) = P.row(v) - Ap.row(v);
-      p.row(v) = inv_diag(v) * r.row(v);
-      sum.col(0) += r.row(v).array().transpose() * p.row(v).array().transpose();
-      sum.col(1) += r.row(v).array().transpose() * r.row(v).array().transpose();
-    });
-    Eigen::Array3d rz = rz_rr0.col(0), r_norm2 = rz_rr0.col(1);
-    const Eigen::Array3d threshold = (cg_tolerance * cg_tolerance) * dot3(P, P).max(1e-300);
-    const int max_iterations = static_cast<int>(std::max<Eigen::Index>(1000, n));
-    for (int it = 0; it < max_iterations; ++it) {
-      // A converged column is frozen (step 0) so that 0/0 never appears.
-      const Eigen::Array3d active = (r_norm2 > threshold).cast<double>();
-      last_iterations = it;
-      if ((active == 0).all()) return x;
-      const Eigen::Array3d pAp = apply(p, alpha, weights, s, Ap);
-      const Eigen::Array3d step = active * rz / pAp.max(1e-300);
-      const Sums rz_rr = blocked_sums(n, [&](std::int64_t v, Sums& sum) {
-        x.row(v) += (step * p.row(v).array().transpose()).transpose().matrix();
-        r.row(v) -= (step * Ap.row(v).array().transpose()).transpose().matrix();
-        const Eigen::Array3d z = inv_diag(v) * r.row(v).array().transpose();
-        sum.col(0) += r.row(v).array().transpose() * z;
-        sum.col(1) += r.row(v).array().transpose() * r.row(v).array().transpose();
-      });
-      const Eigen::Array3d rz_new = rz_rr.col(0);
-      const Eigen::Array3d beta = active * rz_new / rz.max(1e-300);
-      parallel(n, [&](std::int64_t begin, std::int64_t end) {
-        for (std::int64_t v = begin; v < end; ++v) {
-          const Eigen::Array3d z = inv_diag(v) * r.row(v).array().transpose();
-          p.row(v) = (z + beta * p.row(v).array().transpose()).transpose().matrix();
-        }
-      });
-      rz = active * rz_new + (1 - active) * rz;
-      r_norm2 = rz_rr.col(1);
-    }
-    throw SolverError("conjugate gradients did not converge on the pre-filter system");
+    s_buf.resize(topo->num_interior_edges(), 3);
+    const auto apply_A = [&](const Vertices& v, Vertices& Av) { return apply(v, alpha, weights, s_buf, Av); };
+    last_iterations = detail::jacobi_cg(threads(), apply_A, P, inv_diag_buf, cg_tolerance, x, r_buf, p_buf, Ap_buf);
+    if (last_iterations < 0) throw SolverError("conjugate gradients did not converge on the pre-filter system");
+    return x;
   }
 
   Vertices solve(const Vertices& P, double alpha, const Eigen::VectorXd& weights, std::optional<Vertices> start) {

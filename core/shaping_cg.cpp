@@ -151,53 +151,22 @@ void SingleCG::release() {
 // Eq. 2 (decision 38): decision 4's relative residual.
 constexpr double kRegionTolerance = 1e-10;
 void solve_region(const RegionSystem& op, const Vertices& B, Vertices& X) {
-  using Sums = detail::Sums;
   const Eigen::Index m = B.rows();
   Eigen::VectorXd inv_diag(m);
   chunked(op.executor, m, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t r = begin; r < end; ++r) inv_diag(r) = 1.0 / op.diagonal(r);
   });
-  Vertices y(m, 3), r(m, 3), p(m, 3), Ap(m, 3);
-  // Ap = M x = x + beta L^T (L x), and x . Ap in the same sweep.
-  auto apply = [&](const Vertices& x) {
+  Vertices y(m, 3), r, p, Ap;
+  // M x = x + beta L^T (L x), and x . M x in the same sweep.
+  const auto apply = [&](const Vertices& x, Vertices& Mx) {
     op.laplacian(x, y);
     return blocked_sums(op.executor, m, [&](std::int64_t i, Sums& sum) {
-                Ap.row(i) = x.row(i) + op.beta * op.transpose_row(i, y);
-                sum.col(0) += x.row(i).array().transpose() * Ap.row(i).array().transpose();
-              }).col(0).eval();
+             Mx.row(i) = x.row(i) + op.beta * op.transpose_row(i, y);
+             sum.col(0) += x.row(i).array().transpose() * Mx.row(i).array().transpose();
+           }).col(0).eval();
   };
-  apply(X);
-  const Sums start = blocked_sums(op.executor, m, [&](std::int64_t i, Sums& sum) {
-    r.row(i) = B.row(i) - Ap.row(i);
-    p.row(i) = inv_diag(i) * r.row(i);
-    sum.col(0) += r.row(i).array().transpose() * p.row(i).array().transpose();
-    sum.col(1) += r.row(i).array().transpose() * r.row(i).array().transpose();
-  });
-  Eigen::Array3d rz = start.col(0), r_norm2 = start.col(1);
-  const Eigen::Array3d threshold = (kRegionTolerance * kRegionTolerance) *
-                                   blocked_sums(op.executor, m, [&](std::int64_t i, Sums& sum) {
-                                       sum.col(0) += B.row(i).array().transpose().square();
-                                     }).col(0).max(1e-300);
-  const int max_iterations = static_cast<int>(std::max<Eigen::Index>(1000, m));
-  for (int it = 0; it < max_iterations; ++it) {
-    const Eigen::Array3d active = (r_norm2 > threshold).cast<double>();  // converged columns are frozen
-    if ((active == 0).all()) return;
-    const Eigen::Array3d step = active * rz / apply(p).max(1e-300);
-    const Sums rz_rr = blocked_sums(op.executor, m, [&](std::int64_t i, Sums& sum) {
-      X.row(i) += (step * p.row(i).array().transpose()).transpose().matrix();
-      r.row(i) -= (step * Ap.row(i).array().transpose()).transpose().matrix();
-      sum.col(0) += inv_diag(i) * r.row(i).array().transpose().square();
-      sum.col(1) += r.row(i).array().transpose().square();
-    });
-    const Eigen::Array3d beta = active * rz_rr.col(0) / rz.max(1e-300);
-    chunked(op.executor, m, [&](std::int64_t begin, std::int64_t end) {
-      for (std::int64_t i = begin; i < end; ++i)
-        p.row(i) = (inv_diag(i) * r.row(i).array().transpose() + beta * p.row(i).array().transpose()).transpose().matrix();
-    });
-    rz = active * rz_rr.col(0) + (1 - active) * rz;
-    r_norm2 = rz_rr.col(1);
-  }
-  throw SolverError("conjugate gradients did not converge on the region pre-filter (Eq. 2)");
+  if (jacobi_cg(op.executor, apply, B, inv_diag, kRegionTolerance, X, r, p, Ap) < 0)
+    throw SolverError("conjugate gradients did not converge on the region pre-filter (Eq. 2)");
 }
 
 }  // namespace mdn::detail

@@ -168,9 +168,59 @@ struct RegionSystem {
   }
 };
 
-// Jacobi-preconditioned CG on M X = B from X (decision 4's iteration, in double), until every
-// column's residual is at most 1e-10 x ||B column||; throws SolverError if it does not converge.
-// Dot products in decision 11's fixed blocks, so the result does not depend on the threads.
+// Jacobi-preconditioned CG in double on A X = B from X (decision 4's iteration), until every
+// column's residual is at most tolerance x ||B column||, at most max(1000, rows) iterations.
+// apply(x, Ax) writes A x and returns x . Ax per column (blocked_sums). inv_diag: 1 / diag(A).
+// r, p, Ap: work arrays (resized). Dot products in decision 11's fixed blocks, so the result does
+// not depend on the threads. Returns the iterations run, or -1 if it did not converge. Shared by
+// Eq. 3's double check (ShapingSolver, decision 37) and Eq. 2 (solve_region, decision 38).
+template <class Apply>
+int jacobi_cg(Executor* threads, const Apply& apply, const Vertices& B, const Eigen::VectorXd& inv_diag, double tolerance,
+              Vertices& X, Vertices& r, Vertices& p, Vertices& Ap) {
+  const Eigen::Index n = B.rows();
+  r.resize(n, 3);
+  p.resize(n, 3);
+  Ap.resize(n, 3);
+  apply(X, Ap);
+  // r = B - A x, z = D^-1 r (= p), and r . z in the same sweep.
+  const Sums rz_rr0 = blocked_sums(threads, n, [&](std::int64_t v, Sums& sum) {
+    r.row(v) = B.row(v) - Ap.row(v);
+    p.row(v) = inv_diag(v) * r.row(v);
+    sum.col(0) += r.row(v).array().transpose() * p.row(v).array().transpose();
+    sum.col(1) += r.row(v).array().transpose() * r.row(v).array().transpose();
+  });
+  Eigen::Array3d rz = rz_rr0.col(0), r_norm2 = rz_rr0.col(1);
+  const Eigen::Array3d threshold = (tolerance * tolerance) * blocked_sums(threads, n, [&](std::int64_t v, Sums& sum) {
+                                                                 sum.col(0) += B.row(v).array().transpose() * B.row(v).array().transpose();
+                                                               }).col(0).max(1e-300);
+  const int max_iterations = static_cast<int>(std::max<Eigen::Index>(1000, n));
+  for (int it = 0; it < max_iterations; ++it) {
+    // A converged column is frozen (step 0) so that 0/0 never appears.
+    const Eigen::Array3d active = (r_norm2 > threshold).cast<double>();
+    if ((active == 0).all()) return it;
+    const Eigen::Array3d step = active * rz / apply(p, Ap).max(1e-300);
+    const Sums rz_rr = blocked_sums(threads, n, [&](std::int64_t v, Sums& sum) {
+      X.row(v) += (step * p.row(v).array().transpose()).transpose().matrix();
+      r.row(v) -= (step * Ap.row(v).array().transpose()).transpose().matrix();
+      const Eigen::Array3d z = inv_diag(v) * r.row(v).array().transpose();
+      sum.col(0) += r.row(v).array().transpose() * z;
+      sum.col(1) += r.row(v).array().transpose() * r.row(v).array().transpose();
+    });
+    const Eigen::Array3d beta = active * rz_rr.col(0) / rz.max(1e-300);
+    chunked(threads, n, [&](std::int64_t begin, std::int64_t end) {
+      for (std::int64_t v = begin; v < end; ++v) {
+        const Eigen::Array3d z = inv_diag(v) * r.row(v).array().transpose();
+        p.row(v) = (z + beta * p.row(v).array().transpose()).transpose().matrix();
+      }
+    });
+    rz = active * rz_rr.col(0) + (1 - active) * rz;
+    r_norm2 = rz_rr.col(1);
+  }
+  return -1;
+}
+
+// jacobi_cg on M X = B from X to a relative residual of 1e-10 per column; throws SolverError if
+// it does not converge.
 void solve_region(const RegionSystem& op, const Vertices& B, Vertices& X);
 
 }  // namespace mdn::detail
