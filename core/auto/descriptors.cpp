@@ -60,7 +60,8 @@ const std::vector<std::string>& descriptor_names() {
       "dev2_p90",         "dihedral_median",  "dihedral_p75",     "dihedral_p90",     "dihedral_p99",
       "dihedral_over20",  "dihedral_over60",  "dihedral_over130", "edge_cv",          "edge_log_p90_p10",
       "min_angle_median", "sliver_share",     "boundary_share",   "dev_over_dihedral",
-      "dihedral_flat_share", "dihedral_p10",  "dev_p10",  "devl_median", "devl_p90", "devl_over_dev"};
+      "dihedral_flat_share", "dihedral_p10",  "dev_p10",  "devl_median", "devl_p90", "devl_over_dev",
+      "vdist_median",     "vdist_p99",        "vdist_tail",       "vdist_outliers"};
   return names;
 }
 
@@ -95,9 +96,11 @@ struct Read {
 
 // Per scored face: the angle to its ring's mean normal (noise with no recorruption), the same
 // after one more mean filter (what survives smoothing: features), the same between one and four
-// mean filters (decision 45), the triangle's smallest angle.
+// mean filters (decision 45), the triangle's smallest angle; per scored vertex, its distance to
+// its ring's plane (decision 46).
 struct FaceReadings {
   std::vector<double> dev, dev2, devl, min_angle, dihedral, edges;
+  std::vector<double> vdist;  // per scored vertex: distance to its ring's plane / ring radius
 };
 
 FaceReadings read_faces(const Read& r, Executor& executor) {
@@ -147,6 +150,34 @@ FaceReadings read_faces(const Read& r, Executor& executor) {
   for (std::int64_t e = 0; e < topo.num_interior_edges(); ++e)
     if (r.scored(topo.edge_faces(e, 0)) && r.scored(topo.edge_faces(e, 1)))
       out.dihedral.push_back(angle(N.row(topo.edge_faces(e, 0)).transpose(), N.row(topo.edge_faces(e, 1)).transpose()));
+  // Decision 46: each vertex's distance to the plane through its ring's centroid, along the
+  // ring's area-weighted normal, over the ring's mean radius. Impulses are a heavy upper tail
+  // of it that the face angles (bounded by 180 degrees) read only in part.
+  const std::int64_t nv = r.vertex_count();
+  out.vdist.assign(static_cast<std::size_t>(nv), 0.0);
+  executor.parallel_for(nv, [&](std::int64_t b, std::int64_t e) {
+    for (std::int64_t k = b; k < e; ++k) {
+      const auto v = static_cast<std::size_t>(r.vertex(k));
+      const std::int32_t r0 = topo.vv_offsets[v], r1 = topo.vv_offsets[v + 1];
+      if (r1 - r0 < 2) continue;
+      const Vec3 p = P.row(static_cast<Eigen::Index>(v)).transpose();
+      Vec3 c = Vec3::Zero(), n = Vec3::Zero();
+      double radius = 0;
+      for (std::int32_t q = r0; q < r1; ++q) {
+        const Vec3 u = P.row(topo.vv_vertices[static_cast<std::size_t>(q)]).transpose();
+        c += u;
+        radius += (u - p).norm();
+      }
+      c /= r1 - r0;
+      radius /= r1 - r0;
+      for (std::int32_t q = topo.vf_offsets[v]; q < topo.vf_offsets[v + 1]; ++q) {
+        const std::int32_t f = topo.vf_faces[static_cast<std::size_t>(q)];
+        n += A(f) * N.row(f).transpose();
+      }
+      const double nn = n.norm();
+      if (nn > 0 && radius > 0) out.vdist[static_cast<std::size_t>(k)] = std::abs((p - c).dot(n)) / (nn * radius);
+    }
+  });
   out.edges.reserve(3 * faces.size());
   for (const std::int32_t f : faces)
     for (int c = 0; c < 3; ++c) out.edges.push_back((P.row(F(f, c)) - P.row(F(f, (c + 1) % 3))).norm());
@@ -165,6 +196,7 @@ std::vector<double> values_of(std::int64_t faces, double boundary_share, const N
   const double p10 = quantile(r.edges, 0.1), p90 = quantile(r.edges, 0.9);
   const double dev_median = quantile(r.dev, 0.5), dih_median = quantile(r.dihedral, 0.5);
   const double deg = M_PI / 180;
+  const double vd_median = quantile(r.vdist, 0.5), vd_p99 = quantile(r.vdist, 0.99);
   return {std::log10(std::max<double>(1, static_cast<double>(faces))),
           lg(noise.sigma_edges),
           lg(noise.edge_length > 0 ? noise.gaussian_sigma / noise.edge_length : 0),
@@ -201,7 +233,11 @@ std::vector<double> values_of(std::int64_t faces, double boundary_share, const N
           lg(quantile(r.dev, 0.1)),
           lg(quantile(r.devl, 0.5)),
           lg(quantile(r.devl, 0.9)),
-          dev_median > 0 ? std::log(std::max(quantile(r.devl, 0.9), 1e-6) / dev_median) : 0};
+          dev_median > 0 ? std::log(std::max(quantile(r.devl, 0.9), 1e-6) / dev_median) : 0,
+          lg(vd_median),
+          lg(vd_p99),
+          vd_median > 0 ? std::log(std::max(vd_p99, 1e-6) / vd_median) : 0,
+          share_above(r.vdist, 4 * vd_median)};
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "core/noise.h"
 #include "core/parallel.h"
 #include "support/noisy.h"
 #include "support/shapes.h"
@@ -38,6 +39,30 @@ TEST(Descriptors, ExactlyFlatNeighboursSetACleanCadSurfaceApartFromALightlyNoisy
   const TriMesh clean = test::cube(24);
   EXPECT_GT(flat_share(describe(clean, kDescribedFaces)), 0.9);
   EXPECT_LT(flat_share(describe(test::with_noise(clean, 0.05), kDescribedFaces)), 0.05);
+}
+
+// Decision 46: impulses are a heavy upper tail of the vertices' distances to their rings'
+// planes. The same surface with 10% of its vertices displaced by 0.6 l, against Gaussian noise
+// of about the same energy on every vertex (0.6 l x sqrt(0.1) = 0.19 l): the tail over the
+// median and the share of vertices above four medians both stand apart.
+TEST(Descriptors, ImpulsesLiftTheTailOfTheVertexPlaneDistances) {
+  const auto value = [](const Descriptors& d, const std::string& name) {
+    for (std::size_t i = 0; i < d.values.size(); ++i)
+      if (descriptor_names()[i] == name) return d.values[i];
+    ADD_FAILURE() << "no descriptor " << name;
+    return 0.0;
+  };
+  const TriMesh clean = test::torus(96, 48, 0.3);
+  NoiseSpec spec;
+  spec.sigma = 0.6;
+  spec.impulse_fraction = 0.1;
+  const Descriptors impulses = describe(TriMesh{add_noise(clean, spec), clean.F}, kDescribedFaces);
+  const Descriptors gaussian = describe(test::with_noise(clean, 0.19), kDescribedFaces);
+  EXPECT_GT(value(impulses, "vdist_tail"), value(gaussian, "vdist_tail") + 1.0);
+  EXPECT_GT(value(impulses, "vdist_outliers"), 2 * value(gaussian, "vdist_outliers"));
+  EXPECT_GT(value(impulses, "vdist_outliers"), 0.05);
+  // A clean surface reads its curvature only: far below either noisy copy.
+  EXPECT_LT(value(describe(clean, kDescribedFaces), "vdist_median"), value(gaussian, "vdist_median") - 1.0);
 }
 
 }  // namespace
