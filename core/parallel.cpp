@@ -1,8 +1,39 @@
 #include "core/parallel.h"
 
 #include <algorithm>
+#include <chrono>
 
 namespace mdn {
+
+namespace {
+// Decision 47: how long a worker waits for the next task, and the caller for a running chunk,
+// before it sleeps on a condition variable.
+constexpr std::chrono::microseconds kSpin{200};
+
+void relax() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#else
+  std::this_thread::yield();
+#endif
+}
+
+// Spins until done() or kSpin has passed (checking the clock every 64 rounds, and yielding the
+// core then, so that a spinning thread gives way to any other that is ready to run); returns
+// done().
+template <typename Done>
+bool spin_until(const Done& done) {
+  const auto deadline = std::chrono::steady_clock::now() + kSpin;
+  for (unsigned k = 1;; ++k) {
+    if (done()) return true;
+    if ((k & 63) == 0) {
+      if (std::chrono::steady_clock::now() > deadline) return done();
+      std::this_thread::yield();
+    }
+    relax();
+  }
+}
+}  // namespace
 
 Executor::Executor(int threads) : threads_(std::max(1, threads)) {
   for (int i = 1; i < threads_; ++i) workers_.emplace_back([this] { worker_loop(); });
@@ -13,6 +44,7 @@ Executor::~Executor() {
     std::lock_guard lock(mutex_);
     stop_ = true;
   }
+  stopping_.store(true, std::memory_order_release);
   start_cv_.notify_all();
   for (auto& t : workers_) t.join();
 }
@@ -75,11 +107,12 @@ void Executor::run(std::int64_t n, std::int64_t parts, const Task& fn) {
     generation = ++generation_;
     done_.store(0, std::memory_order_relaxed);
     next_.store((generation & 0xffffffffULL) << 32, std::memory_order_release);
+    published_.store(generation, std::memory_order_release);
   }
   start_cv_.notify_all();
   run_chunks(generation, fn, n, parts);
   // Every chunk is claimed; wait for those still running on workers.
-  if (done_.load(std::memory_order_acquire) != parts) {
+  if (!spin_until([&] { return done_.load(std::memory_order_acquire) == parts; })) {
     std::unique_lock lock(mutex_);
     done_cv_.wait(lock, [&] { return done_.load(std::memory_order_acquire) == parts; });
   }
@@ -93,6 +126,7 @@ void Executor::worker_loop() {
     std::uint64_t generation;
     const Task* task;
     std::int64_t n, parts;
+    spin_until([&] { return stopping_.load(std::memory_order_acquire) || published_.load(std::memory_order_acquire) != seen; });
     {
       std::unique_lock lock(mutex_);
       start_cv_.wait(lock, [&] { return stop_ || generation_ != seen; });

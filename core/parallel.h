@@ -3,6 +3,9 @@
 // the number of threads (no reductions happen inside parallel_for). Chunks are claimed, not
 // assigned (decision 28): the calling thread takes any chunk no worker has started, so a worker
 // that is slow to wake (a busy machine) or to run costs the caller nothing but its share.
+// Between tasks, workers and the waiting caller spin for a short while before they sleep
+// (decision 47): waking a sleeping thread costs tens to hundreds of microseconds on a virtual
+// machine, longer than a small mesh's pass.
 #pragma once
 
 #include <atomic>
@@ -49,10 +52,13 @@ class Executor {
   const Task* task_ = nullptr;
   std::int64_t task_n_ = 0, task_parts_ = 0;
   std::uint64_t generation_ = 0;
+  // generation_ as last published, read without the lock by workers that spin (decision 47).
+  std::atomic<std::uint64_t> published_{0};
   // (generation << 32) | next chunk: a claim from an earlier generation fails its CAS.
   std::atomic<std::uint64_t> next_{0};
   std::atomic<std::int64_t> done_{0};
   bool stop_ = false;
+  std::atomic<bool> stopping_{false};
 };
 
 }  // namespace mdn

@@ -62,3 +62,28 @@ TEST(Executor, TheCallerTakesTheChunksOfABusyWorker) {
   EXPECT_EQ(chunks.load(), 64);
   EXPECT_GE(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(50));
 }
+
+TEST(Executor, AWorkerJoinsWhetherItSpinsOrSleeps) {
+  // Decision 47: right after a task the worker spins; after a long pause it sleeps. Either way
+  // it must take a chunk of the next task: each of the two chunks waits (up to 5 s) until both
+  // have started, which only two threads can achieve.
+  Executor ex(2);
+  const auto both_start = [&] {
+    std::atomic<int> started{0};
+    std::atomic<bool> together{true};
+    ex.parallel_for(4, [&](std::int64_t, std::int64_t) {  // two chunks of two
+      started.fetch_add(1);
+      const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+      while (started.load() < 2)
+        if (std::chrono::steady_clock::now() > deadline) {
+          together = false;
+          return;
+        }
+    });
+    return together.load();
+  };
+  EXPECT_TRUE(both_start());  // the workers were just created
+  EXPECT_TRUE(both_start());  // right after a task: spinning
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_TRUE(both_start());  // after a pause far longer than the spin: asleep
+}
