@@ -4,8 +4,8 @@
 // assigned (decision 28): the calling thread takes any chunk no worker has started, so a worker
 // that is slow to wake (a busy machine) or to run costs the caller nothing but its share.
 // Between tasks, workers and the waiting caller spin for a short while before they sleep
-// (decision 47): waking a sleeping thread costs tens to hundreds of microseconds on a virtual
-// machine, longer than a small mesh's pass.
+// (decision 47): on a virtual machine a sleeping worker woke too late to take any chunk of a
+// small mesh's pass, so those passes ran on one thread.
 #pragma once
 
 #include <atomic>
