@@ -103,7 +103,9 @@ TEST_F(HttpApi, AsynchronousJobEqualsCliOutputAndReportsProgress) {
   EXPECT_FALSE(r->get_header_value("Retry-After").empty());
   const json created = parse_json(r->body);
   EXPECT_EQ(location, "/v1/jobs/" + created.value("id", ""));
-  EXPECT_TRUE(created.value("state", "") == "queued" || created.value("state", "") == "running");
+  // A job this small may finish before its 202 is written (a worker starts it at once).
+  const std::string first = created.value("state", "");
+  EXPECT_TRUE(first == "queued" || first == "running" || first == "succeeded") << first;
 
   const json done = wait_job(*c, created["id"]);
   ASSERT_EQ(done.value("state", ""), "succeeded") << done.dump();
@@ -254,7 +256,7 @@ TEST_F(HttpApi, LongPollAnswersWhenTheJobFinishesOrTheWaitEnds) {
   ServerProcess server({"--workers", "1"});
   ASSERT_TRUE(server.started()) << server.log();
   auto c = server.client();
-  auto heavy = c->Post("/v1/jobs", {{"X-Denoise-Params", kHeavyParams}}, noisy_sphere_off(5, 3), "model/x-off");
+  auto heavy = c->Post("/v1/jobs", {{"X-Denoise-Params", kHeavyParams}}, noisy_sphere_off(6, 3), "model/x-off");
   ASSERT_TRUE(heavy);
   ASSERT_EQ(heavy->status, 202);
   const std::string heavy_url = heavy->get_header_value("Location");

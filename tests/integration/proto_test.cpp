@@ -300,7 +300,8 @@ TEST(Proto, OpenApiDocumentsExactlyTheServersRoutesAndStatuses) {
     observe(seen, "DELETE", "/v1/jobs/{id}", c->Delete(queued->get_header_value("Location")));   // 200
     observe(seen, "DELETE", "/v1/jobs/{id}", c->Delete(running->get_header_value("Location")));  // 202
     wait_job(*c, parse_json(running->body)["id"]);
-    observe(seen, "POST", "/v1/denoise", c->Post("/v1/denoise", heavy_params, heavy, "model/x-off"));  // 504
+    // 328k faces: 82k finish inside the 3 s limit on two threads since decision 47 (2.2 s here).
+    observe(seen, "POST", "/v1/denoise", c->Post("/v1/denoise", heavy_params, noisy_sphere_off(7, 9), "model/x-off"));  // 504
   }
 
   {

@@ -440,7 +440,7 @@ TEST_F(RedisQueue, LongPollThroughAnotherReplicaAnswersWhenTheJobEnds) {
   EXPECT_EQ(parse_json(r->body).value("state", ""), "succeeded") << r->body;
   EXPECT_EQ(metric(*a, "mdn_queue_started_on_submit_total"), 1);
 
-  const std::string heavy = post_job(*a, noisy_sphere_off(5, 3), kHeavyParams);
+  const std::string heavy = post_job(*a, noisy_sphere_off(6, 3), kHeavyParams);
   auto t = std::chrono::steady_clock::now();
   r = b->client()->Get("/v1/jobs/" + heavy + "?wait=0.5");
   ASSERT_TRUE(r);
