@@ -17,6 +17,8 @@ using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
+// Decision 48: above this many faces Sec. 4.2's test reads a fixed-stride sample first.
+constexpr std::int64_t kRegionSampleFaces = 65536;
 }  // namespace
 
 Vertices prefilter_stage(const Vertices& input, const Triangles& F, const Topology& topo, const DenoiseParams& params,
@@ -34,12 +36,19 @@ Vertices prefilter_stage(const Vertices& input, const Triangles& F, const Topolo
 
   // Sec. 4.2: irregular-sampling detection and the region-based pre-filter (Eq. 2).
   t0 = Clock::now();
-  if (params.region_mode != RegionMode::Off) {
-    checkpoint(progress, Stage::RegionPrefilter, 0);
+  const bool noisy = report.fold_ratio >= params.fold_ratio;
+  if (params.region_mode != RegionMode::Off) checkpoint(progress, Stage::RegionPrefilter, 0);
+  // Decision 48: a large surface whose sample reads under half the threshold is regular; the
+  // whole clustering would only confirm it. Otherwise the whole clustering decides, as before.
+  bool regular_by_sample = false;
+  if (params.region_mode == RegionMode::Auto && F.rows() > kRegionSampleFaces) {
+    report.cluster_area_ratio = sampled_area_ratio(P, F, params.kmeans_k, params.kmeans_seed, kRegionSampleFaces, &executor);
+    regular_by_sample = report.cluster_area_ratio < 0.5 * params.irregular_area_ratio;
+  }
+  if (params.region_mode != RegionMode::Off && !regular_by_sample) {
     const FaceClusters clusters = cluster_faces(P, F, params.kmeans_k, params.kmeans_seed, 100, &executor);
     report.cluster_area_ratio = clusters.area_ratio;
     const bool irregular = clusters.area_ratio >= params.irregular_area_ratio;
-    const bool noisy = report.fold_ratio >= params.fold_ratio;
     if (params.region_mode == RegionMode::On || (irregular && noisy)) {
       std::vector<std::int32_t> small;
       for (std::size_t f = 0; f < clusters.label.size(); ++f)

@@ -41,7 +41,8 @@ struct StageTimings {
 // What the pipeline measured and decided (Sec. 4.2).
 struct DenoiseReport {
   double fold_ratio = 0;          // fraction of interior edges whose face normals differ by > fold_angle (noisy input)
-  double cluster_area_ratio = 1;  // mean face area of the largest-area cluster / smallest (after Eq. 1); 1 if not measured
+  double cluster_area_ratio = 1;  // mean face area of the largest-area cluster / smallest (after Eq. 1; on a sample
+                                  // where that settles it, decision 48); 1 if not measured
   bool region_prefilter_applied = false;
   std::int64_t region_vertices = 0;  // vertices smoothed by Eq. 2
   ParamMode mode = ParamMode::Manual;     // as requested

@@ -488,6 +488,14 @@ FaceClusters cluster_faces(const Vertices& P, const Triangles& F, int k, std::ui
   return out;
 }
 
+double sampled_area_ratio(const Vertices& P, const Triangles& F, int k, std::uint64_t seed, std::int64_t max_faces,
+                          Executor* executor) {
+  const std::int64_t stride = std::max<std::int64_t>(1, (F.rows() + max_faces - 1) / std::max<std::int64_t>(max_faces, 1));
+  Triangles sample((F.rows() + stride - 1) / stride, 3);
+  for (std::int64_t f = 0, s = 0; f < F.rows(); f += stride, ++s) sample.row(s) = F.row(f);
+  return sample.rows() >= k ? cluster_faces(P, sample, k, seed, 100, executor).area_ratio : 1.0;
+}
+
 // Eq. 2 on the vertices of `faces`; all other vertices are fixed and enter the
 // Laplacian rows of their unknown neighbours as constants.
 Vertices region_prefilter(const Vertices& P, const Triangles& F, const Topology& topo,

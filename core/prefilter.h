@@ -78,6 +78,11 @@ struct FaceClusters {
 // centroids scaled to unit total variance, log(area) standardised (see core/README.md).
 FaceClusters cluster_faces(const Vertices& P, const Triangles& F, int k, std::uint64_t seed,
                            int max_iterations = 100, Executor* executor = nullptr);
+// cluster_faces' area ratio on every ceil(#F / max_faces)-th face (all of them up to
+// max_faces); 1 where the sample has fewer than k faces. A quick reading of Sec. 4.2's
+// irregularity test (measure_input, decision 48).
+double sampled_area_ratio(const Vertices& P, const Triangles& F, int k, std::uint64_t seed, std::int64_t max_faces,
+                          Executor* executor = nullptr);
 
 // Eq. 2 on one set of faces: their vertices are unknowns, every other vertex is fixed.
 // Minimises ||P~ - P||^2 + beta ||L P~||^2 over the unknowns, L the uniform Laplacian of

@@ -76,12 +76,7 @@ InputMeasures measure_input(const Vertices& P, const Triangles& F, const Topolog
   }
 
   // Sec. 4.2 on a fixed-stride sample of the faces.
-  constexpr std::int64_t kMaxSample = 4000;
-  const std::int64_t stride = std::max<std::int64_t>(1, (F.rows() + kMaxSample - 1) / kMaxSample);
-  Triangles sample((F.rows() + stride - 1) / stride, 3);
-  for (std::int64_t f = 0, k = 0; f < F.rows(); f += stride, ++k) sample.row(k) = F.row(f);
-  if (sample.rows() >= params.kmeans_k)
-    m.cluster_area_ratio = cluster_faces(P, sample, params.kmeans_k, params.kmeans_seed, 100, executor).area_ratio;
+  m.cluster_area_ratio = sampled_area_ratio(P, F, params.kmeans_k, params.kmeans_seed, 4000, executor);
 
   m.measure_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return m;

@@ -177,5 +177,27 @@ TEST(Denoise, RegionPrefilterHelpsOnAnIrregularMeshAndAutoDetectsIt) {
   EXPECT_FALSE(denoise(with_noise(clean, 0.2), p).report.region_prefilter_applied);
 }
 
+// Decision 48: above 65,536 faces the test reads a sample first. A large irregular mesh still
+// gets the region pre-filter (the sample reads irregular, the whole clustering confirms it); a
+// large regular one is settled by the sample alone, with the output of region_mode off.
+TEST(Denoise, ALargeMeshIsTestedForIrregularSamplingOnASampleFirst) {
+  DenoiseParams p;
+  p.n_normal = 2;
+  p.n_vertex = 2;
+  const TriMesh irregular = with_noise(test::irregular_sphere(5), 0.3);
+  ASSERT_GT(irregular.num_faces(), 65536);
+  const DenoiseResult on = denoise(irregular, p);
+  EXPECT_TRUE(on.report.region_prefilter_applied);
+  EXPECT_GT(on.report.cluster_area_ratio, p.irregular_area_ratio);
+
+  const TriMesh regular = with_noise(test::sphere(6), 0.3);
+  ASSERT_GT(regular.num_faces(), 65536);
+  const DenoiseResult sampled = denoise(regular, p);
+  EXPECT_FALSE(sampled.report.region_prefilter_applied);
+  EXPECT_LT(sampled.report.cluster_area_ratio, 0.5 * p.irregular_area_ratio);
+  p.region_mode = RegionMode::Off;
+  EXPECT_EQ(sampled.mesh.V, denoise(regular, p).mesh.V);
+}
+
 }  // namespace
 }  // namespace mdn
