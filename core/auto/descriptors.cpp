@@ -151,33 +151,12 @@ FaceReadings read_faces(const Read& r, Executor& executor) {
     if (r.scored(topo.edge_faces(e, 0)) && r.scored(topo.edge_faces(e, 1)))
       out.dihedral.push_back(angle(N.row(topo.edge_faces(e, 0)).transpose(), N.row(topo.edge_faces(e, 1)).transpose()));
   // Decision 46: each vertex's distance to the plane through its ring's centroid, along the
-  // ring's area-weighted normal, over the ring's mean radius. Impulses are a heavy upper tail
-  // of it that the face angles (bounded by 180 degrees) read only in part.
-  const std::int64_t nv = r.vertex_count();
-  out.vdist.assign(static_cast<std::size_t>(nv), 0.0);
-  executor.parallel_for(nv, [&](std::int64_t b, std::int64_t e) {
-    for (std::int64_t k = b; k < e; ++k) {
-      const auto v = static_cast<std::size_t>(r.vertex(k));
-      const std::int32_t r0 = topo.vv_offsets[v], r1 = topo.vv_offsets[v + 1];
-      if (r1 - r0 < 2) continue;
-      const Vec3 p = P.row(static_cast<Eigen::Index>(v)).transpose();
-      Vec3 c = Vec3::Zero(), n = Vec3::Zero();
-      double radius = 0;
-      for (std::int32_t q = r0; q < r1; ++q) {
-        const Vec3 u = P.row(topo.vv_vertices[static_cast<std::size_t>(q)]).transpose();
-        c += u;
-        radius += (u - p).norm();
-      }
-      c /= r1 - r0;
-      radius /= r1 - r0;
-      for (std::int32_t q = topo.vf_offsets[v]; q < topo.vf_offsets[v + 1]; ++q) {
-        const std::int32_t f = topo.vf_faces[static_cast<std::size_t>(q)];
-        n += A(f) * N.row(f).transpose();
-      }
-      const double nn = n.norm();
-      if (nn > 0 && radius > 0) out.vdist[static_cast<std::size_t>(k)] = std::abs((p - c).dot(n)) / (nn * radius);
-    }
-  });
+  // area-weighted vertex normal, over the ring's mean radius (measure_input's r_i, scale-free
+  // per vertex; 0 where undefined). Impulses are a heavy upper tail of it that the face angles
+  // (bounded by 180 degrees) read only in part.
+  out.vdist = ring_plane_distances(P, F, topo, r.inner(), executor, true);
+  for (double& d : out.vdist)
+    if (std::isnan(d)) d = 0;
   out.edges.reserve(3 * faces.size());
   for (const std::int32_t f : faces)
     for (int c = 0; c < 3; ++c) out.edges.push_back((P.row(F(f, c)) - P.row(F(f, (c + 1) % 3))).norm());

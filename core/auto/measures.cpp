@@ -14,16 +14,8 @@
 
 namespace mdn {
 
-namespace {
-
-struct Residuals {
-  double median = 0, p90 = 0, above4 = 0;  // above4: share of r_i > 4 x median
-};
-
-// r_i (see InputMeasures) of every vertex in `vertices` (all if empty) with neighbours and a
-// normal, summarised.
-Residuals residuals(const Vertices& P, const Triangles& F, const Topology& topo, const std::vector<std::int32_t>& vertices,
-                    Executor& ex) {
+std::vector<double> ring_plane_distances(const Vertices& P, const Triangles& F, const Topology& topo,
+                                         const std::vector<std::int32_t>& vertices, Executor& ex, bool over_ring_radius) {
   const Vertices N = vertex_normals(P, F);
   const std::int64_t count = vertices.empty() ? P.rows() : static_cast<std::int64_t>(vertices.size());
   std::vector<double> r(static_cast<std::size_t>(count));
@@ -37,10 +29,32 @@ Residuals residuals(const Vertices& P, const Triangles& F, const Topology& topo,
         continue;
       }
       Eigen::RowVector3d c = Eigen::RowVector3d::Zero();
-      for (std::int32_t a = b; a < e; ++a) c += P.row(topo.vv_vertices[static_cast<std::size_t>(a)]);
-      r[static_cast<std::size_t>(k)] = std::abs(n.dot(P.row(i) - c / static_cast<double>(e - b)));
+      double radius = 0;
+      for (std::int32_t a = b; a < e; ++a) {
+        c += P.row(topo.vv_vertices[static_cast<std::size_t>(a)]);
+        if (over_ring_radius) radius += (P.row(topo.vv_vertices[static_cast<std::size_t>(a)]) - P.row(i)).norm();
+      }
+      const double d = std::abs(n.dot(P.row(i) - c / static_cast<double>(e - b)));
+      if (!over_ring_radius)
+        r[static_cast<std::size_t>(k)] = d;
+      else
+        r[static_cast<std::size_t>(k)] = radius > 0 ? d / (radius / static_cast<double>(e - b)) : std::nan("");
     }
   });
+  return r;
+}
+
+namespace {
+
+struct Residuals {
+  double median = 0, p90 = 0, above4 = 0;  // above4: share of r_i > 4 x median
+};
+
+// r_i (see InputMeasures) of every vertex in `vertices` (all if empty) with neighbours and a
+// normal, summarised.
+Residuals residuals(const Vertices& P, const Triangles& F, const Topology& topo, const std::vector<std::int32_t>& vertices,
+                    Executor& ex) {
+  std::vector<double> r = ring_plane_distances(P, F, topo, vertices, ex);
   std::erase_if(r, [](double x) { return std::isnan(x); });
   Residuals out;
   if (r.empty()) return out;

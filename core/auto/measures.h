@@ -31,6 +31,13 @@ struct InputMeasures {
   double measure_ms = 0;          // time taken by measure_input
 };
 
+// r_i at `vertices` (all if empty), in the order given; NaN where a vertex has no neighbour or
+// no normal. With over_ring_radius, r_i over the mean distance from the vertex to its 1-ring
+// neighbours (scale-free per vertex; decision 46), NaN where that is 0.
+std::vector<double> ring_plane_distances(const Vertices& P, const Triangles& F, const Topology& topo,
+                                         const std::vector<std::int32_t>& vertices, Executor& ex,
+                                         bool over_ring_radius = false);
+
 // Measures the input. P in the unit-box frame; K-means uses params.kmeans_k and kmeans_seed
 // on at most 4000 faces (a fixed-stride sample: the area ratio does not need them all). The
 // residuals are read at `vertices` (all if empty).
