@@ -84,6 +84,16 @@ FaceClusters cluster_faces(const Vertices& P, const Triangles& F, int k, std::ui
 double sampled_area_ratio(const Vertices& P, const Triangles& F, int k, std::uint64_t seed, std::int64_t max_faces,
                           Executor* executor = nullptr);
 
+namespace detail {
+// Rows of (centroid, log area) features, scaled as cluster_faces describes.
+using ClusterFeatures = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
+// Lloyd's iterations from `centers` (k rows) until no label changes, at most max_iterations;
+// the labels into `label` (one per row of X, all 0 on entry), the final centres into
+// `centers`. The same labels and centres as plain Lloyd for any thread count (decisions 39, 49).
+void lloyd_iterations(const ClusterFeatures& X, ClusterFeatures& centers, int max_iterations, Executor* executor,
+                      std::vector<std::int32_t>& label);
+}  // namespace detail
+
 // Eq. 2 on one set of faces: their vertices are unknowns, every other vertex is fixed.
 // Minimises ||P~ - P||^2 + beta ||L P~||^2 over the unknowns, L the uniform Laplacian of
 // the whole mesh restricted to the unknown rows. Returns the new positions of all vertices.
