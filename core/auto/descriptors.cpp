@@ -61,7 +61,8 @@ const std::vector<std::string>& descriptor_names() {
       "dihedral_over20",  "dihedral_over60",  "dihedral_over130", "edge_cv",          "edge_log_p90_p10",
       "min_angle_median", "sliver_share",     "boundary_share",   "dev_over_dihedral",
       "dihedral_flat_share", "dihedral_p10",  "dev_p10",  "devl_median", "devl_p90", "devl_over_dev",
-      "vdist_median",     "vdist_p99",        "vdist_tail",       "vdist_outliers"};
+      "vdist_median",     "vdist_p99",        "vdist_tail",       "vdist_outliers",
+      "spike_share",      "spike_p999"};
   return names;
 }
 
@@ -101,6 +102,7 @@ struct Read {
 struct FaceReadings {
   std::vector<double> dev, dev2, devl, min_angle, dihedral, edges;
   std::vector<double> vdist;  // per scored vertex: distance to its ring's plane / ring radius
+  std::vector<double> spike;  // per scored vertex: vdist over the largest of its ring's (decision 50)
 };
 
 FaceReadings read_faces(const Read& r, Executor& executor) {
@@ -154,9 +156,25 @@ FaceReadings read_faces(const Read& r, Executor& executor) {
   // area-weighted vertex normal, over the ring's mean radius (measure_input's r_i, scale-free
   // per vertex; 0 where undefined). Impulses are a heavy upper tail of it that the face angles
   // (bounded by 180 degrees) read only in part.
-  out.vdist = ring_plane_distances(P, F, topo, r.inner(), executor, true);
-  for (double& d : out.vdist)
+  std::vector<double> all = ring_plane_distances(P, F, topo, {}, executor, true);
+  for (double& d : all)
     if (std::isnan(d)) d = 0;
+  // Decision 50: a spike (one vertex thrown off a surface that is otherwise clean) stands out
+  // of every reading around it: its neighbours' rings hold it, so they read about a valence's
+  // share of it. A crease's or a corner's vertex has neighbours along the feature that read as
+  // much, and Gaussian noise rarely leaves all of a ring at a third of its centre. The floor
+  // keeps exactly flat rings (readings ~1e-17) from dividing by rounding.
+  const std::int64_t n = r.vertex_count();
+  out.vdist.resize(static_cast<std::size_t>(n));
+  out.spike.resize(static_cast<std::size_t>(n));
+  for (std::int64_t k = 0; k < n; ++k) {
+    const auto i = static_cast<std::size_t>(r.vertex(k));
+    double ring = 0;
+    for (std::int32_t a = topo.vv_offsets[i]; a < topo.vv_offsets[i + 1]; ++a)
+      ring = std::max(ring, all[static_cast<std::size_t>(topo.vv_vertices[static_cast<std::size_t>(a)])]);
+    out.vdist[static_cast<std::size_t>(k)] = all[i];
+    out.spike[static_cast<std::size_t>(k)] = all[i] / std::max(ring, 1e-4);
+  }
   out.edges.reserve(3 * faces.size());
   for (const std::int32_t f : faces)
     for (int c = 0; c < 3; ++c) out.edges.push_back((P.row(F(f, c)) - P.row(F(f, (c + 1) % 3))).norm());
@@ -216,7 +234,9 @@ std::vector<double> values_of(std::int64_t faces, double boundary_share, const N
           lg(vd_median),
           lg(vd_p99),
           vd_median > 0 ? std::log(std::max(vd_p99, 1e-6) / vd_median) : 0,
-          share_above(r.vdist, 4 * vd_median)};
+          share_above(r.vdist, 4 * vd_median),
+          share_above(r.spike, 3),
+          lg(quantile(r.spike, 0.999))};
 }
 
 }  // namespace
