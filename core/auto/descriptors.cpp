@@ -17,12 +17,24 @@ namespace {
 constexpr std::int64_t kNoiseVertices = 1500;
 constexpr int kMargin = 4;  // rings left out along a sample's cut (measure_input smooths 4 steps)
 
-// q-quantile of v (sorted copy; 0 for an empty list).
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5));
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-  return v[k];
+// The q-quantiles of v for ascending qs (0 for an empty list): the element of rank
+// round(q (n - 1)). One copy; each selection runs on what the one before left above its rank.
+std::vector<double> quantiles(std::vector<double> v, const std::vector<double>& qs) {
+  std::vector<double> out;
+  std::size_t lo = 0;
+  for (const double q : qs) {
+    if (v.empty()) {
+      out.push_back(0);
+      continue;
+    }
+    const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5));
+    if (k >= lo) {  // else k is the last rank selected
+      std::nth_element(v.begin() + static_cast<std::ptrdiff_t>(lo), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+      lo = k + 1;
+    }
+    out.push_back(v[k]);
+  }
+  return out;
 }
 
 double mean(const std::vector<double>& v) {
@@ -149,9 +161,17 @@ FaceReadings read_faces(const Read& r, Executor& executor) {
   });
   // Dihedral angles over the interior edges between scored faces; the scored faces' edges.
   const Topology& topo = *r.topo;
+  std::vector<std::int64_t> inner_edges;
   for (std::int64_t e = 0; e < topo.num_interior_edges(); ++e)
-    if (r.scored(topo.edge_faces(e, 0)) && r.scored(topo.edge_faces(e, 1)))
-      out.dihedral.push_back(angle(N.row(topo.edge_faces(e, 0)).transpose(), N.row(topo.edge_faces(e, 1)).transpose()));
+    if (r.scored(topo.edge_faces(e, 0)) && r.scored(topo.edge_faces(e, 1))) inner_edges.push_back(e);
+  out.dihedral.resize(inner_edges.size());
+  executor.parallel_for(static_cast<std::int64_t>(inner_edges.size()), [&](std::int64_t b, std::int64_t e) {
+    for (std::int64_t k = b; k < e; ++k) {
+      const std::int64_t edge = inner_edges[static_cast<std::size_t>(k)];
+      out.dihedral[static_cast<std::size_t>(k)] =
+          angle(N.row(topo.edge_faces(edge, 0)).transpose(), N.row(topo.edge_faces(edge, 1)).transpose());
+    }
+  });
   // Decision 46: each vertex's distance to the plane through its ring's centroid, along the
   // area-weighted vertex normal, over the ring's mean radius (measure_input's r_i, scale-free
   // per vertex; 0 where undefined). Impulses are a heavy upper tail of it that the face angles
@@ -184,16 +204,28 @@ FaceReadings read_faces(const Read& r, Executor& executor) {
 // Decision 26's values, in the order of descriptor_names(). Scale-like readings enter as
 // logarithms (they span decades from clean to 0.8 l of noise); shares and angles as they are.
 std::vector<double> values_of(std::int64_t faces, double boundary_share, const NoiseEstimate& noise, const InputMeasures& m,
-                              const FaceReadings& r) {
+                              const FaceReadings& r, Executor& executor) {
   const auto lg = [](double x) { return std::log(std::max(x, 0.0) + 1e-4); };
   const double emean = mean(r.edges);
   double evar = 0;
   for (const double x : r.edges) evar += (x - emean) * (x - emean);
   evar = r.edges.empty() ? 0 : evar / static_cast<double>(r.edges.size());
-  const double p10 = quantile(r.edges, 0.1), p90 = quantile(r.edges, 0.9);
-  const double dev_median = quantile(r.dev, 0.5), dih_median = quantile(r.dihedral, 0.5);
+  // Every reading's quantiles, the readings in parallel.
+  const std::vector<std::pair<const std::vector<double>*, std::vector<double>>> asked = {
+      {&r.edges, {0.1, 0.9}},     {&r.dev, {0.1, 0.5, 0.9, 0.99}}, {&r.dev2, {0.5, 0.9}},
+      {&r.dihedral, {0.1, 0.5, 0.75, 0.9, 0.99}}, {&r.min_angle, {0.5}}, {&r.devl, {0.5, 0.9}},
+      {&r.vdist, {0.5, 0.99}},    {&r.spike, {0.999}}};
+  std::vector<std::vector<double>> qv(asked.size());
+  executor.parallel_for(static_cast<std::int64_t>(asked.size()), 1, [&](std::int64_t b, std::int64_t e) {
+    for (std::int64_t i = b; i < e; ++i)
+      qv[static_cast<std::size_t>(i)] = quantiles(*asked[static_cast<std::size_t>(i)].first, asked[static_cast<std::size_t>(i)].second);
+  });
+  const std::vector<double>&edge_q = qv[0], &dev_q = qv[1], &dev2_q = qv[2], &dih_q = qv[3], &angle_q = qv[4], &devl_q = qv[5],
+        &vd_q = qv[6], &spike_q = qv[7];
+  const double p10 = edge_q[0], p90 = edge_q[1];
+  const double dev_median = dev_q[1], dih_median = dih_q[1];
   const double deg = M_PI / 180;
-  const double vd_median = quantile(r.vdist, 0.5), vd_p99 = quantile(r.vdist, 0.99);
+  const double vd_median = vd_q[0], vd_p99 = vd_q[1];
   return {std::log10(std::max<double>(1, static_cast<double>(faces))),
           lg(noise.sigma_edges),
           lg(noise.edge_length > 0 ? noise.gaussian_sigma / noise.edge_length : 0),
@@ -206,37 +238,37 @@ std::vector<double> values_of(std::int64_t faces, double boundary_share, const N
           std::log(std::max(1.0, m.cluster_area_ratio)),
           lg(mean(r.dev)),
           lg(dev_median),
-          lg(quantile(r.dev, 0.9)),
-          lg(quantile(r.dev, 0.99)),
-          lg(quantile(r.dev2, 0.5)),
-          lg(quantile(r.dev2, 0.9)),
+          lg(dev_q[2]),
+          lg(dev_q[3]),
+          lg(dev2_q[0]),
+          lg(dev2_q[1]),
           lg(dih_median),
-          lg(quantile(r.dihedral, 0.75)),
-          lg(quantile(r.dihedral, 0.9)),
-          lg(quantile(r.dihedral, 0.99)),
+          lg(dih_q[2]),
+          lg(dih_q[3]),
+          lg(dih_q[4]),
           share_above(r.dihedral, 20 * deg),
           share_above(r.dihedral, 60 * deg),
           share_above(r.dihedral, 130 * deg),
           emean > 0 ? std::sqrt(evar) / emean : 0,
           p10 > 0 && p90 > 0 ? std::log(p90 / p10) : 0,
-          quantile(r.min_angle, 0.5),
+          angle_q[0],
           1 - share_above(r.min_angle, 10 * deg),
           boundary_share,
           dih_median > 0 ? std::log(std::max(dev_median, 1e-6) / dih_median) : 0,
           // Decision 33: exactly flat neighbours (a clean CAD surface's planes; noise of 0.05 l
           // already tilts them by degrees) and the low tails.
           1 - share_above(r.dihedral, 0.01 * deg),
-          lg(quantile(r.dihedral, 0.1)),
-          lg(quantile(r.dev, 0.1)),
-          lg(quantile(r.devl, 0.5)),
-          lg(quantile(r.devl, 0.9)),
-          dev_median > 0 ? std::log(std::max(quantile(r.devl, 0.9), 1e-6) / dev_median) : 0,
+          lg(dih_q[0]),
+          lg(dev_q[0]),
+          lg(devl_q[0]),
+          lg(devl_q[1]),
+          dev_median > 0 ? std::log(std::max(devl_q[1], 1e-6) / dev_median) : 0,
           lg(vd_median),
           lg(vd_p99),
           vd_median > 0 ? std::log(std::max(vd_p99, 1e-6) / vd_median) : 0,
           share_above(r.vdist, 4 * vd_median),
           share_above(r.spike, 3),
-          lg(quantile(r.spike, 0.999))};
+          lg(spike_q[0])};
 }
 
 }  // namespace
@@ -258,7 +290,7 @@ Descriptors describe_input(const Vertices& P, const Triangles& F, const Topology
   // The boundary's share is the whole surface's (the sample's cut is not a boundary).
   const double edges = static_cast<double>(topo.num_interior_edges() + topo.boundary_edges.rows() + topo.nonmanifold_edges.rows());
   const double boundary_share = edges > 0 ? static_cast<double>(topo.boundary_edges.rows()) / edges : 0;
-  d.values = values_of(F.rows(), boundary_share, d.noise, d.measures, read_faces(r, executor));
+  d.values = values_of(F.rows(), boundary_share, d.noise, d.measures, read_faces(r, executor), executor);
   d.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return d;
 }
