@@ -18,7 +18,8 @@
 // training shape, plus the field's standard test shapes among CGAL's meshes at any size (fandisk,
 // joint, elephant, turbine, eight, ...), each with one noise kind in turn (along-normal 0.1 and
 // 0.3 l, per-coordinate 0.2 l, impulse noise on 10% of the vertices at 0.6 l, irregular
-// resampling with 0.2 l), every third also at along-normal 0.6 l. "train": the corpus training
+// resampling with 0.2 l), every third also at along-normal 0.6 l and another third with spikes
+// (decision 50; summed in their own row). "train": the corpus training
 // meshes among CGAL's with the same noise kinds, for comparison only. Noise seeds hash the
 // case name. `search` appends each row as it finishes and skips cases already in OUT (resumable).
 #include <algorithm>
