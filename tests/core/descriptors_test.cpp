@@ -16,6 +16,14 @@ Descriptors describe(const TriMesh& m, std::int64_t max_faces) {
   return describe_input(m.V, m.F, topo, executor, max_faces);
 }
 
+// The descriptor called `name` in d.
+double value(const Descriptors& d, const std::string& name) {
+  for (std::size_t i = 0; i < d.values.size(); ++i)
+    if (descriptor_names()[i] == name) return d.values[i];
+  ADD_FAILURE() << "no descriptor " << name;
+  return 0.0;
+}
+
 // Decision 33: above 20,000 faces the descriptors are read on patches; they must say what the
 // whole surface says (scale-free readings within 0.15 in log or 0.03 in share).
 TEST(Descriptors, ALargeSurfaceReadOnPatchesReadsLikeTheWholeSurface) {
@@ -31,11 +39,7 @@ TEST(Descriptors, ALargeSurfaceReadOnPatchesReadsLikeTheWholeSurface) {
 }
 
 TEST(Descriptors, ExactlyFlatNeighboursSetACleanCadSurfaceApartFromALightlyNoisyOne) {
-  const auto flat_share = [](const Descriptors& d) {
-    for (std::size_t i = 0; i < d.values.size(); ++i)
-      if (descriptor_names()[i] == "dihedral_flat_share") return d.values[i];
-    return -1.0;
-  };
+  const auto flat_share = [](const Descriptors& d) { return value(d, "dihedral_flat_share"); };
   const TriMesh clean = test::cube(24);
   EXPECT_GT(flat_share(describe(clean, kDescribedFaces)), 0.9);
   EXPECT_LT(flat_share(describe(test::with_noise(clean, 0.05), kDescribedFaces)), 0.05);
@@ -46,12 +50,6 @@ TEST(Descriptors, ExactlyFlatNeighboursSetACleanCadSurfaceApartFromALightlyNoisy
 // of about the same energy on every vertex (0.6 l x sqrt(0.1) = 0.19 l): the tail over the
 // median and the share of vertices above four medians both stand apart.
 TEST(Descriptors, ImpulsesLiftTheTailOfTheVertexPlaneDistances) {
-  const auto value = [](const Descriptors& d, const std::string& name) {
-    for (std::size_t i = 0; i < d.values.size(); ++i)
-      if (descriptor_names()[i] == name) return d.values[i];
-    ADD_FAILURE() << "no descriptor " << name;
-    return 0.0;
-  };
   const TriMesh clean = test::torus(96, 48, 0.3);
   NoiseSpec spec;
   spec.sigma = 0.6;
@@ -70,12 +68,6 @@ TEST(Descriptors, ImpulsesLiftTheTailOfTheVertexPlaneDistances) {
 // corners (a cube's) must not read as spikes, and Gaussian noise of the same energy on every
 // vertex (0.1 l) reads lower at the top.
 TEST(Descriptors, SpikesStandOutOfTheirRingsAndCreasesDoNot) {
-  const auto value = [](const Descriptors& d, const std::string& name) {
-    for (std::size_t i = 0; i < d.values.size(); ++i)
-      if (descriptor_names()[i] == name) return d.values[i];
-    ADD_FAILURE() << "no descriptor " << name;
-    return 0.0;
-  };
   const TriMesh clean = test::cube(24);
   NoiseSpec spec;
   spec.sigma = 1.0;
