@@ -66,19 +66,6 @@ Features seed_centers(const Features& X, int k, std::uint64_t seed) {
 }  // namespace
 
 namespace detail {
-// Lloyd iterations, one pass per iteration (decision 39): each block of kBlock faces takes its
-// faces' nearest centres, counts the changed labels and sums the features per label; the
-// blocks' sums are added in block order, so the centres do not depend on the number of
-// threads.
-//
-// Decision 49 (Hamerly's bound, 2010): after the first few of Lloyd's iterations (a few dozen
-// at 1.2M faces) most faces keep their label, and a face's label provably stays while the
-// centres have drifted less than its margin. Per face, `bound` holds the gap between its second-nearest and nearest
-// centre when it was last measured, plus the drift D accumulated until then; every iteration
-// adds to D the two largest centre moves (the most that gap can shrink by). A face whose
-// bound still exceeds D (with a rounding margin) is not measured; a block none of whose faces
-// changed keeps its sums, which are then exactly what a fresh pass would add up in the same
-// order. So labels and centres are bit for bit those of passes that measure every face.
 namespace {
 // Per block of Lloyd's faces: its sums and counts per cluster, its faces' changed labels in
 // the current iteration, and the least of its faces' bounds.
@@ -142,6 +129,20 @@ void lloyd_block(const ClusterFeatures& X, const ClusterFeatures& centers, std::
 }
 }  // namespace
 
+// Lloyd iterations, one pass per iteration (decision 39): each block of kBlock faces takes its
+// faces' nearest centres, counts the changed labels and sums the features per label; the
+// blocks' sums are added in block order, so the centres do not depend on the number of
+// threads.
+//
+// Decision 49 (Hamerly's bound, 2010): Lloyd runs a few dozen iterations at 1.2M faces, and
+// after the first few most faces keep their label; a face's label provably stays while the
+// centres have drifted less than its margin. Per face, `bound` holds the gap between its
+// second-nearest and nearest centre when it was last measured, plus the drift D accumulated
+// until then; every iteration adds to D the two largest centre moves (the most that gap can
+// shrink by). A face whose bound still exceeds D (with a rounding margin) is not measured; a
+// block none of whose faces changed keeps its sums, which are then exactly what a fresh pass
+// would add up in the same order. So labels and centres are bit for bit those of passes that
+// measure every face.
 void lloyd_iterations(const ClusterFeatures& X, ClusterFeatures& centers, int max_iterations, Executor* executor,
                       std::vector<std::int32_t>& label) {
   const auto nf = static_cast<std::int64_t>(X.rows());
