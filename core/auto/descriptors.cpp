@@ -220,8 +220,8 @@ std::vector<double> values_of(std::int64_t faces, double boundary_share, const N
     for (std::int64_t i = b; i < e; ++i)
       qv[static_cast<std::size_t>(i)] = quantiles(*asked[static_cast<std::size_t>(i)].first, asked[static_cast<std::size_t>(i)].second);
   });
-  const std::vector<double>&edge_q = qv[0], &dev_q = qv[1], &dev2_q = qv[2], &dih_q = qv[3], &angle_q = qv[4], &devl_q = qv[5],
-        &vd_q = qv[6], &spike_q = qv[7];
+  const auto &edge_q = qv[0], &dev_q = qv[1], &dev2_q = qv[2], &dih_q = qv[3];
+  const auto &angle_q = qv[4], &devl_q = qv[5], &vd_q = qv[6], &spike_q = qv[7];
   const double p10 = edge_q[0], p90 = edge_q[1];
   const double dev_median = dev_q[1], dih_median = dih_q[1];
   const double deg = M_PI / 180;
