@@ -117,6 +117,33 @@ struct FaceReadings {
   std::vector<double> spike;  // per scored vertex: vdist over the largest of its ring's (decision 50)
 };
 
+// The per-vertex readings of decisions 46 and 50 into out.vdist and out.spike.
+void vertex_readings(const Read& r, Executor& executor, FaceReadings& out) {
+  // Decision 46: each vertex's distance to the plane through its ring's centroid, along the
+  // area-weighted vertex normal, over the ring's mean radius (measure_input's r_i, scale-free
+  // per vertex; 0 where undefined). Impulses are a heavy upper tail of it that the face angles
+  // (bounded by 180 degrees) read only in part.
+  std::vector<double> all = ring_plane_distances(*r.P, *r.F, *r.topo, {}, executor, true);
+  for (double& d : all)
+    if (std::isnan(d)) d = 0;
+  // Decision 50: a spike (one vertex thrown off a surface that is otherwise clean) stands out
+  // of every reading around it: its neighbours' rings hold it, so they read about a valence's
+  // share of it. A crease's or a corner's vertex has neighbours along the feature that read as
+  // much, and Gaussian noise rarely leaves all of a ring at a third of its centre. The floor
+  // keeps exactly flat rings (readings ~1e-17) from dividing by rounding.
+  const std::int64_t n = r.vertex_count();
+  out.vdist.resize(static_cast<std::size_t>(n));
+  out.spike.resize(static_cast<std::size_t>(n));
+  for (std::int64_t k = 0; k < n; ++k) {
+    const auto i = static_cast<std::size_t>(r.vertex(k));
+    double ring = 0;
+    for (std::int32_t a = r.topo->vv_offsets[i]; a < r.topo->vv_offsets[i + 1]; ++a)
+      ring = std::max(ring, all[static_cast<std::size_t>(r.topo->vv_vertices[static_cast<std::size_t>(a)])]);
+    out.vdist[static_cast<std::size_t>(k)] = all[i];
+    out.spike[static_cast<std::size_t>(k)] = all[i] / std::max(ring, 1e-4);
+  }
+}
+
 FaceReadings read_faces(const Read& r, Executor& executor) {
   const Vertices& P = *r.P;
   const Triangles& F = *r.F;
@@ -172,29 +199,7 @@ FaceReadings read_faces(const Read& r, Executor& executor) {
           angle(N.row(topo.edge_faces(edge, 0)).transpose(), N.row(topo.edge_faces(edge, 1)).transpose());
     }
   });
-  // Decision 46: each vertex's distance to the plane through its ring's centroid, along the
-  // area-weighted vertex normal, over the ring's mean radius (measure_input's r_i, scale-free
-  // per vertex; 0 where undefined). Impulses are a heavy upper tail of it that the face angles
-  // (bounded by 180 degrees) read only in part.
-  std::vector<double> all = ring_plane_distances(P, F, topo, {}, executor, true);
-  for (double& d : all)
-    if (std::isnan(d)) d = 0;
-  // Decision 50: a spike (one vertex thrown off a surface that is otherwise clean) stands out
-  // of every reading around it: its neighbours' rings hold it, so they read about a valence's
-  // share of it. A crease's or a corner's vertex has neighbours along the feature that read as
-  // much, and Gaussian noise rarely leaves all of a ring at a third of its centre. The floor
-  // keeps exactly flat rings (readings ~1e-17) from dividing by rounding.
-  const std::int64_t n = r.vertex_count();
-  out.vdist.resize(static_cast<std::size_t>(n));
-  out.spike.resize(static_cast<std::size_t>(n));
-  for (std::int64_t k = 0; k < n; ++k) {
-    const auto i = static_cast<std::size_t>(r.vertex(k));
-    double ring = 0;
-    for (std::int32_t a = topo.vv_offsets[i]; a < topo.vv_offsets[i + 1]; ++a)
-      ring = std::max(ring, all[static_cast<std::size_t>(topo.vv_vertices[static_cast<std::size_t>(a)])]);
-    out.vdist[static_cast<std::size_t>(k)] = all[i];
-    out.spike[static_cast<std::size_t>(k)] = all[i] / std::max(ring, 1e-4);
-  }
+  vertex_readings(r, executor, out);
   out.edges.reserve(3 * faces.size());
   for (const std::int32_t f : faces)
     for (int c = 0; c < 3; ++c) out.edges.push_back((P.row(F(f, c)) - P.row(F(f, (c + 1) % 3))).norm());
