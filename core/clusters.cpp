@@ -121,6 +121,22 @@ void lloyd_block(const ClusterFeatures& X, const ClusterFeatures& centers, std::
   std::int64_t* members = &blocks.members[static_cast<std::size_t>(blk * k)];
   sum.setZero();
   std::fill(members, members + k, 0);
+  if (k == 2) {  // Sec. 4.2's K: both sums in registers, each added in face order as below
+    Eigen::Array4d s0 = Eigen::Array4d::Zero(), s1 = Eigen::Array4d::Zero();
+    for (std::int64_t i = lo; i < hi; ++i) {
+      const Eigen::Array4d x = X.row(i).transpose().array();
+      if (label[static_cast<std::size_t>(i)] == 0) {
+        s0 += x;
+        ++members[0];
+      } else {
+        s1 += x;
+        ++members[1];
+      }
+    }
+    sum.row(0) = s0.matrix().transpose();
+    sum.row(1) = s1.matrix().transpose();
+    return;
+  }
   for (std::int64_t i = lo; i < hi; ++i) {
     const std::int32_t l = label[static_cast<std::size_t>(i)];
     sum.row(l) += X.row(i);
