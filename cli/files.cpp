@@ -1,13 +1,15 @@
 #include "cli/files.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <iterator>
 
 #include "cli/options.h"
 #include "service/output_files.h"
@@ -15,18 +17,23 @@
 namespace mdn::cli {
 namespace {
 
-std::string read_stdin() {
-  std::string bytes;
-  char buffer[1 << 16];
+// Reads fd to its end straight into the string (a regular file's size is known up front, so it
+// is one read of the whole file); `what` names the source in errors.
+std::string read_all(int fd, const std::string& what, std::size_t size_hint) {
+  std::string bytes(std::max<std::size_t>(size_hint + 1, 1 << 16), '\0');
+  std::size_t length = 0;
   for (;;) {
-    const ssize_t n = ::read(STDIN_FILENO, buffer, sizeof buffer);
-    if (n == 0) return bytes;
+    if (length == bytes.size()) bytes.resize(bytes.size() * 2);
+    const ssize_t n = ::read(fd, bytes.data() + length, bytes.size() - length);
+    if (n == 0) break;
     if (n < 0) {
       if (errno == EINTR) continue;
-      throw FileError(std::string("cannot read standard input: ") + std::strerror(errno));
+      throw FileError("cannot read " + what + ": " + std::strerror(errno));
     }
-    bytes.append(buffer, static_cast<std::size_t>(n));
+    length += static_cast<std::size_t>(n);
   }
+  bytes.resize(length);
+  return bytes;
 }
 
 void write_bytes(const std::string& path, const std::string& bytes, const std::string& shown) {
@@ -40,17 +47,22 @@ void write_bytes(const std::string& path, const std::string& bytes, const std::s
 }  // namespace
 
 std::string read_file(const std::string& path) {
-  if (path == kStdio) return read_stdin();
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw FileError("cannot read " + path + ": it is a directory");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw FileError("cannot read " + path + ": " + std::strerror(errno));
+  if (path == kStdio) return read_all(STDIN_FILENO, "standard input", 0);
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw FileError("cannot read " + path + ": " + std::strerror(errno));
+  struct stat info{};
+  if (::fstat(fd, &info) == 0 && S_ISDIR(info.st_mode)) {
+    ::close(fd);
+    throw FileError("cannot read " + path + ": it is a directory");
+  }
+  const std::size_t size_hint = S_ISREG(info.st_mode) ? static_cast<std::size_t>(info.st_size) : 0;
   try {
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (in.bad()) throw FileError("cannot read " + path + ": " + std::strerror(errno));
+    std::string bytes = read_all(fd, path, size_hint);
+    ::close(fd);
     return bytes;
-  } catch (const std::ios_base::failure& e) {  // libstdc++ throws from underflow on read errors
-    throw FileError("cannot read " + path + ": " + e.what());
+  } catch (...) {
+    ::close(fd);
+    throw;
   }
 }
 

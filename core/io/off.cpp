@@ -55,7 +55,7 @@ class OffDocument final : public MeshDocument {
       out += '3';
       for (int k = 0; k < 3; ++k) {
         out += ' ';
-        out += std::to_string(mesh.F(f, k));
+        append_number(out, std::int64_t{mesh.F(f, k)});
       }
       if (face_extra_.any() && !face_extra_[static_cast<std::size_t>(f)].empty()) {
         out += ' ';

@@ -32,6 +32,12 @@ TriMesh concatenate(const std::vector<TriMesh>& surfaces) {
   return out;
 }
 
+// Bytes a text writer's output is likely to take (about 20 per coordinate, 8 per index), so its
+// string grows at most once or twice.
+std::size_t text_size_estimate(const TriMesh& mesh) {
+  return static_cast<std::size_t>(mesh.V.rows() * 60 + mesh.F.rows() * 24 + 64);
+}
+
 }  // namespace
 
 void check_surface_sizes(const std::vector<TriMesh>& surfaces, const std::vector<std::int64_t>& counts) {
@@ -58,6 +64,7 @@ void check_float_coordinates(const std::vector<TriMesh>& surfaces, Format format
 
 std::string write_off(const TriMesh& mesh) {
   std::string out = "OFF\n" + std::to_string(mesh.V.rows()) + ' ' + std::to_string(mesh.F.rows()) + " 0\n";
+  out.reserve(text_size_estimate(mesh));
   for (Eigen::Index i = 0; i < mesh.V.rows(); ++i) {
     for (int k = 0; k < 3; ++k) {
       if (k) out += ' ';
@@ -65,13 +72,20 @@ std::string write_off(const TriMesh& mesh) {
     }
     out += '\n';
   }
-  for (Eigen::Index f = 0; f < mesh.F.rows(); ++f)
-    out += "3 " + std::to_string(mesh.F(f, 0)) + ' ' + std::to_string(mesh.F(f, 1)) + ' ' + std::to_string(mesh.F(f, 2)) + '\n';
+  for (Eigen::Index f = 0; f < mesh.F.rows(); ++f) {
+    out += '3';
+    for (int k = 0; k < 3; ++k) {
+      out += ' ';
+      append_number(out, std::int64_t{mesh.F(f, k)});
+    }
+    out += '\n';
+  }
   return out;
 }
 
 std::string write_obj(const TriMesh& mesh) {
   std::string out;
+  out.reserve(text_size_estimate(mesh));
   for (Eigen::Index i = 0; i < mesh.V.rows(); ++i) {
     out += 'v';
     for (int k = 0; k < 3; ++k) {
@@ -80,9 +94,14 @@ std::string write_obj(const TriMesh& mesh) {
     }
     out += '\n';
   }
-  for (Eigen::Index f = 0; f < mesh.F.rows(); ++f)
-    out += "f " + std::to_string(mesh.F(f, 0) + 1) + ' ' + std::to_string(mesh.F(f, 1) + 1) + ' ' +
-           std::to_string(mesh.F(f, 2) + 1) + '\n';
+  for (Eigen::Index f = 0; f < mesh.F.rows(); ++f) {
+    out += 'f';
+    for (int k = 0; k < 3; ++k) {
+      out += ' ';
+      append_number(out, std::int64_t{mesh.F(f, k)} + 1);
+    }
+    out += '\n';
+  }
   return out;
 }
 

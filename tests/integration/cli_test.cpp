@@ -363,6 +363,8 @@ TEST_F(Cli, BadInputFilesExitThree) {
   }
   const Result missing = run(quote(path("missing.off")) + " " + out);
   EXPECT_NE(missing.err.find("missing.off"), std::string::npos) << missing.err;  // names the file
+  const Result directory = run(quote(dir_.string()) + " " + out);
+  EXPECT_NE(directory.err.find("it is a directory"), std::string::npos) << directory.err;
 }
 
 // Starts meshdenoise with `args` (stderr to `err`), sends SIGINT once the process has
