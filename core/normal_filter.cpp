@@ -1,8 +1,12 @@
 #include "core/normal_filter.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <optional>
+#include <stdexcept>
 
 #include "core/errors.h"
 #include "core/fast_math.h"
@@ -127,12 +131,66 @@ PairIndex index_pairs(const Topology& topo, std::int64_t nf, Executor& ex) {
   return p;
 }
 
+// Decision 51 (core/README.md): the passes are bound by memory bandwidth at scale, so the iterations read
+// N(i)'s entries in fewer bytes where they fit: face j as the 16-bit offset j - i (decision
+// 16's order keeps neighbours close: at most 4,174 faces apart on the 1.2M-face bunny, 8,342 at
+// 4.8M), and its pair as the offset from i's first pair, in 16 bits where every one fits (up
+// to 25,011 on the 1.2M bunny; 49,978 at 4.8M), else in 32. Otherwise (a face offset beyond 16
+// bits) the 32-bit face and pair numbers. Either way the same faces and pairs in the same
+// order: the same output.
+struct AbsoluteNeighbours {
+  const std::int32_t* faces;
+  const std::int32_t* pairs;
+  std::int64_t face(std::int64_t, std::int32_t k) const { return faces[k]; }
+  std::int32_t pair(std::int64_t, std::int32_t k) const { return pairs[k]; }
+};
+template <class PairDelta>
+struct CompactNeighbours {
+  std::vector<std::int16_t> face_delta;  // j - i
+  std::vector<PairDelta> pair_delta;     // pair - pair_start[i]
+  const std::int32_t* pair_start = nullptr;
+  std::int64_t face(std::int64_t i, std::int32_t k) const { return i + face_delta[static_cast<std::size_t>(k)]; }
+  std::int32_t pair(std::int64_t i, std::int32_t k) const {
+    return pair_start[i] + static_cast<std::int32_t>(pair_delta[static_cast<std::size_t>(k)]);
+  }
+};
+
+// The compact form of N(i) with PairDelta offsets; nothing if an offset does not fit.
+template <class PairDelta>
+std::optional<CompactNeighbours<PairDelta>> compact_neighbours(const Topology& topo, const PairIndex& pairs,
+                                                               std::int64_t nf, Executor& ex) {
+  auto fits_in = [](std::int64_t x, auto type) {
+    using T = decltype(type);
+    return x >= std::numeric_limits<T>::min() && x <= std::numeric_limits<T>::max();
+  };
+  CompactNeighbours<PairDelta> c;
+  c.face_delta.resize(topo.ff_faces.size());
+  c.pair_delta.resize(topo.ff_faces.size());
+  c.pair_start = pairs.pair_start.data();
+  std::atomic<bool> fits{true};
+  ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
+    bool ok = true;
+    for (std::int64_t i = begin; i < end && ok; ++i)
+      for (std::int32_t k = topo.ff_offsets[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k) {
+        const auto ku = static_cast<std::size_t>(k);
+        const std::int64_t face = topo.ff_faces[ku] - i;
+        const std::int64_t pair = std::int64_t{pairs.pair_of[ku]} - pairs.pair_start[static_cast<std::size_t>(i)];
+        ok = ok && fits_in(face, std::int16_t{}) && fits_in(pair, PairDelta{});
+        c.face_delta[ku] = static_cast<std::int16_t>(face);
+        c.pair_delta[ku] = static_cast<PairDelta>(pair);
+      }
+    if (!ok) fits.store(false, std::memory_order_relaxed);
+  });
+  if (!fits.load()) return std::nullopt;
+  return c;
+}
+
 // The range factor of every pair (i, j > i) for faces [begin, end), normals n (#F x 4 floats,
 // decision 36). Blocks of about kBlock pairs: gather ||n_i - n_j||^2 into range, then the
 // weights while the block is in L1 (branch-free, vectorised).
-void range_pass(const float* n, const Topology& topo, const PairIndex& pairs, float inv_range,
+template <class Neighbours>
+void range_pass(const float* n, const std::vector<std::int32_t>& ff_offsets, const PairIndex& pairs, const Neighbours& nb, float inv_range,
                 const NormalFilterSettings& s, std::vector<float>& range, std::int64_t begin, std::int64_t end) {
-  const std::vector<std::int32_t>& upper = pairs.upper;
   const std::vector<std::int32_t>& pair_start = pairs.pair_start;
   constexpr std::int32_t kBlock = 512;
   for (std::int64_t i = begin; i < end;) {
@@ -142,8 +200,8 @@ void range_pass(const float* n, const Topology& topo, const PairIndex& pairs, fl
     const std::int32_t count = pair_start[static_cast<std::size_t>(stop)] - q0;
     for (std::int32_t q = q0; i < stop; ++i) {
       const float* ni = n + 4 * i;
-      for (std::int32_t k = upper[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k, ++q) {
-        const float* nj = n + 4 * std::int64_t{topo.ff_faces[static_cast<std::size_t>(k)]};
+      for (std::int32_t k = pairs.upper[static_cast<std::size_t>(i)]; k < ff_offsets[static_cast<std::size_t>(i) + 1]; ++k, ++q) {
+        const float* nj = n + 4 * nb.face(i, k);
         const float dx = ni[0] - nj[0], dy = ni[1] - nj[1], dz = ni[2] - nj[2];
         range[static_cast<std::size_t>(q)] = dx * dx + dy * dy + dz * dz;
       }
@@ -157,10 +215,10 @@ using ConstRow4f = Eigen::Map<const Row4f, Eigen::Aligned16>;
 
 // Eq. 7: one Jacobi step of the weighted L1-median for faces [begin, end), all faces from the
 // previous iterate `current` (#F x 4 floats, the fourth 0); omega_ij = spatial[k] *
-// range[pair_of[k]]. Each neighbour is one 4-wide multiply-add, summed in float (decision 36).
-void jacobi_step(const float* current, const Topology& topo, const std::vector<float>& spatial,
-                 const std::vector<float>& range, const std::vector<std::int32_t>& pair_of, float* next,
-                 std::int64_t begin, std::int64_t end) {
+// range[pair of entry k]. Each neighbour is one 4-wide multiply-add, summed in float (decision 36).
+template <class Neighbours>
+void jacobi_step(const float* current, const std::vector<std::int32_t>& ff_offsets, const std::vector<float>& spatial,
+                 const std::vector<float>& range, const Neighbours& nb, float* next, std::int64_t begin, std::int64_t end) {
   for (std::int64_t i = begin; i < end; ++i) {
     const ConstRow4f ni(current + 4 * i);
     Eigen::Map<Row4f, Eigen::Aligned16> out(next + 4 * i);
@@ -169,9 +227,9 @@ void jacobi_step(const float* current, const Topology& topo, const std::vector<f
       continue;
     }
     Row4f sum = Row4f::Zero();
-    for (std::int32_t k = topo.ff_offsets[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k) {
-      const float w = spatial[static_cast<std::size_t>(k)] * range[static_cast<std::size_t>(pair_of[static_cast<std::size_t>(k)])];
-      sum += w * ConstRow4f(current + 4 * std::int64_t{topo.ff_faces[static_cast<std::size_t>(k)]});
+    for (std::int32_t k = ff_offsets[static_cast<std::size_t>(i)]; k < ff_offsets[static_cast<std::size_t>(i) + 1]; ++k) {
+      const float w = spatial[static_cast<std::size_t>(k)] * range[static_cast<std::size_t>(nb.pair(i, k))];
+      sum += w * ConstRow4f(current + 4 * nb.face(i, k));
     }
     const float len = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
     if (len > 0)
@@ -201,6 +259,12 @@ void to_double(const std::vector<float>& n, Vertices& out) {
 
 Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const Topology& topo,
                                  const NormalFilterSettings& s, Executor* executor, ProgressObserver* progress) {
+  return detail::l1_median_normal_filter(V, F, topo, s, executor, progress, detail::NeighbourForm::Auto);
+}
+
+Vertices detail::l1_median_normal_filter(const Vertices& V, const Triangles& F, const Topology& topo,
+                                         const NormalFilterSettings& s, Executor* executor, ProgressObserver* progress,
+                                         NeighbourForm form) {
   Executor serial(1);
   Executor& ex = executor ? *executor : serial;
   const std::int64_t nf = F.rows();
@@ -208,7 +272,16 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
   if (s.iterations <= 0 || nf == 0) return normals;
 
   const std::vector<float> spatial = spatial_weights(V, F, topo, s.sigma_c_factor, ex);
-  const PairIndex pairs = index_pairs(topo, nf, ex);
+  PairIndex pairs = index_pairs(topo, nf, ex);
+  std::optional<CompactNeighbours<std::int16_t>> compact16;
+  std::optional<CompactNeighbours<std::int32_t>> compact32;
+  if (form == NeighbourForm::Auto || form == NeighbourForm::Compact16)
+    compact16 = compact_neighbours<std::int16_t>(topo, pairs, nf, ex);
+  if ((form == NeighbourForm::Auto && !compact16) || form == NeighbourForm::Compact32)
+    compact32 = compact_neighbours<std::int32_t>(topo, pairs, nf, ex);
+  if ((form == NeighbourForm::Compact16 && !compact16) || (form == NeighbourForm::Compact32 && !compact32))
+    throw std::invalid_argument("the forced neighbour form does not hold this mesh's entries");
+  if (compact16 || compact32) std::vector<std::int32_t>().swap(pairs.pair_of);  // before the iterations' arrays (peak memory)
   std::vector<float> range(static_cast<std::size_t>(pairs.pair_start.back()));
 
   // Eq. 7 typo: both denominators mean 1 - cos(sigma_gamma) (core/README.md, decision 8).
@@ -217,20 +290,28 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
   std::vector<float> current, next(static_cast<std::size_t>(4 * nf));
   to_float4(normals, current);
   if (s.on_iteration) s.on_iteration(0, normals);
-  for (int it = 0; it < s.iterations; ++it) {
-    checkpoint(progress, Stage::NormalFilter, static_cast<double>(it) / s.iterations);
-    ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
-      range_pass(current.data(), topo, pairs, inv_range, s, range, begin, end);
-    });
-    ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
-      jacobi_step(current.data(), topo, spatial, range, pairs.pair_of, next.data(), begin, end);
-    });
-    current.swap(next);
-    if (s.on_iteration) {
-      to_double(current, normals);
-      s.on_iteration(it + 1, normals);
+  auto iterate = [&](const auto& neighbours) {
+    for (int it = 0; it < s.iterations; ++it) {
+      checkpoint(progress, Stage::NormalFilter, static_cast<double>(it) / s.iterations);
+      ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
+        range_pass(current.data(), topo.ff_offsets, pairs, neighbours, inv_range, s, range, begin, end);
+      });
+      ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
+        jacobi_step(current.data(), topo.ff_offsets, spatial, range, neighbours, next.data(), begin, end);
+      });
+      current.swap(next);
+      if (s.on_iteration) {
+        to_double(current, normals);
+        s.on_iteration(it + 1, normals);
+      }
     }
-  }
+  };
+  if (compact16)
+    iterate(*compact16);
+  else if (compact32)
+    iterate(*compact32);
+  else
+    iterate(AbsoluteNeighbours{topo.ff_faces.data(), pairs.pair_of.data()});
   if (progress) progress->on_progress(Stage::NormalFilter, 1.0);
   to_double(current, normals);
   return normals;

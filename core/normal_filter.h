@@ -26,4 +26,14 @@ Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const To
                                  const NormalFilterSettings& settings, Executor* executor = nullptr,
                                  ProgressObserver* progress = nullptr);
 
+namespace detail {
+// How the iterations read N(i) (decision 51): the smallest form that holds every entry (Auto),
+// or one form forced, for tests; a forced compact form that does not fit throws
+// std::invalid_argument. Every form gives the same output.
+enum class NeighbourForm { Auto, Compact16, Compact32, Plain };
+Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const Topology& topo,
+                                 const NormalFilterSettings& settings, Executor* executor, ProgressObserver* progress,
+                                 NeighbourForm form);
+}  // namespace detail
+
 }  // namespace mdn

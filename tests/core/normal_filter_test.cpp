@@ -83,5 +83,51 @@ TEST(L1MedianFilter, IdenticalForAnyThreadCount) {
   }
 }
 
+// Decision 51: the compact forms of N(i) read the same faces and pairs as the plain one.
+TEST(L1MedianFilter, EveryNeighbourFormGivesTheSameNormals) {
+  const TriMesh clean = test::sphere(3);
+  NoiseSpec spec;
+  const Vertices noisy = add_noise(clean, spec);
+  const Topology t = Topology::build(clean.F, static_cast<std::int32_t>(clean.V.rows()));
+  Executor ex(2);
+  const Vertices plain = detail::l1_median_normal_filter(noisy, clean.F, t, {}, &ex, nullptr, detail::NeighbourForm::Plain);
+  for (auto form : {detail::NeighbourForm::Auto, detail::NeighbourForm::Compact16, detail::NeighbourForm::Compact32}) {
+    const Vertices other = detail::l1_median_normal_filter(noisy, clean.F, t, {}, &ex, nullptr, form);
+    EXPECT_TRUE((plain.array() == other.array()).all()) << static_cast<int>(form);
+  }
+}
+
+// Neighbours numbered more than 32,767 faces apart (a sphere split in two halves with 40,000
+// loose triangles between them): the 16-bit forms refuse, Auto falls back to the plain form.
+TEST(L1MedianFilter, FarApartNeighboursFallBackToThePlainForm) {
+  const TriMesh sphere = test::sphere(3);
+  NoiseSpec spec;
+  const Vertices noisy = add_noise(sphere, spec);
+  constexpr Eigen::Index kLoose = 40000;
+  const Eigen::Index half = sphere.F.rows() / 2, nv = sphere.V.rows();
+  Vertices V(nv + 3 * kLoose, 3);
+  V.topRows(nv) = noisy;
+  Triangles F(sphere.F.rows() + kLoose, 3);
+  F.topRows(half) = sphere.F.topRows(half);
+  for (Eigen::Index i = 0; i < kLoose; ++i) {
+    const auto v = static_cast<std::int32_t>(nv + 3 * i);
+    V.row(nv + 3 * i) << 3.0 + 0.01 * static_cast<double>(i), 0, 0;
+    V.row(nv + 3 * i + 1) << 3.0 + 0.01 * static_cast<double>(i), 0.01, 0;
+    V.row(nv + 3 * i + 2) << 3.0 + 0.01 * static_cast<double>(i), 0, 0.01;
+    F.row(half + i) << v, v + 1, v + 2;
+  }
+  F.bottomRows(sphere.F.rows() - half) = sphere.F.bottomRows(sphere.F.rows() - half);
+  const Topology t = Topology::build(F, static_cast<std::int32_t>(V.rows()));
+  Executor ex(2);
+  const Vertices plain = detail::l1_median_normal_filter(V, F, t, {}, &ex, nullptr, detail::NeighbourForm::Plain);
+  const Vertices automatic = detail::l1_median_normal_filter(V, F, t, {}, &ex, nullptr, detail::NeighbourForm::Auto);
+  EXPECT_TRUE((plain.array() == automatic.array()).all());
+  for (auto form : {detail::NeighbourForm::Compact16, detail::NeighbourForm::Compact32})
+    EXPECT_THROW(detail::l1_median_normal_filter(V, F, t, {}, &ex, nullptr, form), std::invalid_argument);
+  // The sphere's normals are filtered as on the sphere alone (its faces keep their order).
+  const Vertices alone = l1_median_normal_filter(noisy, sphere.F, Topology::build(sphere.F, static_cast<std::int32_t>(nv)), {}, &ex);
+  EXPECT_TRUE((plain.topRows(half).array() == alone.topRows(half).array()).all());
+}
+
 }  // namespace
 }  // namespace mdn
