@@ -131,13 +131,13 @@ PairIndex index_pairs(const Topology& topo, std::int64_t nf, Executor& ex) {
   return p;
 }
 
-// Decision 51 (core/README.md): the passes are bound by memory bandwidth at scale, so the iterations read
-// N(i)'s entries in fewer bytes where they fit: face j as the 16-bit offset j - i (decision
-// 16's order keeps neighbours close: at most 4,174 faces apart on the 1.2M-face bunny, 8,342 at
-// 4.8M), and its pair as the offset from i's first pair, in 16 bits where every one fits (up
-// to 25,011 on the 1.2M bunny; 49,978 at 4.8M), else in 32. Otherwise (a face offset beyond 16
-// bits) the 32-bit face and pair numbers. Either way the same faces and pairs in the same
-// order: the same output.
+// Decision 51: the passes are bound by memory bandwidth at scale, so the iterations read N(i)'s
+// entries in fewer bytes where they fit: face j as the 16-bit offset j - i (decision 16's order
+// keeps neighbours close: at most 4,174 faces apart on the 1.2M-face bunny, 8,342 at 4.8M), and
+// its pair as the offset from i's first pair, in 16 bits where every one fits (up to 25,011 on
+// the 1.2M bunny; 49,978 at 4.8M), else in 32. Otherwise (a face offset beyond 16 bits) the
+// 32-bit face and pair numbers. Either way the same faces and pairs in the same order: the
+// same output.
 struct AbsoluteNeighbours {
   const std::int32_t* faces;
   const std::int32_t* pairs;
