@@ -50,7 +50,7 @@ std::string read_file(const std::string& path) {
   if (path == kStdio) return read_all(STDIN_FILENO, "standard input", 0);
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw FileError("cannot read " + path + ": " + std::strerror(errno));
-  struct stat info{};
+  struct stat info {};
   if (::fstat(fd, &info) == 0 && S_ISDIR(info.st_mode)) {
     ::close(fd);
     throw FileError("cannot read " + path + ": it is a directory");
