@@ -171,7 +171,8 @@ std::optional<CompactNeighbours<PairDelta>> compact_neighbours(const Topology& t
   ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
     bool ok = true;
     for (std::int64_t i = begin; i < end && ok; ++i)
-      for (std::int32_t k = topo.ff_offsets[static_cast<std::size_t>(i)]; k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k) {
+      for (std::int32_t k = topo.ff_offsets[static_cast<std::size_t>(i)];
+           k < topo.ff_offsets[static_cast<std::size_t>(i) + 1]; ++k) {
         const auto ku = static_cast<std::size_t>(k);
         const std::int64_t face = topo.ff_faces[ku] - i;
         const std::int64_t pair = std::int64_t{pairs.pair_of[ku]} - pairs.pair_start[static_cast<std::size_t>(i)];
@@ -189,18 +190,22 @@ std::optional<CompactNeighbours<PairDelta>> compact_neighbours(const Topology& t
 // decision 36). Blocks of about kBlock pairs: gather ||n_i - n_j||^2 into range, then the
 // weights while the block is in L1 (branch-free, vectorised).
 template <class Neighbours>
-void range_pass(const float* n, const std::vector<std::int32_t>& ff_offsets, const PairIndex& pairs, const Neighbours& nb, float inv_range,
-                const NormalFilterSettings& s, std::vector<float>& range, std::int64_t begin, std::int64_t end) {
+void range_pass(const float* n, const std::vector<std::int32_t>& ff_offsets, const PairIndex& pairs,
+                const Neighbours& nb, float inv_range, const NormalFilterSettings& s, std::vector<float>& range,
+                std::int64_t begin, std::int64_t end) {
   const std::vector<std::int32_t>& pair_start = pairs.pair_start;
   constexpr std::int32_t kBlock = 512;
   for (std::int64_t i = begin; i < end;) {
     std::int64_t stop = i + 1;  // at least one face, however many pairs it has
-    while (stop < end && pair_start[static_cast<std::size_t>(stop) + 1] - pair_start[static_cast<std::size_t>(i)] <= kBlock) ++stop;
+    while (stop < end &&
+           pair_start[static_cast<std::size_t>(stop) + 1] - pair_start[static_cast<std::size_t>(i)] <= kBlock)
+      ++stop;
     const std::int32_t q0 = pair_start[static_cast<std::size_t>(i)];
     const std::int32_t count = pair_start[static_cast<std::size_t>(stop)] - q0;
     for (std::int32_t q = q0; i < stop; ++i) {
       const float* ni = n + 4 * i;
-      for (std::int32_t k = pairs.upper[static_cast<std::size_t>(i)]; k < ff_offsets[static_cast<std::size_t>(i) + 1]; ++k, ++q) {
+      for (std::int32_t k = pairs.upper[static_cast<std::size_t>(i)]; k < ff_offsets[static_cast<std::size_t>(i) + 1];
+           ++k, ++q) {
         const float* nj = n + 4 * nb.face(i, k);
         const float dx = ni[0] - nj[0], dy = ni[1] - nj[1], dz = ni[2] - nj[2];
         range[static_cast<std::size_t>(q)] = dx * dx + dy * dy + dz * dz;
@@ -218,7 +223,8 @@ using ConstRow4f = Eigen::Map<const Row4f, Eigen::Aligned16>;
 // range[pair of entry k]. Each neighbour is one 4-wide multiply-add, summed in float (decision 36).
 template <class Neighbours>
 void jacobi_step(const float* current, const std::vector<std::int32_t>& ff_offsets, const std::vector<float>& spatial,
-                 const std::vector<float>& range, const Neighbours& nb, float* next, std::int64_t begin, std::int64_t end) {
+                 const std::vector<float>& range, const Neighbours& nb, float* next, std::int64_t begin,
+                 std::int64_t end) {
   for (std::int64_t i = begin; i < end; ++i) {
     const ConstRow4f ni(current + 4 * i);
     Eigen::Map<Row4f, Eigen::Aligned16> out(next + 4 * i);
@@ -227,7 +233,8 @@ void jacobi_step(const float* current, const std::vector<std::int32_t>& ff_offse
       continue;
     }
     Row4f sum = Row4f::Zero();
-    for (std::int32_t k = ff_offsets[static_cast<std::size_t>(i)]; k < ff_offsets[static_cast<std::size_t>(i) + 1]; ++k) {
+    for (std::int32_t k = ff_offsets[static_cast<std::size_t>(i)]; k < ff_offsets[static_cast<std::size_t>(i) + 1];
+         ++k) {
       const float w = spatial[static_cast<std::size_t>(k)] * range[static_cast<std::size_t>(nb.pair(i, k))];
       sum += w * ConstRow4f(current + 4 * nb.face(i, k));
     }
@@ -281,7 +288,8 @@ Vertices detail::l1_median_normal_filter(const Vertices& V, const Triangles& F, 
     compact32 = compact_neighbours<std::int32_t>(topo, pairs, nf, ex);
   if ((form == NeighbourForm::Compact16 && !compact16) || (form == NeighbourForm::Compact32 && !compact32))
     throw std::invalid_argument("the forced neighbour form does not hold this mesh's entries");
-  if (compact16 || compact32) std::vector<std::int32_t>().swap(pairs.pair_of);  // before the iterations' arrays (peak memory)
+  if (compact16 || compact32)
+    std::vector<std::int32_t>().swap(pairs.pair_of);  // before the iterations' arrays (peak memory)
   std::vector<float> range(static_cast<std::size_t>(pairs.pair_start.back()));
 
   // Eq. 7 typo: both denominators mean 1 - cos(sigma_gamma) (core/README.md, decision 8).
