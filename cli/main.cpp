@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <iostream>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <string>
@@ -165,23 +166,21 @@ void print_result(const CliOptions& options, json summary, const std::optional<j
   }
 }
 
-// A small input's run frees and allocates arrays of a few hundred KiB stage after stage; glibc
-// serves those from fresh mmap()s at first and gives them back, so each stage faults its pages
-// in again (a third of the page faults of Fandisk's run). Keeping freed memory in the heap up to
-// 32 MiB per block (and trimming above 64 MiB) saves about 1 ms of its 26; a large input keeps
-// glibc's defaults, which hold its peak lower (+23 MiB at 1.2M faces otherwise).
-void reuse_freed_memory_if_small(std::size_t input_bytes) {
-  constexpr std::size_t kSmallInput = std::size_t{4} << 20;
-  if (input_bytes > kSmallInput) return;
-  ::mallopt(M_MMAP_THRESHOLD, 32 << 20);
-  ::mallopt(M_TRIM_THRESHOLD, 64 << 20);
+// Decision 52: the process keeps what it frees. Every stage allocates its arrays and frees them
+// (at 1.2M faces, Eq. 3's 16 passes and the normal filter alone, hundreds of MB each); glibc
+// serves the large ones from fresh mmap()s and gives them back, so each stage faults its pages
+// in again: 307,000 page faults for a run whose peak is 146,000 pages. From the heap only, and
+// never trimmed, a freed array is the next stage's memory. A command-line process ends after its
+// files, so nothing is held for long; the server keeps glibc's defaults.
+void keep_freed_memory() {
+  ::mallopt(M_MMAP_MAX, 0);
+  ::mallopt(M_TRIM_THRESHOLD, std::numeric_limits<int>::max());
 }
 
 // meshdenoise [options] IN OUT: the one denoise path (denoise_file), as each file of a batch.
 int run_denoise(const CliOptions& options) {
   SingleRun run = single_run(options);
   const InputFile in = read_input(run.in_path);
-  reuse_freed_memory_if_small(in.bytes.size());
   const std::optional<GroundTruth> truth = truth_of(options);
   check_output(options, run);
   install_sigint_handler();
@@ -253,6 +252,7 @@ constexpr Verb kVerbs[] = {
 };
 
 int run(int argc, char** argv) {
+  keep_freed_memory();
   const CliOptions options = parse_command_line(argc, argv);
   if (!options.help && !options.version) check_standard_input(options);
   for (const Verb& verb : kVerbs)
