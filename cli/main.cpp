@@ -2,12 +2,10 @@
 // file, or a batch of them into a folder, with the shared job runner (the same bytes as the HTTP
 // server for the same input and parameters); add synthetic noise for experiments; measure MSAE /
 // E_v against a ground truth; search the parameters against one (--tune). See usage().
-#include <malloc.h>
 #include <unistd.h>
 
 #include <cstdint>
 #include <iostream>
-#include <limits>
 #include <numbers>
 #include <optional>
 #include <string>
@@ -24,6 +22,7 @@
 #include "core/noise.h"
 #include "service/job_json.h"
 #include "service/params_json.h"
+#include "service/process_memory.h"
 
 #ifndef MDN_VERSION
 #define MDN_VERSION "unknown"
@@ -166,17 +165,6 @@ void print_result(const CliOptions& options, json summary, const std::optional<j
   }
 }
 
-// Decision 52: the process keeps what it frees. Every stage allocates its arrays and frees them
-// (at 1.2M faces, Eq. 3's 16 passes and the normal filter alone, hundreds of MB each); glibc
-// serves the large ones from fresh mmap()s and gives them back, so each stage faults its pages
-// in again: 307,000 page faults for a run whose peak is 146,000 pages. From the heap only, and
-// never trimmed, a freed array is the next stage's memory. A command-line process ends after its
-// files, so nothing is held for long; the server keeps glibc's defaults.
-void keep_freed_memory() {
-  ::mallopt(M_MMAP_MAX, 0);
-  ::mallopt(M_TRIM_THRESHOLD, std::numeric_limits<int>::max());
-}
-
 // meshdenoise [options] IN OUT: the one denoise path (denoise_file), as each file of a batch.
 int run_denoise(const CliOptions& options) {
   SingleRun run = single_run(options);
@@ -252,7 +240,7 @@ constexpr Verb kVerbs[] = {
 };
 
 int run(int argc, char** argv) {
-  keep_freed_memory();
+  service::keep_freed_memory();  // decision 52: a process that ends after its files
   const CliOptions options = parse_command_line(argc, argv);
   if (!options.help && !options.version) check_standard_input(options);
   for (const Verb& verb : kVerbs)

@@ -23,6 +23,9 @@
 //   --cg            also print the pre-filter's CG iteration counts (Eq. 1 and each Eq. 3 step)
 //   --jitter EPS    displace the noisy input once more along the normals by N(0, (EPS l)^2)
 //                   (seed 2): how far MSAE moves under a perturbation far below the noise
+//   --allocator cli|glibc  how the child allocates: as meshdenoise does (decision 52: freed
+//                   memory kept for the next stage; the default) or with glibc's defaults (as
+//                   the server does)
 //
 // Each run is a forked child that holds only the noisy input, so its peak RSS (VmHWM, reset
 // through /proc/self/clear_refs before denoise()) is that of a process that read the mesh and
@@ -52,6 +55,7 @@
 #include "core/auto/denoise.h"
 #include "core/prefilter.h"
 #include "core/topology.h"
+#include "service/process_memory.h"
 #include "subdivide.h"
 
 namespace fs = std::filesystem;
@@ -68,6 +72,7 @@ struct Options {
   int runs = 3;
   bool cg = false;
   double jitter = 0;
+  bool keep_freed_memory = true;  // --allocator cli (decision 52)
 };
 
 std::vector<std::string> split(const std::string& s) {
@@ -81,7 +86,7 @@ std::vector<std::string> split(const std::string& s) {
 [[noreturn]] void usage(const char* argv0, int code) {
   std::fprintf(code ? stderr : stdout,
                "usage: %s [--data DIR] [--meshes NAME:LEVELS,...] [--big] [--params auto,heavy,paper,cad] [--threads 1,2]\n"
-               "          [--order auto,input,curve,bfs] [--runs N] [--cg] [--jitter EPS]\n",
+               "          [--order auto,input,curve,bfs] [--runs N] [--cg] [--jitter EPS] [--allocator cli|glibc]\n",
                argv0);
   std::exit(code);
 }
@@ -119,6 +124,10 @@ Options parse(int argc, char** argv) {
       o.runs = std::max(1, std::stoi(value()));
     } else if (a == "--jitter") {
       o.jitter = std::stod(value());
+    } else if (a == "--allocator") {
+      const std::string kind = value();
+      if (kind != "cli" && kind != "glibc") usage(argv[0], 2);
+      o.keep_freed_memory = kind == "cli";
     } else if (a == "--cg") {
       o.cg = true;
     } else if (a == "--help" || a == "-h") {
@@ -186,7 +195,7 @@ struct RunFigures {
 // Runs denoise() in a forked child that drops everything but the noisy input; the child sends
 // back its figures and the output positions.
 RunFigures run_child(std::unique_ptr<TriMesh>& truth, std::unique_ptr<TriMesh>& noisy, const DenoiseParams& params,
-                     const RunOptions& options, Vertices& output) {
+                     const RunOptions& options, bool keep_freed_memory, Vertices& output) {
   int pipe_fd[2];
   if (pipe(pipe_fd) != 0) throw std::runtime_error("pipe failed");
   std::fflush(stdout);
@@ -195,6 +204,7 @@ RunFigures run_child(std::unique_ptr<TriMesh>& truth, std::unique_ptr<TriMesh>& 
   if (pid == 0) {
     close(pipe_fd[0]);
     truth.reset();  // unmapped in the child only: its RSS is the noisy input's
+    if (keep_freed_memory) service::keep_freed_memory();
     RunFigures fig;
     fig.rss_before_mib = proc_status_mib("VmRSS:");
     {
@@ -280,8 +290,9 @@ int main(int argc, char** argv) {
   double load[3] = {0, 0, 0};
   getloadavg(load, 3);
   std::printf("machine: %u hardware threads, load average %.2f %.2f %.2f; along_normal noise 0.2 l seed 1; "
-              "%d runs per configuration (round-robin), medians\n",
-              std::thread::hardware_concurrency(), load[0], load[1], load[2], o.runs);
+              "%d runs per configuration (round-robin), medians; allocator %s\n",
+              std::thread::hardware_concurrency(), load[0], load[1], load[2], o.runs,
+              o.keep_freed_memory ? "cli (decision 52)" : "glibc's defaults");
   // Per stage, wall time of the stage per face per pass (setup, measure and Eq. 1 once; Eq. 3 per
   // anisotropic pass, the filters per iteration, over the counts that ran), in ns.
   // cpu: process CPU time (all threads; a loaded machine's waits excluded): the whole run, the
@@ -323,7 +334,7 @@ int main(int argc, char** argv) {
             configs.push_back({p, k, params_named(p), options, {}, {}});
           }
       for (int run = 0; run < o.runs; ++run)
-        for (Config& c : configs) c.runs.push_back(run_child(truth, noisy, c.params, c.options, c.output));
+        for (Config& c : configs) c.runs.push_back(run_child(truth, noisy, c.params, c.options, o.keep_freed_memory, c.output));
 
       for (const Config& c : configs) {
         auto med = [&](double (*get)(const RunFigures&)) {
