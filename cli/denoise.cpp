@@ -5,20 +5,22 @@
 #include "cli/files.h"
 #include "cli/mesh.h"
 #include "service/job_json.h"
+#include "service/output_files.h"
 
 namespace mdn::cli {
 
 InputFile read_input(const std::string& path) {
   InputFile in{.path = path, .bytes = read_file(path)};
   in.format = input_format(path, in.bytes);
+  in.data_beside = in.format == io::Format::Gltf && service::has_external_uris(in.bytes);
   return in;
 }
 
 GroundTruth load_truth(const std::string& path) { return {load_mesh(path).scene, path}; }
 
-DenoisedFile denoise_file(const InputFile& in, const std::string& out_path, const service::JobParams& params,
-                          int threads, CliProgress& progress, const GroundTruth* truth) {
-  service::JobOutput output = denoise_input(in.path, in.bytes, in.format, params, threads, progress);
+DenoisedFile denoise_file(InputFile in, const std::string& out_path, const service::JobParams& params, int threads,
+                          CliProgress& progress, const GroundTruth* truth) {
+  service::JobOutput output = denoise_input(in.path, std::move(in.bytes), in.format, params, threads, progress);
   DenoisedFile file;
   file.summary = service::output_to_json(output);  // before the bytes move out
   file.faces = output.faces;
@@ -28,7 +30,7 @@ DenoisedFile denoise_file(const InputFile& in, const std::string& out_path, cons
   if (truth) {
     file.metrics = measure(truth->scene, truth->path, scene_mesh(output.surfaces, output.placements), in.path, threads);
   }
-  write_output(in.path, in.bytes, in.format, out_path, std::move(output.bytes), output.format);
+  write_output(in.path, in.data_beside, out_path, std::move(output.bytes), output.format);
   return file;
 }
 

@@ -21,6 +21,7 @@ struct InputFile {
   std::string path;
   std::string bytes;
   io::Format format = io::Format::Off;
+  bool data_beside = false;  // a .gltf whose buffers or images are files beside it
 };
 InputFile read_input(const std::string& path);
 
@@ -41,8 +42,9 @@ struct DenoisedFile {
 
 // Runs IN through the shared job runner, measures the computed surfaces against `truth` (if
 // any; before writing, so a failed comparison leaves no OUT) and writes OUT with the one output
-// writer. A problem with the input is a FileError naming it.
-DenoisedFile denoise_file(const InputFile& in, const std::string& out_path, const service::JobParams& params,
-                          int threads, CliProgress& progress, const GroundTruth* truth = nullptr);
+// writer. A problem with the input is a FileError naming it. The input's bytes go to the job,
+// which frees them once decoded.
+DenoisedFile denoise_file(InputFile in, const std::string& out_path, const service::JobParams& params, int threads,
+                          CliProgress& progress, const GroundTruth* truth = nullptr);
 
 }  // namespace mdn::cli

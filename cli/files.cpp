@@ -130,11 +130,10 @@ void check_not_input(const std::string& in_path, const std::string& out_path, bo
                    "renamed), or choose another output");
 }
 
-void write_output(const std::string& in_path, const std::string& in_bytes, io::Format in_format,
-                  const std::string& out_path, std::string out_bytes, io::Format out_format) {
+void write_output(const std::string& in_path, bool in_data_beside, const std::string& out_path, std::string out_bytes,
+                  io::Format out_format) {
   namespace fs = std::filesystem;
-  const bool data_beside =
-      out_path != kStdio && in_path != kStdio && in_format == io::Format::Gltf && service::has_external_uris(in_bytes);
+  const bool data_beside = out_path != kStdio && in_path != kStdio && in_data_beside;
   if (out_path != kStdio) {
     const fs::path folder = fs::path(out_path).parent_path();
     std::error_code ec;

@@ -45,9 +45,9 @@ void check_not_input(const std::string& in_path, const std::string& out_path, bo
 
 // The one writer of meshdenoise's outputs, single runs and batches alike: the files
 // service::output_files() makes of a job's bytes at OUT (a .gltf whose input kept its data
-// beside it keeps that layout), each through write_file; OUT's folder is created if missing,
-// as --out-dir's is.
-void write_output(const std::string& in_path, const std::string& in_bytes, io::Format in_format,
-                  const std::string& out_path, std::string out_bytes, io::Format out_format);
+// beside it, `in_data_beside`, keeps that layout), each through write_file; OUT's folder is
+// created if missing, as --out-dir's is.
+void write_output(const std::string& in_path, bool in_data_beside, const std::string& out_path, std::string out_bytes,
+                  io::Format out_format);
 
 }  // namespace mdn::cli

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <iostream>
 #include <thread>
+#include <utility>
 
 #include "core/errors.h"
 #include "core/params.h"
@@ -109,15 +110,16 @@ service::JobParams job_params(const CliOptions& options, json& fields) {
   return params;
 }
 
-service::JobOutput denoise_input(const std::string& in_path, const std::string& in_bytes, io::Format in_format,
+service::JobOutput denoise_input(const std::string& in_path, std::string in_bytes, io::Format in_format,
                                  const service::JobParams& params, int threads, CliProgress& progress) {
-  const service::JobInput job{.bytes = in_bytes,
-                              .format = in_format,
-                              .params = params,
-                              .threads = threads,
-                              .resource_dir = resource_dir(in_path, in_format)};
+  service::JobInput job{.bytes = std::move(in_bytes),
+                        .format = in_format,
+                        .params = params,
+                        .threads = threads,
+                        .resource_dir = resource_dir(in_path, in_format)};
   try {
-    service::JobOutput output = blame_file(in_path, [&] { return service::run_job(job, cli_limits(), &progress); });
+    service::JobOutput output =
+        blame_file(in_path, [&] { return service::run_job(std::move(job), cli_limits(), &progress); });
     progress.clear();
     return output;
   } catch (...) {

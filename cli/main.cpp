@@ -168,13 +168,13 @@ void print_result(const CliOptions& options, json summary, const std::optional<j
 // meshdenoise [options] IN OUT: the one denoise path (denoise_file), as each file of a batch.
 int run_denoise(const CliOptions& options) {
   SingleRun run = single_run(options);
-  const InputFile in = read_input(run.in_path);
+  InputFile in = read_input(run.in_path);
   const std::optional<GroundTruth> truth = truth_of(options);
   check_output(options, run);
   install_sigint_handler();
   CliProgress progress(options.progress && ::isatty(STDERR_FILENO));
   const DenoisedFile file =
-      denoise_file(in, run.out_path, run.params, run.threads, progress, truth ? &*truth : nullptr);
+      denoise_file(std::move(in), run.out_path, run.params, run.threads, progress, truth ? &*truth : nullptr);
   print_result(options, file.summary, file.metrics);
   return kExitOk;
 }
@@ -218,7 +218,7 @@ int run_add_noise(const CliOptions& options) {
     metrics = measure(truth->scene, truth->path, scene_mesh(loaded.document->surfaces(), loaded.document->placements()),
                       in.path, run.threads);
   }
-  write_output(in.path, in.bytes, in.format, run.out_path, std::move(out_bytes), *encode.format);
+  write_output(in.path, in.data_beside, run.out_path, std::move(out_bytes), *encode.format);
   print_result(options, std::move(summary), metrics);
   return kExitOk;
 }

@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <memory>
+#include <string>
 #include <utility>
 
 #include "core/io/encode_check.h"
@@ -19,9 +20,9 @@ double ms_since(Clock::time_point start) {
 
 bool is_gltf(io::Format format) { return format == io::Format::Glb || format == io::Format::Gltf; }
 
-}  // namespace
-
-JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObserver* progress) {
+// The job; `release` (the input's own bytes, or null) is emptied once decoded, so a large
+// input's bytes are not held through the denoising.
+JobOutput run(const JobInput& input, std::string* release, const io::Limits& limits, ProgressObserver* progress) {
   // Parameters first: a bad request is refused before any decoding work.
   validate(input.params);
 
@@ -39,6 +40,7 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
   std::unique_ptr<io::MeshDocument> document =
       io::decode(input.bytes, input.format, io::DecodeOptions{.limits = bounded, .resource_dir = input.resource_dir});
   out.timings.decode_ms = ms_since(start);
+  if (release) std::string().swap(*release);
 
   io::EncodeOptions encode = input.params.output;
   encode.cancel = progress;
@@ -81,6 +83,16 @@ JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObser
   out.placements = document->placements();
   out.surfaces = std::move(document->surfaces());  // the document is done with them
   return out;
+}
+
+}  // namespace
+
+JobOutput run_job(const JobInput& input, const io::Limits& limits, ProgressObserver* progress) {
+  return run(input, nullptr, limits, progress);
+}
+
+JobOutput run_job(JobInput&& input, const io::Limits& limits, ProgressObserver* progress) {
+  return run(input, &input.bytes, limits, progress);
 }
 
 }  // namespace mdn::service
