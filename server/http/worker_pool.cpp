@@ -293,7 +293,8 @@ void WorkerPool::run(const std::shared_ptr<Job>& job) {
   JobState state = JobState::Succeeded;
   try {
     if (job->cancel_) throw CancelledError();
-    output = std::make_shared<const service::JobOutput>(service::run_job(input, options_.limits, &observer));
+    // Handed over: the request bytes are freed once decoded, not held through the denoising.
+    output = std::make_shared<const service::JobOutput>(service::run_job(std::move(input), options_.limits, &observer));
   } catch (const CancelledError&) {
     if (observer.timed_out()) {
       state = JobState::Failed;
@@ -308,7 +309,7 @@ void WorkerPool::run(const std::shared_ptr<Job>& job) {
     state = JobState::Failed;
     error = problem_from_exception(std::current_exception());
   }
-  input = {};  // free the request bytes before publishing
+  input = {};  // free the rest of the request (the bytes, if decoding failed) before publishing
   bool report = true;
   {
     std::lock_guard lock(mutex_);  // the pool's mutex first (lock order)
