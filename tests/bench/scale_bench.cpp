@@ -13,9 +13,10 @@
 //                   fixed heavy set: the paper's row with n_aniso 16, n_normal 100, n_vertex 30),
 //                   paper (DenoiseParams{}, Table 1's Fandisk row) and/or cad (the heavy CAD
 //                   prototype: alpha 0.06, sigma_theta 70, n_aniso 2, sigma_gamma 60,
-//                   n_normal 100, n_vertex 80); default auto,heavy. "auto" also prints how much
-//                   of the run choosing the parameters took; every per-iteration column divides
-//                   by the iteration counts that ran (auto: the chosen ones)
+//                   n_normal 100, n_vertex 80); default auto,heavy. "auto" also runs its choice
+//                   as manual parameters (the "pick" row) and prints how much of the run choosing
+//                   took and auto's time over the pick's; every per-iteration column divides by
+//                   the iteration counts that ran (auto: the chosen ones)
 //   --threads LIST  default 2
 //   --order LIST    RunOptions::order: auto (the default), input, curve and/or bfs (decision 16)
 //   --runs N        runs per configuration, round-robin over the configurations of a mesh;
@@ -35,6 +36,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -189,8 +191,17 @@ struct RunFigures {
   double rss_before_mib = 0, peak_mib = 0;
   double cpu_s = 0;  // user + system CPU time of denoise(), all threads
   int n_aniso = 0, n_normal = 0, n_vertex = 0;  // the iteration counts that ran
+  double alpha = 0, sigma_theta = 0, sigma_gamma = 0;  // and the rest of the parameters that ran
+  bool region_on = false;
   bool peak_reset = false;
 };
+
+// The parameters a run ran (auto: its choice) as manual ones.
+DenoiseParams params_that_ran(const RunFigures& r) {
+  return {.mode = ParamMode::Manual, .alpha = r.alpha, .sigma_theta = r.sigma_theta, .n_aniso = r.n_aniso,
+          .sigma_gamma = r.sigma_gamma, .n_normal = r.n_normal, .n_vertex = r.n_vertex,
+          .region_mode = r.region_on ? RegionMode::On : RegionMode::Off};
+}
 
 // Runs denoise() in a forked child that drops everything but the noisy input; the child sends
 // back its figures and the output positions.
@@ -227,6 +238,10 @@ RunFigures run_child(std::unique_ptr<TriMesh>& truth, std::unique_ptr<TriMesh>& 
     fig.n_aniso = r.report.params.n_aniso;
     fig.n_normal = r.report.params.n_normal;
     fig.n_vertex = r.report.params.n_vertex;
+    fig.alpha = r.report.params.alpha;
+    fig.sigma_theta = r.report.params.sigma_theta;
+    fig.sigma_gamma = r.report.params.sigma_gamma;
+    fig.region_on = r.report.params.region_mode == RegionMode::On;
     auto write_all = [&](const void* data, std::size_t bytes) {
       const char* p = static_cast<const char*>(data);
       while (bytes > 0) {
@@ -333,8 +348,18 @@ int main(int argc, char** argv) {
                                            : OrderKind::Auto;
             configs.push_back({p, k, params_named(p), options, {}, {}});
           }
-      for (int run = 0; run < o.runs; ++run)
+      // Each auto configuration's choice also runs as manual parameters ("pick"), from the first
+      // round on, round-robin with the rest: issue 31's cost of auto against one run of its pick.
+      const std::size_t given = configs.size();
+      for (int run = 0; run < o.runs; ++run) {
         for (Config& c : configs) c.runs.push_back(run_child(truth, noisy, c.params, c.options, o.keep_freed_memory, c.output));
+        for (std::size_t i = 0; run == 0 && i < given; ++i) {
+          if (configs[i].params.mode != ParamMode::Auto) continue;
+          Config pick{"pick", configs[i].order_name, params_that_ran(configs[i].runs.front()), configs[i].options, {}, {}};
+          pick.runs.push_back(run_child(truth, noisy, pick.params, pick.options, o.keep_freed_memory, pick.output));
+          configs.push_back(std::move(pick));
+        }
+      }
 
       for (const Config& c : configs) {
         auto med = [&](double (*get)(const RunFigures&)) {
@@ -368,8 +393,18 @@ int main(int argc, char** argv) {
         if (c.params.mode == ParamMode::Auto) {
           const double select = med([](const RunFigures& r) { return r.t.measure_ms; });
           const double total = med([](const RunFigures& r) { return r.t.total_ms; });
-          std::printf("%-11s %8s   auto: measuring and choosing %.0f ms of %.0f ms: %.2f x one run of the choice\n", "", "",
-                      select, total, total / std::max(1.0, total - select));
+          // Issue 31's measure: auto against its pick run as manual parameters (the "pick" row).
+          const auto pick = std::find_if(configs.begin(), configs.end(), [&](const Config& k) {
+            return k.params_name == "pick" && k.order_name == c.order_name && k.options.threads == c.options.threads;
+          });
+          if (pick == configs.end()) continue;  // not reached: every auto configuration has one
+          std::vector<double> pick_ms;
+          for (const RunFigures& r : pick->runs) pick_ms.push_back(r.t.total_ms);
+          const double one_run = bench::median(pick_ms);
+          std::printf("%-11s %8s   auto: measuring and choosing %.0f ms of %.0f ms; its pick as manual parameters %.0f ms: "
+                      "%.2f x (output %s)\n",
+                      "", "", select, total, one_run, total / std::max(1e-3, one_run),
+                      pick->output == c.output ? "identical" : "differs");
         }
       }
       if (o.cg)
