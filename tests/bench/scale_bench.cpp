@@ -47,6 +47,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include "bench_stats.h"
@@ -190,18 +191,10 @@ struct RunFigures {
   double cpu_pre_s = 0, cpu_normal_s = 0, cpu_vertex_s = 0;
   double rss_before_mib = 0, peak_mib = 0;
   double cpu_s = 0;  // user + system CPU time of denoise(), all threads
-  int n_aniso = 0, n_normal = 0, n_vertex = 0;  // the iteration counts that ran
-  double alpha = 0, sigma_theta = 0, sigma_gamma = 0;  // and the rest of the parameters that ran
-  bool region_on = false;
+  DenoiseParams params;  // the parameters that ran (auto: its choice, as manual parameters)
   bool peak_reset = false;
 };
-
-// The parameters a run ran (auto: its choice) as manual ones.
-DenoiseParams params_that_ran(const RunFigures& r) {
-  return {.mode = ParamMode::Manual, .alpha = r.alpha, .sigma_theta = r.sigma_theta, .n_aniso = r.n_aniso,
-          .sigma_gamma = r.sigma_gamma, .n_normal = r.n_normal, .n_vertex = r.n_vertex,
-          .region_mode = r.region_on ? RegionMode::On : RegionMode::Off};
-}
+static_assert(std::is_trivially_copyable_v<RunFigures>, "sent through a pipe as bytes");
 
 // Runs denoise() in a forked child that drops everything but the noisy input; the child sends
 // back its figures and the output positions.
@@ -235,13 +228,9 @@ RunFigures run_child(std::unique_ptr<TriMesh>& truth, std::unique_ptr<TriMesh>& 
     fig.cpu_vertex_s = clock.vertex1 - clock.vertex0;
     fig.peak_mib = proc_status_mib("VmHWM:");
     fig.t = r.report.timings;
-    fig.n_aniso = r.report.params.n_aniso;
-    fig.n_normal = r.report.params.n_normal;
-    fig.n_vertex = r.report.params.n_vertex;
-    fig.alpha = r.report.params.alpha;
-    fig.sigma_theta = r.report.params.sigma_theta;
-    fig.sigma_gamma = r.report.params.sigma_gamma;
-    fig.region_on = r.report.params.region_mode == RegionMode::On;
+    fig.params = r.report.params;
+    fig.params.mode = ParamMode::Manual;
+    fig.params.pinned = 0;
     auto write_all = [&](const void* data, std::size_t bytes) {
       const char* p = static_cast<const char*>(data);
       while (bytes > 0) {
@@ -355,7 +344,7 @@ int main(int argc, char** argv) {
         for (Config& c : configs) c.runs.push_back(run_child(truth, noisy, c.params, c.options, o.keep_freed_memory, c.output));
         for (std::size_t i = 0; run == 0 && i < given; ++i) {
           if (configs[i].params.mode != ParamMode::Auto) continue;
-          Config pick{"pick", configs[i].order_name, params_that_ran(configs[i].runs.front()), configs[i].options, {}, {}};
+          Config pick{"pick", configs[i].order_name, configs[i].runs.front().params, configs[i].options, {}, {}};
           pick.runs.push_back(run_child(truth, noisy, pick.params, pick.options, o.keep_freed_memory, pick.output));
           configs.push_back(std::move(pick));
         }
@@ -369,9 +358,9 @@ int main(int argc, char** argv) {
         };
         const RunFigures& ran = c.runs.front();  // the counts are those of every run (deterministic)
         const double per_face = 1e6 / nf;  // ms -> ns/f
-        const double per_aniso = per_face / std::max(1, ran.n_aniso);
-        const double per_normal = per_face / std::max(1, ran.n_normal);
-        const double per_vertex = per_face / std::max(1, ran.n_vertex);
+        const double per_aniso = per_face / std::max(1, ran.params.n_aniso);
+        const double per_normal = per_face / std::max(1, ran.params.n_normal);
+        const double per_vertex = per_face / std::max(1, ran.params.n_vertex);
         const double peak = med([](const RunFigures& r) { return r.peak_mib; });
         const TriMesh out{c.output, truth->F};
         std::printf("%-11s %8.0f %-5s %-5s %3d | %7.3f %7.0f %7.0f %7.0f %7.1f %7.1f %7.1f | %6.2f %6.2f %7.1f %7.1f | %7.0f %7.0f | "
@@ -388,7 +377,7 @@ int main(int argc, char** argv) {
                     med([](const RunFigures& r) { return r.cpu_normal_s; }) * 1e3 * per_normal,
                     med([](const RunFigures& r) { return r.cpu_vertex_s; }) * 1e3 * per_vertex, peak, peak / (nf / 1e6),
                     msae(out, *truth) * 1e2,
-                    ran.n_aniso, ran.n_normal, ran.n_vertex, med([](const RunFigures& r) { return r.rss_before_mib; }),
+                    ran.params.n_aniso, ran.params.n_normal, ran.params.n_vertex, med([](const RunFigures& r) { return r.rss_before_mib; }),
                     ran.peak_reset ? "" : " (peak not reset)");
         if (c.params.mode == ParamMode::Auto) {
           const double select = med([](const RunFigures& r) { return r.t.measure_ms; });
