@@ -2,8 +2,7 @@
 """Fits the trained parameter choice (issue 31) from the corpus tables and writes the model.
 
     train.py LABELS.tsv DESCRIPTORS.tsv OUT.inc [--sets 48] [--hidden 64] [--alpha 0.1] [--seed 1]
-             [--members 16] [--clean-weight 4] [--decision-weight 0] [--temperature 0.1]
-             [--report R.json]
+             [--members 16] [--clean-weight 4] [--report R.json]
 
 LABELS.tsv:      `train_corpus label` (true MSAE of every set of the label grid, and identity)
 DESCRIPTORS.tsv: `train_corpus describe` (what core/auto/descriptors.cpp reads at run time)
@@ -22,12 +21,6 @@ Method:
    --alpha is the networks' L2 penalty: 0.1 rather than 0.01 gives up a little on the holdout
    shapes for a steadier result on shapes unlike the corpus's (decision 40). Sixteen members
    rather than three average away most of the seed-to-seed spread of the picks (decision 43).
-   With --decision-weight w > 0 each network is trained here instead (numpy, Adam) on the
-   squared error plus w times the expected regret of a soft pick, sum_s softmax(-pred/T)_s *
-   regret_s with T = --temperature: the squared error keeps the outputs regret predictions, the
-   second term weighs the errors that change the pick. It fits the holdout shapes better and
-   the validation meshes worse (docs/experiments/2026-12-04-decision-focused-loss.md), so the
-   shipped recipe keeps 0: scikit-learn's MLPRegressor.
 Splits are by shape (`split` column, corpus.cpp): the network sees only "train" shapes; the
 figures printed and recorded are those of the "holdout" shapes.
 """
@@ -108,75 +101,6 @@ def evaluate(model, X, L, chosen, names, mu, sd):
     }, pick
 
 
-class RegretNetwork:
-    """Two ReLU layers like MLPRegressor (its initialisation, Adam, batches of 200, the L2
-    penalty as it scales it), trained on the squared error plus decision_weight times the
-    expected regret of the soft pick softmax(-prediction / temperature) (--decision-weight)."""
-
-    def __init__(self, hidden, alpha, seed, decision_weight, temperature, epochs=300, lr=1e-3, batch=200):
-        self.hidden, self.alpha, self.seed = hidden, alpha, seed
-        self.decision_weight, self.temperature = decision_weight, temperature
-        self.epochs, self.lr, self.batch = epochs, lr, batch
-
-    def _forward(self, X):
-        a1 = np.maximum(X @ self.coefs_[0] + self.intercepts_[0], 0)
-        a2 = np.maximum(a1 @ self.coefs_[1] + self.intercepts_[1], 0)
-        return a1, a2, a2 @ self.coefs_[2] + self.intercepts_[2]
-
-    def predict(self, X):
-        return self._forward(X)[2]
-
-    def loss_and_gradients(self, x, y):
-        """The batch's loss and its gradient for coefs_ + intercepts_ (checked against finite
-        differences by train_test.py)."""
-        b, outputs = y.shape
-        a1, a2, out = self._forward(x)
-        loss = 0.5 * ((out - y) ** 2).mean()
-        g = (out - y) / (b * outputs)  # the squared error's gradient, as MLPRegressor's
-        if self.decision_weight > 0:
-            z = -out / self.temperature
-            z -= z.max(axis=1, keepdims=True)
-            p = np.exp(z)
-            p /= p.sum(axis=1, keepdims=True)
-            expected = (p * y).sum(axis=1, keepdims=True)
-            loss += self.decision_weight * expected.mean()
-            g += self.decision_weight * (-p * (y - expected) / self.temperature) / b
-        loss += 0.5 * self.alpha * sum((w ** 2).sum() for w in self.coefs_) / b
-        g2 = (g @ self.coefs_[2].T) * (a2 > 0)
-        g1 = (g2 @ self.coefs_[1].T) * (a1 > 0)
-        grads = [x.T @ g1 + self.alpha * self.coefs_[0] / b, a1.T @ g2 + self.alpha * self.coefs_[1] / b,
-                 a2.T @ g + self.alpha * self.coefs_[2] / b, g1.sum(0), g2.sum(0), g.sum(0)]
-        return loss, grads
-
-    def initialise(self, inputs, outputs, rng):
-        sizes = [inputs, self.hidden, self.hidden, outputs]
-        self.coefs_, self.intercepts_ = [], []
-        for i in range(3):
-            bound = math.sqrt(6.0 / (sizes[i] + sizes[i + 1]))
-            self.coefs_.append(rng.uniform(-bound, bound, (sizes[i], sizes[i + 1])))
-            self.intercepts_.append(rng.uniform(-bound, bound, sizes[i + 1]))
-
-    def fit(self, X, Y):
-        n, outputs = Y.shape
-        rng = np.random.default_rng(self.seed)
-        self.initialise(X.shape[1], outputs, rng)
-        params = self.coefs_ + self.intercepts_
-        m1 = [np.zeros_like(p) for p in params]
-        m2 = [np.zeros_like(p) for p in params]
-        step = 0
-        for _ in range(self.epochs):
-            order = rng.permutation(n)
-            for start in range(0, n, self.batch):
-                rows = order[start:start + self.batch]
-                loss, grads = self.loss_and_gradients(X[rows], Y[rows])
-                step += 1
-                for i, (param, grad) in enumerate(zip(params, grads)):
-                    m1[i] = 0.9 * m1[i] + 0.1 * grad
-                    m2[i] = 0.999 * m2[i] + 0.001 * grad * grad
-                    param -= self.lr * (m1[i] / (1 - 0.9 ** step)) / (np.sqrt(m2[i] / (1 - 0.999 ** step)) + 1e-8)
-        return self
-
-
 class Ensemble:
     """The mean of several networks' predictions (what core/auto/model.cpp evaluates)."""
 
@@ -216,9 +140,6 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--members", type=int, default=16, help="networks averaged (different seeds; decision 43)")
     ap.add_argument("--clean-weight", type=int, default=4, help="times each clean case is repeated in training")
-    ap.add_argument("--decision-weight", type=float, default=0.0,
-                    help="weight of the soft pick's expected regret in training (numpy networks); 0: MLPRegressor")
-    ap.add_argument("--temperature", type=float, default=0.1, help="the soft pick's temperature, in log regret")
     ap.add_argument("--report")
     a = ap.parse_args()
 
@@ -238,14 +159,9 @@ def main():
     rows = np.where(train)[0]
     clean = np.array([m["noise"] == "clean" for m in meta])
     rows = np.concatenate([rows] + [rows[clean[rows]]] * (a.clean_weight - 1))
-    if a.decision_weight > 0:
-        members = [RegretNetwork(a.hidden, a.alpha, a.seed + k, a.decision_weight, a.temperature)
-                   for k in range(a.members)]
-    else:
-        members = [MLPRegressor(hidden_layer_sizes=(a.hidden, a.hidden), activation="relu", alpha=a.alpha,
-                                learning_rate_init=1e-3, max_iter=600, random_state=a.seed + k)
-                   for k in range(a.members)]
-    model = Ensemble(members)
+    model = Ensemble([MLPRegressor(hidden_layer_sizes=(a.hidden, a.hidden), activation="relu", alpha=a.alpha,
+                                   learning_rate_init=1e-3, max_iter=600, random_state=a.seed + k)
+                      for k in range(a.members)])
     model.fit((X[rows] - mu) / sd, R[rows][:, chosen])
     figures = {"train": evaluate(model, X[train], L[train], chosen, names, mu, sd)[0]}
     figures["holdout"], pick = evaluate(model, X[hold], L[hold], chosen, names, mu, sd)
