@@ -351,11 +351,12 @@ int main(int argc, char** argv) {
       }
 
       for (const Config& c : configs) {
-        auto med = [&](double (*get)(const RunFigures&)) {
+        auto median_of = [](const Config& k, double (*get)(const RunFigures&)) {
           std::vector<double> v;
-          for (const RunFigures& r : c.runs) v.push_back(get(r));
+          for (const RunFigures& r : k.runs) v.push_back(get(r));
           return bench::median(v);
         };
+        auto med = [&](double (*get)(const RunFigures&)) { return median_of(c, get); };
         const RunFigures& ran = c.runs.front();  // the counts are those of every run (deterministic)
         const double per_face = 1e6 / nf;  // ms -> ns/f
         const double per_aniso = per_face / std::max(1, ran.params.n_aniso);
@@ -387,9 +388,7 @@ int main(int argc, char** argv) {
             return k.params_name == "pick" && k.order_name == c.order_name && k.options.threads == c.options.threads;
           });
           if (pick == configs.end()) continue;  // not reached: every auto configuration has one
-          std::vector<double> pick_ms;
-          for (const RunFigures& r : pick->runs) pick_ms.push_back(r.t.total_ms);
-          const double one_run = bench::median(pick_ms);
+          const double one_run = median_of(*pick, [](const RunFigures& r) { return r.t.total_ms; });
           std::printf("%-11s %8s   auto: measuring and choosing %.0f ms of %.0f ms; its pick as manual parameters %.0f ms: "
                       "%.2f x (output %s)\n",
                       "", "", select, total, one_run, total / std::max(1e-3, one_run),
