@@ -97,6 +97,11 @@ void close_after_response(httplib::Response& res) {
   mark_bytes_left_unread();
 }
 
+// The methods whose body cpp-httplib 0.11 reads before routing (its expect_content()).
+bool reads_request_body(const std::string& method) {
+  return method == "POST" || method == "PUT" || method == "PATCH" || method == "PRI" || method == "DELETE";
+}
+
 bool has_request_body(const httplib::Request& req) {
   Request headers_only;
   headers_only.headers = Headers(req.headers.begin(), req.headers.end());
@@ -331,6 +336,12 @@ struct HttpService::Impl {
         return reject(make_problem(ProblemType::BadRequest, "the request has conflicting Content-Length values"));
       }
     }
+    // RFC 9112, 6: a body is framed by Content-Length or chunked coding whatever the method, but
+    // cpp-httplib reads one only for POST, PUT, PATCH, PRI and DELETE. The body of a GET, HEAD or
+    // OPTIONS would be parsed as the next request on this connection, and behind a proxy's
+    // kept-alive upstream connection its answer handed to another client (a response desync).
+    // Such a request is answered and its connection closed, the body unread.
+    if (!reads_request_body(req.method) && has_request_body(req)) close_after_response(res);
     if (req.headers.size() > kMaxRequestHeaders)
       return reject(make_problem(ProblemType::TooManyHeaders, "the request has " + std::to_string(req.headers.size()) + " header fields, more than the limit of " +
                                      std::to_string(kMaxRequestHeaders)));

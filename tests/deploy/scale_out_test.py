@@ -6,12 +6,14 @@ docker-compose.yml).
 
   1. Load: concurrent POST /v1/denoise through nginx all succeed with a denoised mesh, and every
      replica's own /metrics shows it served a share of them.
-  2. Failover: one replica is killed (SIGKILL) while it runs requests; no synchronous request is
+  2. Response desync: GETs whose body is a whole request, sent beside victims' requests, never
+     get (or cause) another request's answer (issue 49, item 1).
+  3. Failover: one replica is killed (SIGKILL) while it runs requests; no synchronous request is
      lost (nginx resends it to another replica, seen in its access log), and afterwards the two
      survivors serve everything.
-  3. Graceful stop: SIGTERM to a busy replica; it drains (503 to new work, which nginx resends)
+  4. Graceful stop: SIGTERM to a busy replica; it drains (503 to new work, which nginx resends)
      and exits 0 while every request still succeeds.
-  4. Asynchronous jobs through the balancer: created, polled, fetched and deleted through nginx,
+  5. Asynchronous jobs through the balancer: created, polled, fetched and deleted through nginx,
      whichever replica each request reaches. The balancer's own answers: an oversized body
      refused with 413 before any replica sees it, /metrics not proxied, and a replica's own
      error passed through unchanged and not retried.
@@ -215,7 +217,48 @@ def main():
                   "replica %d served %d of %d requests: least_conn did not spread them (%s)"
                   % (port, n, args.requests, counts))
 
-        # 2. Kill one replica while it is running requests.
+        # 2. A response desync (issue 49, item 1): attackers send GET /healthz with a whole second
+        # request as its body, while victims denoise their own meshes, all through nginx's
+        # kept-alive upstream connections. A replica that parsed the body as a request would
+        # write a second answer that nginx hands to whoever uses that connection next.
+        desync_end = time.monotonic() + 8
+        smuggled = b"GET /readyz HTTP/1.1\r\nHost: x\r\n\r\n"
+
+        def attack():
+            conn, answers = http.client.HTTPConnection("127.0.0.1", lb, timeout=30), 0
+            try:
+                while time.monotonic() < desync_end:
+                    conn.request("GET", "/healthz", body=smuggled)
+                    r = conn.getresponse()
+                    body = r.read()
+                    check(r.status == 200 and json.loads(body).get("status") == "ok",
+                          "the attacker got another answer than its own: %d %r" % (r.status, body[:200]))
+                    answers += 1
+            finally:
+                conn.close()
+            return answers
+
+        def victim(k):
+            mesh, done = noisy_icosphere_off(2, 0.02, seed=100 + k), 0
+            while time.monotonic() < desync_end:
+                rid = "victim-%d-%d" % (k, done)
+                r = denoise_through(lb, mesh, rid)
+                check(r.status == 200 and r.header("X-Request-Id") == rid,
+                      "victim %s got another answer than its own: %d, X-Request-Id %s, %r"
+                      % (rid, r.status, r.header("X-Request-Id"), r.body[:120]))
+                check_denoised(r.body, mesh, "victim " + rid)
+                done += 1
+            return done
+
+        with concurrent.futures.ThreadPoolExecutor(6) as pool:
+            attacks = [pool.submit(attack) for _ in range(3)]
+            victims = [pool.submit(victim, k) for k in range(3)]
+            attacked, served_victims = sum(f.result() for f in attacks), sum(f.result() for f in victims)
+        check(attacked > 0 and served_victims > 0, "the desync phase ran no request")
+        log("desync: %d smuggling GETs and %d victims' denoise requests through nginx, none answered "
+            "with another request's answer" % (attacked, served_victims))
+
+        # 3. Kill one replica while it is running requests.
         victim = 1
         heavy = noisy_icosphere_off(4, 0.01, seed=2)
         heavy_params = {"n_normal": 100, "n_vertex": 50}
@@ -259,7 +302,7 @@ def main():
         check(sum(gained) == len(after_ids), "survivors served %s of %d requests" % (gained, len(after_ids)))
         check(all(g > 0 for g in gained), "one survivor got nothing after the kill: %s" % gained)
 
-        # A graceful stop (what docker stop / a rolling update does) under load: SIGTERM to a
+        # 4. A graceful stop (what docker stop / a rolling update does) under load: SIGTERM to a
         # busy replica. It finishes what it accepted and answers 503 to new work, which nginx
         # resends to the last replica; no request fails and the replica exits 0.
         draining = 0
@@ -286,7 +329,7 @@ def main():
         log("graceful stop: %d requests all 200 while replica %d drained and exited 0 "
             "(%d answered 503 by it and resent)" % (len(drain_ids), replicas[draining], refused))
 
-        # 3. Asynchronous jobs through the balancer: each request may reach another replica (the
+        # 5. Asynchronous jobs through the balancer: each request may reach another replica (the
         # one stopped above refuses connections and nginx moves on); the shared queue answers.
         job_ids = []
         for i in range(2 * args.replicas):

@@ -174,6 +174,36 @@ TEST_F(HttpHardening, ConflictingContentLengthsAreRefusedWith400AndTheConnection
   EXPECT_EQ(raw_status(server_->port(), "GET /healthz HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\nContent-Length: 0\r\n\r\n"), 200);
 }
 
+TEST_F(HttpHardening, TheBodyOfAGetIsNeverParsedAsTheNextRequest) {
+  ASSERT_TRUE(server_->started()) << server_->log();
+  // Issue 49, item 1: behind a proxy's kept-alive upstream connection, a body smuggled into a
+  // GET (HEAD, OPTIONS) and answered as a request of its own hands its answer to the next client.
+  const std::string smuggled = "GET /readyz HTTP/1.1\r\nHost: x\r\n\r\n";
+  const std::string chunked = std::to_string(smuggled.size()) + "\r\n" + smuggled + "\r\n0\r\n\r\n";
+  const std::string length = "Content-Length: " + std::to_string(smuggled.size()) + "\r\n\r\n" + smuggled;
+  const std::pair<std::string, int> requests[] = {
+      {"GET /healthz HTTP/1.1\r\nHost: x\r\n" + length, 200},
+      {"GET /healthz HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n" + chunked, 200},
+      {"HEAD /healthz HTTP/1.1\r\nHost: x\r\n" + length, 200},
+      {"OPTIONS /v1/jobs HTTP/1.1\r\nHost: x\r\n" + length, 204},
+      {"GET /no-such-route HTTP/1.1\r\nHost: x\r\n" + length, 404},
+  };
+  for (const auto& [request, status] : requests) {
+    std::string response;
+    // A third request after the body: nothing after the first answer may be answered.
+    EXPECT_EQ(raw_status(server_->port(), request + "GET /v1/params HTTP/1.1\r\nHost: x\r\n\r\n", &response, true, 5), status)
+        << request;
+    EXPECT_EQ(response.find("HTTP/1.1", 10), std::string::npos) << "a second answer on one request: " << response;
+    EXPECT_NE(response.find("Connection: close\r\n"), std::string::npos) << response;
+  }
+  // Without a body the connection stays open for the next request.
+  std::string response;
+  raw_status(server_->port(),
+             "GET /healthz HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\n\r\nGET /readyz HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n",
+             &response, true, 5);
+  EXPECT_NE(response.find("\"status\":\"ready\""), std::string::npos) << response;
+}
+
 // ---------------------------------------------------------------- timeouts and connections
 
 TEST(HttpConnections, ATricklingBodyIsAnswered408AtItsDeadline) {
