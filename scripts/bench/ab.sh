@@ -19,14 +19,10 @@ shift 4
 data="${DATA:-third_party_data/cgal}"
 one="$(mktemp)"
 trap 'rm -f "$one"' EXIT
-: > "$out"
-for _ in $(seq "$rounds"); do
-  for bin in "$@"; do
-    tag="$(ab_tag "$bin")"
-    ab_load "$tag" "$out"
-    /usr/bin/time -f "TIME %U %S %e" "$bin" --data "$data" --meshes "$meshes" --params "$params" --runs 1 \
-      --threads "${THR:-2}" > "$one" 2>&1 || { cat "$one" >&2; exit 1; }
-    grep -E "^(fandisk|bunny)" "$one" | sed "s/^/$tag /" >> "$out"
-    grep "^TIME" "$one" | sed "s/^/$tag /" >> "$out"
-  done
-done
+run_one() {  # BIN TAG
+  /usr/bin/time -f "TIME %U %S %e" "$1" --data "$data" --meshes "$meshes" --params "$params" --runs 1 \
+    --threads "${THR:-2}" > "$one" 2>&1 || { cat "$one" >&2; exit 1; }
+  grep -E "^(fandisk|bunny)" "$one" | sed "s/^/$2 /" >> "$out"
+  grep "^TIME" "$one" | sed "s/^/$2 /" >> "$out"
+}
+ab_alternate "$rounds" "$out" run_one "$@"

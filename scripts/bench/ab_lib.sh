@@ -26,3 +26,18 @@ ab_tag() {
 ab_load() {
   echo "$1 LOAD $(cut -d' ' -f1-3 /proc/loadavg)" >> "$2"
 }
+
+# The rounds: for each of $1 rounds, for each binary after $3, appends its load line to file $2
+# and calls the function named $3 with the binary and its tag.
+ab_alternate() {
+  local rounds=$1 out=$2 run_one=$3 bin tag
+  shift 3
+  : > "$out"
+  for _ in $(seq "$rounds"); do
+    for bin in "$@"; do
+      tag="$(ab_tag "$bin")"
+      ab_load "$tag" "$out"
+      "$run_one" "$bin" "$tag"
+    done
+  done
+}

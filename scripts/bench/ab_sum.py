@@ -45,8 +45,7 @@ def summarize(lines):
         for i in range(width):
             column = [number(r[i]) for r in runs]
             if all(v is not None for v in column):
-                m = statistics.median(column)
-                cells.append(("%.3f" % m).rstrip("0").rstrip("."))
+                cells.append("%.6g" % statistics.median(column))  # six digits: MSAE's too
             else:
                 cells.append(runs[0][i])
         out.append("%s  %s  (n=%d)" % (" ".join(key), " ".join(cells), len(runs)))

@@ -15,15 +15,11 @@ rounds=$1 params=$2 in=$3 out=$4
 shift 4
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
-: > "$out"
-for _ in $(seq "$rounds"); do
-  for bin in "$@"; do
-    tag="$(ab_tag "$bin")"
-    ab_load "$tag" "$out"
-    /usr/bin/time -o "$work/time" -f "%e %U %S %M" "$bin" --params "$params" --report "$in" "$work/out.glb" \
-      > "$work/report.json" 2> "$work/stderr" || { cat "$work/stderr" >&2; exit 1; }
-    echo "$tag TIME $(cat "$work/time")" >> "$out"
-    python3 - "$work/report.json" "$tag" >> "$out" <<'PY'
+run_one() {  # BIN TAG
+  /usr/bin/time -o "$work/time" -f "%e %U %S %M" "$1" --params "$params" --report "$in" "$work/out.glb" \
+    > "$work/report.json" 2> "$work/stderr" || { cat "$work/stderr" >&2; exit 1; }
+  echo "$2 TIME $(cat "$work/time")" >> "$out"
+  python3 - "$work/report.json" "$2" >> "$out" <<'PY'
 import json, sys
 report = json.load(open(sys.argv[1]))
 timings = {}
@@ -42,5 +38,5 @@ def find(node):
 find(report)
 print(sys.argv[2], "STAGES", " ".join("%s=%.1f" % kv for kv in timings.items()))
 PY
-  done
-done
+}
+ab_alternate "$rounds" "$out" run_one "$@"

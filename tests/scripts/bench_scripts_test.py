@@ -21,11 +21,18 @@ echo "fandisk        12946 paper natural  2 |   $n.000     201     - 197 160.0 2
 """
 
 
-def write_fake(folder):
-    path = os.path.join(folder, "build", "release", "tests", "bench", "scale_bench")
+FAKE_CLI = """#!/bin/bash
+# meshdenoise --params P --report IN OUT: prints a report with the stage times, writes OUT
+echo x > "${@: -1}"
+echo '{"files": [{"timings_ms": {"decode": 4.0, "denoise": 20.0}}]}'
+"""
+
+
+def write_fake(folder, relative=("build", "release", "tests", "bench", "scale_bench"), text=None):
+    path = os.path.join(folder, *relative)
     os.makedirs(os.path.dirname(path))
     with open(path, "w") as f:
-        f.write(FAKE_BENCH)
+        f.write(FAKE_BENCH if text is None else text)
     os.chmod(path, os.stat(path).st_mode | stat.S_IEXEC)
     return path
 
@@ -66,6 +73,18 @@ class Bench(unittest.TestCase):
             self.assertIn("after TIME  5.6 9 0.5 580000  (n=3)", summary)
             self.assertIn("after STAGES decode  410  (n=3)", summary)
             self.assertIn("after STAGES encode  15  (n=3)", summary)
+
+    def test_cli_ab_alternates_and_reads_the_reports_stage_times(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            bins = [write_fake(os.path.join(tmp, side), ("build", "release", "cli", "meshdenoise"), FAKE_CLI)
+                    for side in ("before", "after")]
+            out = os.path.join(tmp, "cli.txt")
+            subprocess.run(["bash", os.path.join(BENCH, "cli_ab.sh"), "2", "{}", "in.off", out] + bins, check=True,
+                           cwd=tmp)
+            lines = open(out).read().splitlines()
+            self.assertEqual([l.split()[0] for l in lines if " LOAD " in l], ["before", "after"] * 2)
+            self.assertEqual(len([l for l in lines if l.startswith("after TIME ")]), 2)
+            self.assertIn("before STAGES decode=4.0 denoise=20.0", lines)
 
     def test_ab_refuses_missing_arguments(self):
         p = subprocess.run(["bash", os.path.join(BENCH, "ab.sh"), "3"], capture_output=True, text=True)
