@@ -76,9 +76,9 @@ struct PositionPlan {
 // nodes can carry the scale; float32 otherwise. `note` receives what was chosen and why.
 PositionPlan plan_positions(const Json& json, const Surface& surface, const TriMesh& mesh, Compression compression,
                             const EncodeOptions& options, std::vector<std::string>& notes);
-// `values` (#points by 3, in the accessor's number space: dequantised for normalized types)
+// `values` (#points by components, in the accessor's number space: dequantised for normalized types)
 // stored as `component_type`; nullopt when a value does not fit.
-std::optional<Attribute> integer_attribute(const std::string& semantic, int accessor, const Vertices& values,
+std::optional<Attribute> integer_attribute(const std::string& semantic, int accessor, const Eigen::MatrixXd& values,
                                            int component_type, bool normalized);
 // The written POSITION / NORMAL of a primitive in the types `plan` and the input call for
 // (uncompressed output: NORMAL in the input's integer type; meshopt writes normals itself).

@@ -84,7 +84,7 @@ Attribute gathered(const Attribute& a, const std::vector<std::uint32_t>& order) 
 // transform).
 std::optional<Attribute> quantized_uvs(const Attribute& uv, int bits) {
   const double steps = std::ldexp(1.0, bits) - 1;
-  Vertices values(uv.count, uv.components);
+  Eigen::MatrixXd values(uv.count, uv.components);
   for (std::int64_t i = 0; i < uv.count; ++i)
     for (int k = 0; k < uv.components; ++k) {
       const double u = uv.value(i, k);
@@ -137,7 +137,7 @@ int Output::append_meshopt_view(const std::string& plain, const MeshoptView& lay
   return static_cast<int>(json["bufferViews"].size()) - 1;
 }
 
-std::optional<Attribute> integer_attribute(const std::string& semantic, int accessor, const Vertices& values,
+std::optional<Attribute> integer_attribute(const std::string& semantic, int accessor, const Eigen::MatrixXd& values,
                                            int component_type, bool normalized) {
   const IntRange r = int_range(component_type);
   const int size = component_size(component_type);

@@ -192,14 +192,7 @@ TEST(Meshopt, OutputFollowsTheInputAndKeepsItsTypes) {
 std::unique_ptr<MeshDocument> float_sphere() {
   const TriMesh m = test_io::sphere(24, 48);
   const Vertices V = test_io::jitter(m.V, 0.01);
-  std::string off = "OFF\n" + std::to_string(V.rows()) + " " + std::to_string(m.F.rows()) + " 0\n";
-  char line[128];
-  for (Eigen::Index i = 0; i < V.rows(); ++i) {
-    std::snprintf(line, sizeof line, "%.9g %.9g %.9g\n", V(i, 0), V(i, 1), V(i, 2));
-    off += line;
-  }
-  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
-    off += "3 " + std::to_string(m.F(f, 0)) + " " + std::to_string(m.F(f, 1)) + " " + std::to_string(m.F(f, 2)) + "\n";
+  const std::string off = test_io::off_text(V, m.F);
   EncodeOptions glb;
   glb.format = Format::Glb;
   glb.compression = Compression::None;
