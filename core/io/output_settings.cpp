@@ -5,15 +5,11 @@
 namespace mdn::io {
 namespace {
 
-std::vector<std::string> names(std::initializer_list<Format> formats) {
+// The names of enumeration values (Format, Compression), as the JSON spells them.
+template <class Enum>
+std::vector<std::string> names(std::initializer_list<Enum> values) {
   std::vector<std::string> out;
-  for (const Format f : formats) out.emplace_back(to_string(f));
-  return out;
-}
-
-std::vector<std::string> names(std::initializer_list<Compression> compressions) {
-  std::vector<std::string> out;
-  for (const Compression c : compressions) out.emplace_back(to_string(c));
+  for (const Enum v : values) out.emplace_back(to_string(v));
   return out;
 }
 
