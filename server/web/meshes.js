@@ -114,9 +114,10 @@ export async function loadMesh(blob, format) {
   return { geometry: geometryOf(mesh.positions, mesh.indices), info: mesh.info };
 }
 
-// How far each vertex of `after` moved (distance to the nearest vertex of `before`, in model
-// units) and the mean edge length of `before`. Computed in the worker.
+// How far each vertex of `after` moved: {moved, signed (along the result's normal, outwards
+// positive), exact (matched by index; else by nearest position), edge (the mean edge length of
+// `before`, the heat map's unit)}, in model units. Computed in the worker.
 export function displacements(before, after) {
   return call({ op: 'moved', before: before.getAttribute('position').array, beforeIndices: before.index.array,
-                after: after.getAttribute('position').array });
+                after: after.getAttribute('position').array, afterIndices: after.index.array });
 }
