@@ -1,8 +1,8 @@
 // The page's Web Worker: everything that walks a whole mesh runs here, off the main thread, so
 // the page keeps answering while a 64 MB file is read. Messages {id, op, ...} are answered
 // {id, result} or {id, error} (an error text a person can read). Ops:
-//   parse  {blob, format}  OFF (read here), OBJ, PLY, STL (three.js loaders) ->
-//          {positions: Float32Array, indices: Uint32Array, info}; coincident vertices of
+//   parse  {blob, format, info}  OFF (read here), OBJ, PLY, STL (three.js loaders) ->
+//          {positions: Float32Array, indices: Uint32Array, info (null when info is false)}; coincident vertices of
 //          formats that store triangles apart (STL, OBJ as three reads it) are welded.
 //   info   {positions, indices} -> info (vertices, faces, bounding box, open edges)
 //   moved  {before, beforeIndices, after, afterIndices} -> per `after` vertex how far it moved
@@ -20,83 +20,82 @@ class ReadError extends Error {}
 // OFF, COFF, NOFF, CNOFF (ASCII), read from the bytes without building strings (a 3.6 MB file
 // in tens of milliseconds): a vertex line's first three numbers are its position (colours and
 // normals follow), a face line is a count and that many indices (a colour may follow); polygons
-// are fanned into triangles; '#' starts a comment.
+// are fanned into triangles; '#' starts a comment, blank lines are skipped.
 function parseOff(bytes) {
   const n = bytes.length;
-  let at = 0;
-  let line = 1;
-  // Numbers of the next line holding any (comments and blank lines skipped), into `out`;
-  // returns how many, or -1 at the end of the file.
-  const out = new Float64Array(64);
-  let word = '';
-  function nextLine() {
-    for (;;) {
-      if (at >= n) return -1;
-      let count = 0;
-      word = '';
-      while (at < n && bytes[at] !== 10) {
-        const c = bytes[at];
-        if (c === 35) { while (at < n && bytes[at] !== 10) ++at; break; }  // '#'
-        if (c === 32 || c === 9 || c === 13) { ++at; continue; }
-        // A number: sign, digits, fraction, exponent.
-        const begin = at;
-        let sign = 1, mant = 0, scale = 0, digits = 0;
-        if (c === 45 || c === 43) { if (c === 45) sign = -1; ++at; }
-        while (at < n && bytes[at] >= 48 && bytes[at] <= 57) { mant = mant * 10 + (bytes[at++] - 48); ++digits; }
-        if (at < n && bytes[at] === 46) {
-          ++at;
-          while (at < n && bytes[at] >= 48 && bytes[at] <= 57) { mant = mant * 10 + (bytes[at++] - 48); --scale; ++digits; }
-        }
-        if (digits > 0 && at < n && (bytes[at] === 101 || bytes[at] === 69)) {
-          ++at;
-          let es = 1, e = 0;
-          if (bytes[at] === 45 || bytes[at] === 43) { if (bytes[at] === 45) es = -1; ++at; }
-          while (at < n && bytes[at] >= 48 && bytes[at] <= 57) e = e * 10 + (bytes[at++] - 48);
-          scale += es * e;
-        }
-        const endsWell = at >= n || bytes[at] === 32 || bytes[at] === 9 || bytes[at] === 13 || bytes[at] === 10 || bytes[at] === 35;
-        if (digits === 0 || !endsWell) {  // a word (the header) or something else
-          while (at < n && bytes[at] > 32 && bytes[at] !== 35) ++at;
-          if (count > 0 || word) throw new ReadError(`line ${line} holds something that is not a number`);
-          word = String.fromCharCode(...bytes.subarray(begin, Math.min(at, begin + 16)));
-          continue;
-        }
-        if (count < out.length) out[count] = sign * (scale === 0 ? mant : scale < 0 ? mant / 10 ** -scale : mant * 10 ** scale);
-        ++count;
-      }
-      ++at;
-      ++line;
-      if (count > 0 || word) return count;
+  let at = 0, line = 1;
+  // Past blanks and comments, to the start of the next line that holds something.
+  const nextItem = () => {
+    while (at < n) {
+      const c = bytes[at];
+      if (c === 10) { ++line; ++at; } else if (c === 32 || c === 9 || c === 13) ++at;
+      else if (c === 35) { while (at < n && bytes[at] !== 10) ++at; } else return true;
     }
-  }
-  let k = nextLine();
-  if (!/^[CN]*OFF$/.test(word)) throw new ReadError(bytes.length === 0 ? 'the file is empty' : 'its first line is not an OFF header');
-  if (k === 0) k = nextLine();
-  if (k > 0 && word && !/^[CN]*OFF$/.test(word)) throw new ReadError(`line ${line - 1} holds something that is not a number`);
-  const [nv, nf] = [out[0], out[1]];
-  if (!(k >= 2 && Number.isInteger(nv) && Number.isInteger(nf) && nv >= 0 && nf >= 0)) throw new ReadError('its vertex and face counts are missing');
+    return false;
+  };
+  // The next number on this line, or NaN (none before the line's end, or not a number).
+  const number = () => {
+    while (at < n && (bytes[at] === 32 || bytes[at] === 9 || bytes[at] === 13)) ++at;
+    let c = bytes[at], sign = 1, mant = 0, scale = 0, digits = 0;
+    if (c === 45) { sign = -1; c = bytes[++at]; } else if (c === 43) c = bytes[++at];
+    while (c >= 48 && c <= 57) { mant = mant * 10 + (c - 48); ++digits; c = bytes[++at]; }
+    if (c === 46) {
+      c = bytes[++at];
+      while (c >= 48 && c <= 57) { mant = mant * 10 + (c - 48); --scale; ++digits; c = bytes[++at]; }
+    }
+    if (digits === 0) return NaN;
+    if (c === 101 || c === 69) {
+      c = bytes[++at];
+      let es = 1, e = 0;
+      if (c === 45) { es = -1; c = bytes[++at]; } else if (c === 43) c = bytes[++at];
+      while (c >= 48 && c <= 57) { e = e * 10 + (c - 48); c = bytes[++at]; }
+      scale += es * e;
+    }
+    if (!(at >= n || c === 32 || c === 9 || c === 13 || c === 10 || c === 35)) return NaN;
+    return sign * (scale === 0 ? mant : scale < 0 ? mant / 10 ** -scale : mant * 10 ** scale);
+  };
+  const endLine = () => { while (at < n && bytes[at] !== 10) ++at; };
+  const notNumber = () => new ReadError(`line ${line} holds something that is not a number`);
+
+  if (!nextItem()) throw new ReadError('the file is empty');
+  const begin = at;
+  while (at < n && bytes[at] > 32 && bytes[at] !== 35) ++at;
+  if (!/^[CN]*OFF$/.test(String.fromCharCode(...bytes.subarray(begin, Math.min(at, begin + 16))))) throw new ReadError('its first line is not an OFF header');
+  let nv = number();
+  if (Number.isNaN(nv)) { endLine(); nextItem(); nv = number(); }
+  const nf = number();
+  if (!(Number.isInteger(nv) && Number.isInteger(nf) && nv >= 0 && nf >= 0)) throw new ReadError('its vertex and face counts are missing');
+  endLine();
   const positions = new Float32Array(nv * 3);
   for (let i = 0; i < nv; ++i) {
-    if (nextLine() < 3 || word) throw new ReadError(at >= n ? `it declares ${nv} vertices and ${nf} faces but ends after ${i} vertices` : `vertex ${i} is not three numbers`);
-    positions[3 * i] = out[0]; positions[3 * i + 1] = out[1]; positions[3 * i + 2] = out[2];
+    if (!nextItem()) throw new ReadError(`it declares ${nv} vertices and ${nf} faces but ends after ${i} vertices`);
+    const x = number(), y = number(), z = number();
+    if (Number.isNaN(x) || Number.isNaN(y) || Number.isNaN(z)) throw i === 0 && Number.isNaN(x) ? notNumber() : new ReadError(`vertex ${i} (line ${line}) is not three numbers`);
+    positions[3 * i] = x; positions[3 * i + 1] = y; positions[3 * i + 2] = z;
+    endLine();
   }
   let indices = new Uint32Array(Math.max(3, nf * 3));
   let used = 0;
   for (let f = 0; f < nf; ++f) {
-    const m = nextLine();
-    if (word) throw new ReadError(`line ${line - 1} holds something that is not a number`);
-    if (m < 0) throw new ReadError(`it declares ${nv} vertices and ${nf} faces but ends after ${f} faces`);
-    const corners = out[0];
-    if (!(Number.isInteger(corners) && corners >= 0 && m >= corners + 1 && corners + 1 <= out.length)) throw new ReadError(`face ${f} does not list its corners`);
-    for (let c = 1; c <= corners; ++c) {
-      if (!(Number.isInteger(out[c]) && out[c] >= 0 && out[c] < nv)) throw new ReadError(`face ${f} refers to vertex ${out[c]}, which does not exist (the file has ${nv})`);
-    }
-    if (used + 3 * Math.max(0, corners - 2) > indices.length) {
+    if (!nextItem()) throw new ReadError(`it declares ${nv} vertices and ${nf} faces but ends after ${f} faces`);
+    const corners = number();
+    if (!(Number.isInteger(corners) && corners >= 0)) throw new ReadError(`face ${f} (line ${line}) does not start with its corner count`);
+    if (used + 3 * corners > indices.length) {
       const bigger = new Uint32Array(2 * indices.length + 3 * corners);
       bigger.set(indices);
       indices = bigger;
     }
-    for (let c = 2; c < corners; ++c) { indices[used++] = out[1]; indices[used++] = out[c]; indices[used++] = out[c + 1]; }
+    let first = 0, prev = 0;
+    for (let c = 0; c < corners; ++c) {
+      const v = number();
+      if (!(Number.isInteger(v) && v >= 0 && v < nv)) {
+        throw new ReadError(Number.isNaN(v) ? `face ${f} (line ${line}) lists fewer corners than its count` : `face ${f} refers to vertex ${v}, which does not exist (the file has ${nv})`);
+      }
+      if (c === 0) first = v;
+      else if (c >= 2) { indices[used++] = first; indices[used++] = prev; indices[used++] = v; }
+      prev = v;
+    }
+    endLine();
   }
   return { positions, indices: indices.slice(0, used) };
 }
@@ -194,7 +193,8 @@ function meanEdgeLength(p, idx) {
   for (let f = 0; f + 2 < idx.length; f += 3) {
     for (let k = 0; k < 3; ++k) {
       const a = 3 * idx[f + k], b = 3 * idx[f + (k + 1) % 3];
-      sum += Math.hypot(p[a] - p[b], p[a + 1] - p[b + 1], p[a + 2] - p[b + 2]);
+      const dx = p[a] - p[b], dy = p[a + 1] - p[b + 1], dz = p[a + 2] - p[b + 2];
+      sum += Math.sqrt(dx * dx + dy * dy + dz * dz);
       ++n;
     }
   }
@@ -209,16 +209,22 @@ function vertexNormals(p, idx) {
     const ux = p[b] - p[a], uy = p[b + 1] - p[a + 1], uz = p[b + 2] - p[a + 2];
     const vx = p[c] - p[a], vy = p[c + 1] - p[a + 1], vz = p[c + 2] - p[a + 2];
     const nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;  // twice the area
-    for (const v of [a, b, c]) { nrm[v] += nx; nrm[v + 1] += ny; nrm[v + 2] += nz; }
+    nrm[a] += nx; nrm[a + 1] += ny; nrm[a + 2] += nz;
+    nrm[b] += nx; nrm[b + 1] += ny; nrm[b + 2] += nz;
+    nrm[c] += nx; nrm[c + 1] += ny; nrm[c + 2] += nz;
   }
   for (let i = 0; i < nrm.length; i += 3) {
-    const l = Math.hypot(nrm[i], nrm[i + 1], nrm[i + 2]);
+    const l = Math.sqrt(nrm[i] * nrm[i] + nrm[i + 1] * nrm[i + 1] + nrm[i + 2] * nrm[i + 2]);
     if (l > 0) { nrm[i] /= l; nrm[i + 1] /= l; nrm[i + 2] /= l; }
   }
   return nrm;
 }
 
-const sameArray = (a, b) => a.length === b.length && a.every((x, i) => x === b[i]);
+function sameArray(a, b) {
+  if (a.length !== b.length) return false;
+  for (let i = 0; i < a.length; ++i) if (a[i] !== b[i]) return false;
+  return true;
+}
 
 // How far each vertex of `after` moved, unsigned and signed (along the result's vertex normal:
 // positive outwards). When both meshes have the same vertices and faces in the same order (the
@@ -234,7 +240,7 @@ function displacements(P, Pidx, Q, Qidx, cell) {
   for (let j = 0; j < Q.length; j += 3) {
     const i = match(j);
     const dx = Q[j] - P[i], dy = Q[j + 1] - P[i + 1], dz = Q[j + 2] - P[i + 2];
-    moved[j / 3] = Math.hypot(dx, dy, dz);
+    moved[j / 3] = Math.sqrt(dx * dx + dy * dy + dz * dz);
     signed[j / 3] = dx * normals[j] + dy * normals[j + 1] + dz * normals[j + 2];
   }
   return { moved, signed, exact };
@@ -277,7 +283,7 @@ self.onmessage = async ({ data }) => {
     if (op === 'parse') {
       const mesh = await parse(data.blob, data.format);
       if (mesh.indices.length === 0) throw new ReadError('it holds no triangles');
-      result = { ...mesh, info: info(mesh.positions, mesh.indices) };
+      result = { ...mesh, info: data.info === false ? null : info(mesh.positions, mesh.indices) };
       transfer = [mesh.positions.buffer, mesh.indices.buffer];
     } else if (op === 'info') {
       result = info(data.positions, data.indices);

@@ -116,6 +116,19 @@ export class Viewer {
     this.draw();
   }
 
+  // Runs `change` (setMesh, setHeat, ...) with one draw at its end instead of one per call;
+  // resolves after the next animation frame, when that draw is on screen.
+  async batch(change) {
+    this.holding = true;
+    try {
+      change();
+    } finally {
+      this.holding = false;
+    }
+    this.draw();
+    await new Promise((resolve) => requestAnimationFrame(() => resolve()));
+  }
+
   setHeatVisible(on) { this.heat = on; this.applyStyle(); this.draw(); }
   setSmooth(on) { this.smooth = on; this.applyStyle(); this.draw(); }
   setWireframe(on) { this.wireframe = on; this.applyStyle(); this.draw(); }
@@ -237,6 +250,7 @@ export class Viewer {
   }
 
   draw() {
+    if (this.holding) return;
     const width = this.canvas.clientWidth, height = this.canvas.clientHeight;
     if (width === 0 || height === 0) return;
     // The key light follows the camera, from its upper left, so that every side of the model is
