@@ -13,28 +13,23 @@
 // view and information and the result; a new run clears the result once the server accepted
 // it (a run that cannot be sent keeps the previous result); a changed parameter marks a shown
 // result as out of date (#stale).
-import { ApiError, cancelJob, cancelOnLeave, getJson, isUnreachable, jobResult, onTokenNeeded, pollJob, submitJob, token } from './api.js';
+import { ApiError, cancelJob, cancelOnLeave, getJson, jobResult, onTokenNeeded, token } from './api.js';
 import { definitions, fileContents, outputPanel, summaryLine, timings, whatRan } from './describe.js';
-import { bytesText, count, num, percent, seconds } from './format.js';
+import { StrengthComparison } from './compare.js';
+import { bytesText, count, num, percent, saveBlob, seconds } from './format.js';
 import { ParamForm } from './form.js';
 import { HeatMap } from './heat.js';
+import { followJob, sendJob } from './jobs.js';
 import { displacements, formatOf, loadMesh } from './meshes.js';
 import { Viewer } from './viewer.js';
 
 const $ = (id) => document.getElementById(id);
-const POLL_S = 0.5;          // long-poll window: progress is redrawn at least this often
-const POLL_GAP_MS = 300;     // at least this long between two polls' starts (at most ~3 a second)
-const RETRY_MS = [1000, 2000, 4000, 8000, 10_000];  // waits between tries when the server cannot be reached
 
 const state = {
   file: null, before: null, beforeLoad: null, job: null, result: null, resultName: '', abort: null,
   started: 0, cancelling: false, moved: null, legend: null,
 };
-let form, viewer, heat;
-const sleep = (ms, signal) => new Promise((resolve, reject) => {
-  const timer = setTimeout(resolve, ms);
-  signal?.addEventListener('abort', () => { clearTimeout(timer); reject(signal.reason); }, { once: true });
-});
+let form, viewer, heat, compare;
 
 function setState(name) { document.body.dataset.state = name; }
 
@@ -101,6 +96,8 @@ function clearInput() {
   $('viewer-empty').hidden = false;
   $('viewer-empty').textContent = 'The noisy input and the denoised result appear here, side by side, with one camera.';
   state.beforeProblem = null;
+  compare?.clear();
+  $('compare').hidden = true;
 }
 
 // The invalid-field error names the first field still wrong (or goes when none is).
@@ -200,63 +197,27 @@ function stopJob() {
   }
 }
 
-// Says that the server cannot be reached and when the page tries again; waits that long.
-async function waitToRetry(attempt, what, abort) {
-  const wait = RETRY_MS[Math.min(attempt, RETRY_MS.length - 1)];
-  const kept = state.result ? ' The previous result stays on screen.' : '';
-  showError({ title: 'The server cannot be reached', detail: `The page tries ${what} again in ${Math.round(wait / 1000)} s (try ${attempt + 2}), and keeps trying until it answers.${kept} Cancel stops it.` });
-  setStage(`The server cannot be reached · trying again in ${Math.round(wait / 1000)} s`, undefined);
-  await sleep(wait, abort.signal);
+// The server cannot be reached: said in the action bar with the next try (decision 66).
+function sayRetry(what) {
+  return (attempt, wait) => {
+    const kept = state.result ? ' The previous result stays on screen.' : '';
+    showError({ title: 'The server cannot be reached', detail: `The page tries ${what} again in ${Math.round(wait / 1000)} s (try ${attempt + 2}), and keeps trying until it answers.${kept} Cancel stops it.` });
+    setStage(`The server cannot be reached · trying again in ${Math.round(wait / 1000)} s`, undefined);
+  };
 }
 
-// Sends the file; while the server cannot be reached, tries again with backoff.
-async function send(file, paramsText, abort) {
-  for (let attempt = 0; ; ++attempt) {
-    setStage(`Sending ${file.name} · 0 %`, 0);
-    try {
-      const job = await submitJob(file, paramsText, {
-        signal: abort.signal,
-        onUpload: (sent, total) => setStage(`Sending ${file.name} · ${percent(sent / (total || 1))} of ${bytesText(total)}`, sent / (total || 1)),
-      });
-      showError(null);
-      return job;
-    } catch (e) {
-      if (!isUnreachable(e)) throw e;
-      await waitToRetry(attempt, 'to send the file', abort);
-    }
+// The job's stage in the action bar.
+function showJobStage(job) {
+  if (state.cancelling) return;
+  const p = job.progress;
+  if (job.state === 'queued') {
+    const ahead = p.jobs_ahead;
+    setStage(`${stageName('queued')}${ahead === undefined ? '' : ahead === 0 ? ' · next in line' : ` · ${ahead} ${ahead === 1 ? 'job' : 'jobs'} ahead`} · ${elapsed()}`, undefined);
+  } else if (p.stage === 'decode' && !(p.fraction > 0)) {
+    setStage(`${stageName('decode')} · ${elapsed()}`, undefined);
+  } else {
+    setStage(`${stageName(p.stage)} · ${percent(p.fraction)} · ${elapsed()}`, p.fraction);
   }
-}
-
-// Follows the job to its end: long polls, at most one start every POLL_GAP_MS; while the
-// server cannot be reached, tries again with backoff (a restarted server that kept the job, or
-// one finishing its jobs before it exits, still answers).
-async function follow(job, abort) {
-  let lastPoll = 0;
-  for (let attempt = 0; job.state === 'queued' || job.state === 'running';) {
-    if (!state.cancelling) {
-      const p = job.progress;
-      if (job.state === 'queued') {
-        const ahead = p.jobs_ahead;
-        setStage(`${stageName('queued')}${ahead === undefined ? '' : ahead === 0 ? ' · next in line' : ` · ${ahead} ${ahead === 1 ? 'job' : 'jobs'} ahead`} · ${elapsed()}`, undefined);
-      } else if (p.stage === 'decode' && !(p.fraction > 0)) {
-        setStage(`${stageName('decode')} · ${elapsed()}`, undefined);
-      } else {
-        setStage(`${stageName(p.stage)} · ${percent(p.fraction)} · ${elapsed()}`, p.fraction);
-      }
-    }
-    const gap = POLL_GAP_MS - (performance.now() - lastPoll);
-    if (gap > 0) await sleep(gap, abort.signal);
-    lastPoll = performance.now();
-    try {
-      job = await pollJob(job.id, POLL_S, abort.signal);
-      if (attempt > 0) showError(null);
-      attempt = 0;
-    } catch (e) {
-      if (!isUnreachable(e)) throw e;
-      await waitToRetry(attempt++, 'to follow the job', abort);
-    }
-  }
-  return job;
 }
 
 async function run() {
@@ -276,6 +237,7 @@ async function run() {
   stopJob();
   const abort = state.abort = new AbortController();
   const paramsText = form.paramsText();
+  const strength = form.strength.value;
   state.job = null;
   state.cancelling = false;
   state.started = performance.now();
@@ -284,12 +246,16 @@ async function run() {
   $('cancel').disabled = false;
   const file = state.file;
   try {
-    let job = await send(file, paramsText, abort);
+    setStage(`Sending ${file.name} · 0 %`, 0);
+    let job = await sendJob(file, paramsText, abort.signal, {
+      onUpload: (sent, total) => setStage(`Sending ${file.name} · ${percent(sent / (total || 1))} of ${bytesText(total)}`, sent / (total || 1)),
+      onRetry: sayRetry('to send the file'), onSent: () => showError(null),
+    });
     // Accepted: the previous result no longer belongs to what runs.
     clearResult();
-    state.job = { id: job.id, paramsText, name: file.name, running: true };
+    state.job = { id: job.id, paramsText, name: file.name, running: true, strength };
     setState('running');
-    job = await follow(job, abort);
+    job = await followJob(job, abort.signal, { onProgress: showJobStage, onRetry: sayRetry('to follow the job'), onBack: () => showError(null) });
     state.job.running = false;
     if (job.state === 'cancelled') {
       setState('cancelled');
@@ -352,12 +318,12 @@ async function cancel() {
 }
 
 // ---------------------------------------------------------------- the result
-async function showResult(job, bytes, abort) {
+async function showResult(job, bytes, abort, name = null) {
   const result = job.result;
   const drawStart = performance.now();
   setStage('Drawing the result · reading it', 0.1);
   state.result = new Blob([bytes], { type: result.media_type });
-  state.resultName = `${state.file.name.replace(/\.[^.]*$/, '')}-denoised.${result.format}`;
+  state.resultName = name ?? `${state.file.name.replace(/\.[^.]*$/, '')}-denoised.${result.format}`;
   let after = null;
   try {
     after = (await loadMesh(state.result, result.format, { info: false })).geometry;
@@ -396,7 +362,7 @@ async function showResult(job, bytes, abort) {
     ['Mesh', `${count(result.vertices)} vertices · ${count(result.faces)} faces`],
     ...(heat.data ? [['Moved', `mean ${num(heat.mean / heat.edge)} · max ${num(heat.max / heat.edge)} edge lengths`]] : []),
   ]));
-  $('reports').replaceChildren(whatRan(result.reports, JSON.parse(state.job.paramsText)));
+  $('reports').replaceChildren(whatRan(result.reports, JSON.parse(state.job.paramsText), state.job.strength));
   $('timings').replaceChildren(...timings(result.timings_ms, STAGE_NAMES));
   const inputBytes = await state.file.arrayBuffer().catch(() => new ArrayBuffer(0));
   if (state.abort !== abort) return;
@@ -408,9 +374,23 @@ async function showResult(job, bytes, abort) {
   $('done-bar').hidden = false;
   showCommand('curl');
   $('results').hidden = false;
+  $('compare').hidden = false;
   setStage(`Done in ${seconds(wall)}.`, 1);
   setState('done');
   paramsChanged();
+}
+
+// A strength of the side-by-side runs becomes the page's result (view, heat map, report,
+// Download); the form's strength follows, so that Denoise would make it again.
+async function pickStrength(entry) {
+  stopJob();
+  showError(null);
+  form.setStrength(entry.key);
+  state.job = { id: entry.job.id, paramsText: entry.paramsText, name: entry.name, running: false, strength: entry.key };
+  state.started = performance.now();
+  setState('running');
+  await showResult(entry.job, entry.bytes, state.abort, entry.resultName);
+  setStage(`Showing ${entry.label}.`, 1);
 }
 
 // A click (not a drag) on the result: the nearest vertex of the face under the pointer and how
@@ -433,14 +413,7 @@ function pickAt(x, y) {
 
 // ---------------------------------------------------------------- download, commands
 function download() {
-  if (!state.result) return;
-  const a = document.createElement('a');
-  a.href = URL.createObjectURL(state.result);
-  a.download = state.resultName;
-  document.body.append(a);
-  a.click();
-  a.remove();
-  setTimeout(() => URL.revokeObjectURL(a.href), 60_000);
+  if (state.result) saveBlob(state.result, state.resultName);
 }
 
 const shellQuote = (s) => /^[A-Za-z0-9_./:=@%+-]+$/.test(s) ? s : `'${s.replaceAll("'", "'\\''")}'`;
@@ -536,6 +509,10 @@ async function main() {
       main: $('fields-main'), more: $('fields-more'), output: $('fields-output'),
     });
     form.onChange = paramsChanged;
+    compare = new StrengthComparison({
+      file: () => state.file, before: () => state.before, paramsText: (key) => form.strengthParamsText(key),
+      onPick: pickStrength, onRetry: sayRetry,
+    });
     document.body.dataset.form = 'ready';
   } catch (e) {
     setState('failed');

@@ -38,9 +38,12 @@ function strengthOf(p) {
   return null;
 }
 
-// Per surface, in words. given: the parameters this run sent (parsed JSON).
-export function whatRan(reports, given) {
-  const overridden = Object.keys(given).filter((k) => k !== 'mode' && k !== 'output');
+// Per surface, in words. given: the parameters this run sent (parsed JSON); strength: the
+// strength chosen in the form (its values were sent too).
+export function whatRan(reports, given, strength) {
+  // The fields the user set: those sent that are not the strength's own value.
+  const preset = STRENGTHS[strength]?.params ?? {};
+  const overridden = Object.keys(given).filter((k) => k !== 'mode' && k !== 'output' && !(k in preset && preset[k] === given[k]));
   const box = document.createDocumentFragment();
   reports.forEach((r, i) => {
     const rows = [];
@@ -65,7 +68,7 @@ export function whatRan(reports, given) {
           : `an error about ${num(c.predicted_ratio)} times what the best of those settings could do: a surface unlike most the model learned from`]);
       }
     } else {
-      rows.push(['Strength', named && overridden.every((k) => k in (STRENGTHS[named.toLowerCase()]?.params ?? {})) ? `${named} (fixed settings)` : 'Manual: the parameters given']);
+      rows.push(['Strength', named && !overridden.length ? `${named} (fixed settings)` : named ? `${named} (fixed settings), with your own values` : 'Manual: the parameters given']);
     }
     if (r.mode !== 'none') rows.push(['Ran with', paramsInWords(p)]);
     if (overridden.length && r.mode !== 'none') {
@@ -180,12 +183,16 @@ export function outputPanel(input, output, job) {
   row('Size', bytesText(job.input_bytes), `${bytesText(r.bytes)} (${num((100 * r.bytes) / (job.input_bytes || 1))} %)`);
   row('Holds', input.contents.meshes, output.contents.meshes);
   row('Attributes', input.contents.attributes, output.contents.attributes);
-  row('Compression', input.contents.compression, r.compression === 'none' ? output.contents.compression : `${r.compression}${output.contents.compression.includes('quantized') ? ', quantized positions' : ''}`);
+  const named = { none: 'none', draco: 'Draco', meshopt: 'meshopt' };
+  row('Compression', input.contents.compression, output.contents.compression || named[r.compression] || r.compression);
   row('Mesh', input.info ? `${count(input.info.vertices)} vertices · ${count(input.info.faces)} faces` : 'not drawn', `${count(r.vertices)} vertices · ${count(r.faces)} faces`);
-  const checks = [`read ${r.reports.length} ${r.reports.length === 1 ? 'surface' : 'surfaces'}; connectivity kept (only positions change)`, ...r.notes];
+  const server = [`read ${r.reports.length} ${r.reports.length === 1 ? 'surface' : 'surfaces'}, denoised each and wrote them back with the same faces (only positions change)`, ...r.notes];
+  const browser = [];
   if (input.info) {
-    checks.push(input.info.open_edges === 0 ? 'the input is closed (no open edges)' : `the input has ${count(input.info.open_edges)} open edges`);
-    if (input.info.non_manifold_edges) checks.push(`${count(input.info.non_manifold_edges)} non-manifold edges`);
+    browser.push(input.info.open_edges === 0 ? 'the input is closed (no open edges)' : `the input has ${count(input.info.open_edges)} open edges`);
+    if (input.info.non_manifold_edges) browser.push(`it has ${count(input.info.non_manifold_edges)} non-manifold edges`);
   }
-  return [table, el('h3', { textContent: 'What the server checked and did' }), el('ul', { className: 'checks' }, ...checks.map((c) => el('li', { textContent: c })))];
+  const list = (items) => el('ul', { className: 'checks' }, ...items.map((c) => el('li', { textContent: c })));
+  return [table, el('h3', { textContent: 'What the server checked and did' }), list(server),
+          ...(browser.length ? [el('h3', { textContent: 'Read in this browser' }), list(browser)] : [])];
 }

@@ -229,6 +229,26 @@ export class ParamForm {
     return `{${parts.join(',')}}`;
   }
 
+  // The parameters of a strength alone (its set, or {} for auto), with the output fields given:
+  // what the strengths side by side send, so that each result is in the chosen container.
+  strengthParamsText(key) {
+    const output = [];
+    for (const [path, { control }] of this.rows) {
+      const text = control.value.trim();
+      const [head, sub] = path.split('.');
+      if (text !== '' && head === 'output' && sub) output.push(`${JSON.stringify(sub)}:${text}`);
+    }
+    const parts = Object.entries(STRENGTHS[key].params).map(([k, v]) => `${JSON.stringify(k)}:${JSON.stringify(v)}`);
+    if (output.length) parts.push(`"output":{${output.join(',')}}`);
+    return `{${parts.join(',')}}`;
+  }
+
+  setStrength(key) {
+    this.strength.value = key;
+    this.refreshPlaceholders();
+    this.onChange();
+  }
+
   reset() {
     for (const [path, { control }] of this.rows) {
       control.value = '';

@@ -7,6 +7,8 @@
 // unsigned modes and a range the user sets, the view turned and zoomed from the keyboard, polls
 // at a few a second, and a server that goes away: the result kept, the page saying so and
 // trying again until the server is back. Screenshots land in <build>/artifacts/web/.
+#include <cmath>
+#include <map>
 #include <regex>
 
 #include "browser_fixture.h"
@@ -127,6 +129,35 @@ TEST(WebPageReading, ResultsInViewInWordsAndKeptWhenTheServerGoesAway) {
   EXPECT_NE(keys.at("panned").at("target"), keys.at("zoomed").at("target")) << keys;
   EXPECT_NEAR(keys.at("framed").at("distance").get<double>(), keys.at("start").at("distance").get<double>(), 1e-6) << keys;
   EXPECT_NEAR(keys.at("framed").at("azimuth").get<double>(), keys.at("start").at("azimuth").get<double>(), 1e-6) << keys;
+
+  // The output panel: what each file holds and the server's checks; the strengths side by
+  // side, each with its time and displacement (Strong moves the surface more than Light), one
+  // shown as the page's result and ready to download.
+  const json& features = report.at("features");
+  ASSERT_EQ(features.at("state"), "done") << features;
+  const std::string panel = features.at("output_panel");
+  for (const char* word : {"Input", "Output", "OFF", "glTF binary", "Draco", "POSITION", "Compression", "What the server"})
+    EXPECT_NE(panel.find(word), std::string::npos) << word << " missing from the output panel: " << panel;
+  ASSERT_EQ(features.at("rows").size(), 3u) << features;
+  std::map<std::string, json> rows;
+  for (const json& r : features.at("rows")) rows[r.at("strength")] = r;
+  for (const char* key : {"auto", "light", "strong"}) {
+    ASSERT_TRUE(rows.count(key)) << key << ": " << features.at("rows");
+    EXPECT_NE(rows[key].at("text").get<std::string>().find("on the server"), std::string::npos) << rows[key];
+    EXPECT_GT(rows[key].at("run_s").get<double>(), 0) << rows[key];
+  }
+  EXPECT_GT(rows["strong"].at("mean").get<double>(), rows["light"].at("mean").get<double>()) << features.at("rows");
+  const json& shown = features.at("shown");
+  EXPECT_EQ(shown.at("state"), "done") << shown;
+  EXPECT_NE(shown.at("download").get<std::string>().find("-strong.glb"), std::string::npos) << shown;
+  EXPECT_EQ(shown.at("strength"), "strong") << shown;
+  EXPECT_NE(shown.at("what_ran").get<std::string>().find("Strong (fixed settings)"), std::string::npos) << shown;
+  EXPECT_FALSE(shown.at("stale").get<bool>()) << shown;
+  for (const char* which : {"layout", "narrow_layout"}) {
+    const json& l = features.at(which);
+    EXPECT_LE(l.at("scroll_width").get<int>(), l.at("width").get<int>()) << which;
+    EXPECT_TRUE(l.at("outside").empty()) << which << ": text outside its card: " << l.at("outside");
+  }
 
   // 3: polls at no more than a few a second; the server gone: the previous result stays, the
   // page says so and that it tries again; back on the same port, the run goes through.

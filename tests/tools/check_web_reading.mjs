@@ -71,7 +71,7 @@ const inView = (page, selector) => page.$eval(selector, (e) => {
 // Sideways scroll, and every piece of text in the result panels, the legend and the action bar
 // that reaches outside its card or is cut by its own box (scrollWidth beyond its width).
 const layout = (page) => page.evaluate(() => {
-  const cards = [...document.querySelectorAll('#results > section, #legend, #actionbar')].filter((c) => c.getClientRects().length);
+  const cards = [...document.querySelectorAll('#results > section, #legend, #actionbar, #compare')].filter((c) => c.getClientRects().length);
   const outside = [];
   for (const card of cards) {
     const box = card.getBoundingClientRect();
@@ -233,6 +233,30 @@ try {
   await page.keyboard.press('0');
   report.keys.framed = await view();
   step('keys');
+
+  // (features) The output panel of a glb + Draco result; the strengths side by side, one shown.
+  report.phase = 'features';
+  await open(1280, 800);
+  await fill(page, { 'output.format': '"glb"', 'output.compression': '"draco"' });
+  await page.$eval('#advanced', (d) => { d.open = false; });
+  report.features = { state: await upload(page, plan.mesh), output_panel: await page.$eval('#output-panel', (e) => e.innerText) };
+  await page.click('#compare-run');
+  await page.waitForSelector('#compare[data-state="done"]', { timeout: 120_000 });
+  report.features.rows = await page.$$eval('#compare-rows tr', (rows) => rows.map((r) => ({
+    strength: r.dataset.strength, text: r.cells[1].textContent, mean: Number(r.cells[1].dataset.mean), run_s: Number(r.cells[1].dataset.runS) })));
+  await page.click('#compare-rows tr[data-strength="strong"] button');
+  await page.waitForFunction(() => /Showing Strong/.test(document.getElementById('stage').textContent));
+  report.features.shown = {
+    state: await page.$eval('body', (b) => b.dataset.state), download: await page.$eval('#download', (e) => e.textContent),
+    strength: await page.$eval('#strength', (e) => e.value), what_ran: await page.$eval('#reports', (e) => e.innerText),
+    stale: await page.$eval('#stale', (e) => !e.hidden), line: await page.$eval('#result-line', (e) => e.textContent),
+    legend_mean: await page.$eval('#summary', (e) => e.innerText),
+  };
+  report.features.layout = await layout(page);
+  await page.screenshot({ path: `${plan.out}/reading-compare.png`, fullPage: true });
+  await page.setViewport({ width: 400, height: 800 });
+  report.features.narrow_layout = await layout(page);
+  step('features');
 
   // (server) Polls of a job of a few seconds; the server gone while a result is shown.
   report.phase = 'polls';
