@@ -8,14 +8,15 @@ export const ENDED = 'body[data-state="done"], body[data-state="failed"], body[d
 // Debian's Chromium, headless. --no-sandbox: CI containers run as root. WebGL without a GPU:
 // SwiftShader through ANGLE. The rest keeps the browser from doing background work or reaching
 // the network; the resolver rule makes every host name but the loopback address unresolvable.
-export function launchBrowser(viewport) {
+// extra: more command-line switches (the screenshots hide scroll bars).
+export function launchBrowser(viewport, extra = []) {
   return puppeteer.launch({
     executablePath: process.env.MDN_CHROMIUM ?? '/usr/bin/chromium',
     headless: true,
     args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-quic',
            '--no-first-run', '--no-default-browser-check', '--disable-background-networking',
            '--disable-component-update', '--disable-sync', '--disable-extensions', '--disable-dev-shm-usage',
-           '--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE 127.0.0.1'],
+           '--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE 127.0.0.1', ...extra],
     defaultViewport: viewport,
   });
 }
