@@ -533,7 +533,15 @@ void HttpService::begin_drain() {
   impl_->store->begin_drain();
 }
 
-bool HttpService::wait_drained(Clock::time_point deadline) { return impl_->store->wait_drained(deadline); }
+bool HttpService::wait_drained(Clock::time_point deadline) {
+  const bool drained = impl_->store->wait_drained(deadline);
+  // Results that finished during the drain and whose clients are still polling for them are
+  // served until fetched, their clients go quiet, or the grace ends: a restart loses nothing
+  // that was accepted (decision 67). A result nobody asks for does not hold the exit.
+  while (drained && Clock::now() < deadline && impl_->store->results_awaited())
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  return drained;
+}
 
 void HttpService::stop() {
   impl_->pool.begin_drain();
