@@ -20,6 +20,7 @@ import { bytesText, count, num, percent, saveBlob, seconds } from './format.js';
 import { ParamForm } from './form.js';
 import { HeatMap } from './heat.js';
 import { followJob, sendJob } from './jobs.js';
+import { ReferenceComparison } from './reference.js';
 import { displacements, formatOf, loadMesh } from './meshes.js';
 import { Viewer } from './viewer.js';
 
@@ -29,7 +30,7 @@ const state = {
   file: null, before: null, beforeLoad: null, job: null, result: null, resultName: '', abort: null,
   started: 0, cancelling: false, moved: null, legend: null,
 };
-let form, viewer, heat, compare;
+let form, viewer, heat, compare, reference;
 
 function setState(name) { document.body.dataset.state = name; }
 
@@ -81,6 +82,8 @@ function clearResult() {
   state.result = null;
   viewer.setMesh('after', null);
   heat.set(null);
+  reference?.clear();
+  $('reference').hidden = true;
   $('results').hidden = true;
   $('done-bar').hidden = true;
   $('stale').hidden = true;
@@ -285,6 +288,8 @@ async function run() {
     }
     if (state.abort !== abort) return;  // another run took over
     if (state.job) state.job.running = false;
+    await state.beforeLoad;  // the browser's own reading first, so that the view says what it found
+    if (state.abort !== abort) return;
     setState('failed');
     setStage(state.job ? 'The job could not be followed.' : 'Not accepted.', 0);
     showError(problemOf(e));
@@ -375,6 +380,8 @@ async function showResult(job, bytes, abort, name = null) {
   showCommand('curl');
   $('results').hidden = false;
   $('compare').hidden = false;
+  reference.clear();
+  $('reference').hidden = false;
   setStage(`Done in ${seconds(wall)}.`, 1);
   setState('done');
   paramsChanged();
@@ -451,6 +458,10 @@ async function showCommand(kind, copy = false) {
 async function main() {
   viewer = new Viewer($('canvas'));
   heat = new HeatMap(viewer);
+  reference = new ReferenceComparison({
+    input: () => state.file, heat,
+    result: () => (state.result && heat.data ? { blob: state.result, name: state.resultName, vertices: heat.data.moved.length } : null),
+  });
   const drop = $('drop');
   $('file').addEventListener('change', () => {
     const file = $('file').files[0];

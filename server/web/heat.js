@@ -1,6 +1,7 @@
 // The displacement heat map's state and its legend: how far each result vertex moved, as a
 // distance (0 to the scale's end) or signed along the result's normal (in: negative, out:
-// positive; the scale runs from -end to +end), with the scale's end set by the user (in mean
+// positive; the scale runs from -end to +end), or, once a reference is given, each result
+// vertex's deviation from the reference (from the server's comparison, POST /v1/compare), with the scale's end set by the user (in mean
 // input edge lengths) or at the 99th percentile. The viewer colours the lit surface; the legend
 // draws the same scale, its labels and a histogram of the vertices over it.
 import { count, num } from './format.js';
@@ -29,6 +30,7 @@ export class HeatMap {
   // data: {moved, signed, exact, edge} from meshes.displacements, or null (nothing to show).
   set(data) {
     this.data = data;
+    this.setReference(null);
     $('legend').hidden = !data;
     if (!data) return;
     const sorted = Float32Array.from(data.moved).sort();
@@ -42,8 +44,28 @@ export class HeatMap {
     this.apply();
   }
 
-  percentileEnd() { return this.mode === 'signed' ? this.stats.p99Signed : this.stats.p99; }
-  get edge() { return this.data?.edge ?? 0; }
+  // reference: {deviation (per result vertex, model units), signed, edge (the reference's mean
+  // edge length)}, or null; the mode "Reference" is offered while one is set.
+  setReference(reference) {
+    this.reference = reference;
+    const input = document.querySelector('input[name=heat-mode][value=reference]');
+    input.closest('label').hidden = !reference;
+    if (reference) {
+      const abs = Float32Array.from(reference.deviation, Math.abs).sort();
+      reference.p99 = quantile(abs, 0.99) || abs[abs.length - 1] || 0;
+      input.checked = true;
+      this.mode = 'reference';
+      this.end = this.percentileEnd();
+      this.apply();
+    } else if (this.mode === 'reference') {
+      document.querySelector('input[name=heat-mode][value=distance]').checked = true;
+      this.mode = 'distance';
+      if (this.data) { this.end = this.percentileEnd(); this.apply(); }
+    }
+  }
+
+  percentileEnd() { return this.mode === 'reference' ? this.reference.p99 : this.mode === 'signed' ? this.stats.p99Signed : this.stats.p99; }
+  get edge() { return this.mode === 'reference' ? this.reference.edge : this.data?.edge ?? 0; }
   get mean() { return this.stats?.mean ?? 0; }
   get max() { return this.stats?.max ?? 0; }
 
@@ -63,9 +85,10 @@ export class HeatMap {
   // Colours, legend and histogram for the current mode and end.
   apply() {
     if (!this.data) return;
-    const signed = this.mode === 'signed';
+    const ref = this.mode === 'reference';
+    const signed = ref ? this.reference.signed : this.mode === 'signed';
     const end = this.end > 0 ? this.end : 0;
-    const values = signed ? this.data.signed : this.data.moved;
+    const values = ref ? this.reference.deviation : signed ? this.data.signed : this.data.moved;
     const t = new Float32Array(values.length);
     for (let i = 0; i < values.length; ++i) t[i] = end > 0 ? (signed ? 0.5 + values[i] / (2 * end) : values[i] / end) : signed ? 0.5 : 0;
     this.viewer.setHeat(t, signed);
@@ -79,17 +102,19 @@ export class HeatMap {
       ctx.fillStyle = `rgb(${Math.round(255 * r)}, ${Math.round(255 * g)}, ${Math.round(255 * b)})`;
       ctx.fillRect(x, 0, 1, bar.height);
     }
-    $('legend-title').textContent = signed ? 'How far each vertex moved in (−) or out (+)' : 'How far each vertex moved';
+    $('legend-title').textContent = ref ? `Deviation from the reference${signed ? ', in (−) or out (+)' : ''}`
+      : signed ? 'How far each vertex moved in (−) or out (+)' : 'How far each vertex moved';
     $('legend-min').textContent = signed ? `−${num(edges)} · in` : '0';
     $('legend-mid').textContent = signed ? '0' : '';
     $('legend-max').textContent = `${signed ? '+' : ''}${num(edges)} edge lengths · ${num(end)} model units${signed ? ' · out' : ''}`;
     $('legend-max').dataset.edgeLengths = String(edges);
     $('legend-max').dataset.modelUnits = String(end);
     $('legend').dataset.mode = this.mode;
-    const how = this.data.exact
-      ? 'Each result vertex against the same input vertex (the file keeps the input\'s vertex order)'
+    const how = ref ? (signed ? 'Each result vertex against the same reference vertex, along the reference\'s normal (computed by the server)'
+                              : 'Each result vertex\'s distance to the closest point of the reference surface (computed by the server)')
+      : this.data.exact ? 'Each result vertex against the same input vertex (the file keeps the input\'s vertex order)'
       : 'Each result vertex against the nearest input vertex (the result\'s vertices were reordered)';
-    $('legend-note').textContent = `${how}${signed ? ', along the result\'s normal' : ''}; mean input edge length ${num(this.edge)} model units. ` +
+    $('legend-note').textContent = `${how}${signed && !ref ? ', along the result\'s normal' : ''}; mean ${ref ? 'reference' : 'input'} edge length ${num(this.edge)} model units. ` +
       `${Math.abs(end - this.percentileEnd()) < 1e-12 * (1 + end) ? 'The scale ends at the 99th percentile' : 'The scale ends where you set it'}; ` +
       'values beyond it take its end colour. Click the result to read one vertex.';
     this.drawHistogram(values, end, signed);
@@ -121,7 +146,7 @@ export class HeatMap {
   describe(index) {
     if (!this.data || index >= this.data.moved.length) return null;
     const d = this.data.moved[index], s = this.data.signed[index];
-    const e = this.edge > 0 ? this.edge : 1;
+    const e = this.data.edge > 0 ? this.data.edge : 1;
     return { moved: d, text: `Vertex ${count(index)} moved ${num(d / e)} edge lengths (${num(d)} model units), ${s < 0 ? 'in' : 'out'} ${num(Math.abs(s) / e)} along the normal` };
   }
 }

@@ -60,20 +60,27 @@ TEST(ServerLifecycle, AnUndownloadedResultDoesNotHoldTheStop) {
   EXPECT_NE(server.log().find("results_not_downloaded=1"), std::string::npos) << server.log();
 }
 
+// Posts a job of a few hundred milliseconds (a noisy sphere, 5k faces) and waits until a worker
+// runs it; returns its id, or "" (with a test failure) if it was not accepted.
+std::string start_job(httplib::Client& c, const std::string& params) {
+  auto posted = c.Post("/v1/jobs", {{"X-Denoise-Params", params}}, noisy_sphere_off(4, 7), "model/x-off");
+  EXPECT_TRUE(posted && posted->status == 202) << (posted ? posted->body : "no answer");
+  if (!posted || posted->status != 202) return "";
+  const std::string id = parse_json(posted->body)["id"];
+  for (int i = 0; i < 200; ++i) {  // until it runs
+    if (parse_json(c.Get("/v1/jobs/" + id)->body).value("state", "") != "queued") break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return id;
+}
+
 // A running job holds the stop until it ends; the log names it when the drain starts.
 TEST(ServerLifecycle, TheStopWaitsForARunningJobAndNamesIt) {
   ServerProcess server({"--workers", "1", "--drain-grace", "60"});
   ASSERT_TRUE(server.started()) << server.log();
   auto c = server.client();
-  auto posted = c->Post("/v1/jobs", {{"X-Denoise-Params", R"({"n_normal":200,"n_vertex":200})"}},
-                        noisy_sphere_off(4, 7), "model/x-off");
-  ASSERT_TRUE(posted);
-  ASSERT_EQ(posted->status, 202) << posted->body;
-  const std::string id = parse_json(posted->body)["id"];
-  for (int i = 0; i < 200; ++i) {  // until it runs
-    if (parse_json(c->Get("/v1/jobs/" + id)->body).value("state", "") != "queued") break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
+  const std::string id = start_job(*c, R"({"n_normal":200,"n_vertex":200})");
+  ASSERT_FALSE(id.empty());
   server.signal(SIGTERM);
   EXPECT_EQ(server.wait_exit(std::chrono::seconds(90)), 0) << server.log();
   const std::string log = server.log();
@@ -90,11 +97,8 @@ TEST(ServerLifecycle, AJobFinishedDuringTheDrainIsDownloadableByItsPollingClient
   ServerProcess server({"--workers", "1", "--drain-grace", "60"});
   ASSERT_TRUE(server.started()) << server.log();
   auto c = server.client();
-  auto posted = c->Post("/v1/jobs", {{"X-Denoise-Params", R"({"n_normal":200,"n_vertex":100})"}},
-                        noisy_sphere_off(4, 7), "model/x-off");
-  ASSERT_TRUE(posted);
-  ASSERT_EQ(posted->status, 202) << posted->body;
-  const std::string id = parse_json(posted->body)["id"];
+  const std::string id = start_job(*c, R"({"n_normal":200,"n_vertex":100})");
+  ASSERT_FALSE(id.empty());
   // The client polls as the web page does (a status request every 300 ms), then fetches.
   int result_status = 0;
   std::string result_body;
@@ -112,10 +116,6 @@ TEST(ServerLifecycle, AJobFinishedDuringTheDrainIsDownloadableByItsPollingClient
     if (r) result_body = r->body;
     fetched = std::chrono::steady_clock::now();
   });
-  for (int i = 0; i < 200; ++i) {  // until it runs
-    if (parse_json(c->Get("/v1/jobs/" + id)->body).value("state", "") != "queued") break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
   const auto signalled = std::chrono::steady_clock::now();
   server.signal(SIGTERM);
   EXPECT_EQ(server.wait_exit(std::chrono::seconds(90)), 0) << server.log();

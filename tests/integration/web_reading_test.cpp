@@ -22,6 +22,7 @@ TEST(WebPageReading, ResultsInViewInWordsAndKeptWhenTheServerGoesAway) {
   check_browser_tools();
   const std::string dir = temp_dir("web_reading");
   write_file(dir + "/cube.off", noisy_cube_off(12, 23));
+  write_file(dir + "/clean-cube.off", off_text(cube(12)));  // the same faces, no noise
   write_file(dir + "/empty.off", "");
   write_file(dir + "/broken.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");  // a vertex and a face short
   write_file(dir + "/sphere.off", noisy_sphere_off(5, 7));                           // 20k faces
@@ -33,6 +34,7 @@ TEST(WebPageReading, ResultsInViewInWordsAndKeptWhenTheServerGoesAway) {
                      {"empty", dir + "/empty.off"},
                      {"broken", dir + "/broken.off"},
                      {"zero", dir + "/cube.off"},
+                     {"reference", dir + "/clean-cube.off"},
                      // A few seconds of work on this machine: long enough to count polls.
                      {"slow", {{"mesh", dir + "/sphere.off"}, {"set", {{"n_normal", "1000"}, {"n_vertex", "300"}}}}}};
   const json report = run_browser_check("check_web_reading.mjs", plan, dir);
@@ -115,6 +117,29 @@ TEST(WebPageReading, ResultsInViewInWordsAndKeptWhenTheServerGoesAway) {
   // A wrong range is said beside the field and changes nothing.
   EXPECT_FALSE(heat.at("bad_range").at("error").get<std::string>().empty()) << heat.at("bad_range");
   EXPECT_NEAR(heat.at("bad_range").at("legend").at("edge_lengths").get<double>(), 0.05, 1e-9) << heat.at("bad_range");
+
+  // The reference comparison: the server's figures, the CLI's for the same files (the input's
+  // E_v and MSAE as `meshdenoise --metrics` prints them), the result closer to the reference
+  // than the input, and the heat map showing the signed deviation.
+  const json& ref = report.at("reference");
+  ASSERT_EQ(ref.at("state"), "done") << ref;
+  ASSERT_EQ(ref.at("rows").size(), 2u) << ref;
+  const json& input_row = ref.at("rows")[0];
+  const json& result_row = ref.at("rows")[1];
+  EXPECT_EQ(input_row.at("row"), "input");
+  EXPECT_EQ(result_row.at("row"), "result");
+  const auto [cli_code, cli_out] = run_command(shell_quote(cli_binary()) + " --metrics " + shell_quote(dir + "/clean-cube.off") + " " +
+                                               shell_quote(dir + "/cube.off"));
+  ASSERT_EQ(cli_code, 0) << cli_out;
+  const json cli = parse_json(cli_out);
+  EXPECT_NEAR(input_row.at("ev").get<double>(), cli.at("ev").get<double>(), 1e-12 + 1e-9 * cli.at("ev").get<double>()) << ref;
+  EXPECT_NEAR(input_row.at("msae").get<double>(), cli.at("msae_deg2").get<double>(), 1e-9 * cli.at("msae_deg2").get<double>()) << ref;
+  EXPECT_LT(result_row.at("ev").get<double>(), input_row.at("ev").get<double>()) << ref;
+  EXPECT_LT(result_row.at("msae").get<double>(), input_row.at("msae").get<double>()) << ref;
+  EXPECT_EQ(ref.at("mode"), "reference") << ref;
+  EXPECT_NE(ref.at("title").get<std::string>().find("Deviation from the reference"), std::string::npos) << ref;
+  EXPECT_NE(ref.at("min").get<std::string>().find("−"), std::string::npos) << "a signed deviation: " << ref;
+  EXPECT_GT(ref.at("pixels").at("drawn").get<int>(), 1000) << ref;
 
   // 8: the keyboard turns (three 15° steps), tilts, zooms (the model grows on screen), pans and
   // frames the model again.

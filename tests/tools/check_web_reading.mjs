@@ -6,13 +6,15 @@
 //        stopped and started again), "out": DIR, "mesh": FILE (a quick noisy mesh),
 //        "override": {"field": "n_normal", "value": "7"}, "invalid": [[FIELD, VALUE], [FIELD, VALUE]],
 //        "empty": FILE (0 bytes), "broken": FILE (an OFF the server refuses), "zero": FILE (run with
-//        mode none: nothing moves), "slow": {"mesh": FILE, "set": {...}} (a job of a few seconds)}
+//        mode none: nothing moves), "slow": {"mesh": FILE, "set": {...}} (a job of a few seconds),
+//        "reference": FILE (the clean mesh of "mesh", same faces)}
 // Steps, at 1280x800 and 400x800 unless said: (layout) a run's end: the download and the one-line
 // summary in view as the page stands, no sideways scroll, no text outside its card, the stage
 // timings' bars and units; (what ran) a run with a field overridden: the words shown; (invalid)
 // two wrong fields: the focused one below the sticky bar and in view, the error naming the first
 // still wrong as each is fixed; (bad files) an empty file and a refused one: the messages;
-// (heat, 1280 only) lit colours, the signed mode, a range typed in, a wrong range; (keys) the
+// (heat, 1280 only) lit colours, the signed mode, a range typed in, a wrong range, a reference
+// mesh compared through the server (figures and the deviation map); (keys) the
 // view turned, zoomed, panned and framed from the keyboard; (server, 1280 only) the polls of a
 // job of a few seconds, then the server killed while a result is shown and Denoise pressed: the
 // result kept, the words shown, then the server started again on the same port: the run goes
@@ -211,6 +213,20 @@ try {
   await page.type('#heat-range', 'abc');
   await page.keyboard.press('Enter');
   report.heat.bad_range = { error: await page.$eval('#heat-range-error', (e) => (e.hidden ? '' : e.textContent)), legend: await legend() };
+  // (reference) The clean mesh as the reference: the server's figures for the input and the
+  // result, the result's deviation in the heat map.
+  await page.$eval('#heat-range', (e) => { e.value = ''; });
+  await page.click('#heat-auto');
+  await (await page.$('#reference-file')).uploadFile(plan.reference);
+  await page.waitForSelector('#reference[data-state="done"], #reference[data-state="failed"]');
+  report.reference = await page.evaluate(() => ({
+    state: document.getElementById('reference').dataset.state, status: document.getElementById('reference-status').textContent,
+    rows: [...document.querySelectorAll('#reference-rows tr')].map((r) => ({ row: r.dataset.row, ev: Number(r.dataset.ev), msae: Number(r.dataset.msae), text: r.innerText })),
+    mode: document.getElementById('legend').dataset.mode, title: document.getElementById('legend-title').textContent,
+    min: document.getElementById('legend-min').textContent,
+  }));
+  report.reference.pixels = await resultPixels(page);
+  await page.screenshot({ path: `${plan.out}/reading-reference.png` });
   step('heat');
 
   // (keys) The view from the keyboard.
