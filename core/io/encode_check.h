@@ -1,7 +1,8 @@
 // The validation step between decode and encode: what an encoder will quantise or pack, and
 // what it will cost, is checked before any encoder runs (core/io/README.md, "Encoders never
-// crash"). The service calls check_encode() after denoising and before MeshDocument::encode;
-// the encoders repeat the checks that depend on their exact input (check_draco_encodable).
+// crash"). The service calls check_encode() right after decoding, before any denoising work
+// (service/job_runner.cpp), so a job whose output cannot be written fails in milliseconds; the
+// encoders repeat the checks that depend on their exact input (check_draco_encodable).
 #pragma once
 
 #include <cstdint>

@@ -23,7 +23,9 @@ constexpr std::size_t kReadChunk = 16384;
 // A request head longer than this is handed to the parser unfinished (it answers 414 / 400).
 constexpr std::size_t kMaxHeadBytes = 65536;
 
-inline Clock::duration seconds(double s) { return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s)); }
+inline Clock::duration seconds(double s) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
 
 // One client connection. Owned by the gate while parked, by one lane thread while served.
 struct Conn {
