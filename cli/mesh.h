@@ -15,12 +15,9 @@
 #include "core/io/document.h"
 #include "core/mesh.h"
 #include "cli/files.h"
+#include "cli/options.h"
 
 namespace mdn::cli {
-
-// The CLI runs on the user's own machine: the server's request limits would only get in the
-// way, but declared sizes are still checked so a corrupt header cannot exhaust memory.
-io::Limits cli_limits();
 
 // IN's format by its extension, else by its contents; throws FileError when neither tells.
 io::Format input_format(const std::string& path, const std::string& bytes);
@@ -59,8 +56,8 @@ mdn::TriMesh merge_surfaces(const std::vector<mdn::TriMesh>& surfaces);
 // exported in world coordinates, and two glTFs compare as they render.
 mdn::TriMesh scene_mesh(const std::vector<mdn::TriMesh>& surfaces,
                         const std::vector<std::vector<Eigen::Matrix4d>>& placements);
-LoadedMesh decode_mesh(const std::string& path, const std::string& bytes, io::Format format);
-LoadedMesh load_mesh(const std::string& path);
+LoadedMesh decode_mesh(const std::string& path, const std::string& bytes, io::Format format, const io::Limits& limits);
+LoadedMesh load_mesh(const std::string& path, const InputLimits& limits);
 
 // MSAE and E_v of `result` against the ground truth (Sec. 7). Both need the same faces in the
 // same order; formats that renumber them (Draco) cannot be compared after the fact.
