@@ -97,7 +97,7 @@ void write_file(const std::string& path, const std::string& bytes) {
     write_bytes(path, bytes, path);  // a device, a pipe, a link that leads nowhere yet
     return;
   }
-  // Decision 62: a link is replaced at its final target, never truncated through.
+  // Decision 61: a link is replaced at its final target, never truncated through.
   ec.clear();
   const fs::path target = fs::is_symlink(link) ? fs::canonical(path, ec) : fs::path(path);
   if (ec) throw FileError("cannot write " + path + ": " + ec.message());

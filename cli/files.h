@@ -30,7 +30,7 @@ std::string read_file(const std::string& path, std::int64_t max_bytes);
 // Writes OUT through a temporary file and a rename, so a failure (disk full, Ctrl-C) never
 // leaves a truncated OUT behind or clobbers an existing one. A symbolic link to a regular file
 // is followed: the temporary file goes beside the link's final target and is renamed over it,
-// so the link stays a link and its target is replaced whole (decision 62). Special files
+// so the link stays a link and its target is replaced whole (decision 61). Special files
 // (/dev/stdout, pipes) are written in place, and so is a link that leads nowhere yet.
 void write_file(const std::string& path, const std::string& bytes);
 

@@ -954,7 +954,7 @@ namespace mdn {
 namespace {
 
 // Issue 49, item 8: --in-place on a symbolic link truncated the link's target and wrote it in
-// place, so a failed write destroyed the input. Now (decision 62) the temporary file goes
+// place, so a failed write destroyed the input. Now (decision 61) the temporary file goes
 // beside the link's target and is renamed over it: the link stays a link, the target is a new
 // file (its mode kept), and a write that fails (here: past the file-size limit) leaves it whole.
 TEST_F(Cli, InPlaceThroughASymbolicLinkReplacesTheTargetWhole) {

@@ -323,8 +323,12 @@ TEST(HttpFraming, OddMethodsDoNotGrowTheMetrics) {
   ServerProcess server({});
   ASSERT_TRUE(server.started()) << server.log();
   auto odd = [&](int from, int to) {
-    for (int i = from; i < to; ++i)
-      raw_status(server.port(), "M" + std::to_string(i) + " /healthz HTTP/1.1\r\nHost: x\r\n\r\n", nullptr, false, 3);
+    for (int i = from; i < to; ++i) {
+      std::string request = "M";  // an odd method: M0, M1, ...
+      request += std::to_string(i);
+      request += " /healthz HTTP/1.1\r\nHost: x\r\n\r\n";
+      raw_status(server.port(), request, nullptr, false, 3);
+    }
   };
   odd(0, 10);
   const std::string before = server.client()->Get("/metrics")->body;
@@ -336,6 +340,46 @@ TEST(HttpFraming, OddMethodsDoNotGrowTheMetrics) {
   EXPECT_NE(after.find("method=\"other\""), std::string::npos) << after.substr(0, 2000);
   // The same series; only counts change (a digit or two).
   EXPECT_LT(after.size(), before.size() + 200);
+}
+
+}  // namespace
+}  // namespace mdn::test
+
+namespace mdn::test {
+namespace {
+
+// Item 4: a downloaded result kept its stored-job slot for its whole lifetime (600 s), so with
+// 1,024 slots asynchronous throughput was capped at 1.7 jobs a second. A downloaded or
+// cancelled result now gives its slot up first (decision 62); results not downloaded are kept.
+TEST(HttpFairShares, DownloadedOrCancelledResultsFreeTheirSlots) {
+  ServerProcess server({"--workers", "2", "--max-stored-jobs", "3"});
+  ASSERT_TRUE(server.started()) << server.log();
+  auto c = server.client();
+  const std::string mesh = noisy_sphere_off(1);
+  const httplib::Headers params = {{"X-Denoise-Params", R"({"mode":"none"})"}};
+  for (int i = 0; i < 9; ++i) {  // three times the slots, each result downloaded
+    auto posted = c->Post("/v1/jobs", params, mesh, "model/x-off");
+    ASSERT_TRUE(posted);
+    ASSERT_EQ(posted->status, 202) << "job " << i << ": " << posted->body;
+    const std::string id = parse_json(posted->body).value("id", "");
+    EXPECT_EQ(wait_job(*c, id).value("state", ""), "succeeded") << id;
+    auto result = c->Get("/v1/jobs/" + id + "/result");
+    ASSERT_TRUE(result);
+    EXPECT_EQ(result->status, 200) << id;
+  }
+  // Results not downloaded are kept for their lifetime: with three of them the store is full.
+  std::vector<std::string> kept;
+  for (int i = 0; i < 3; ++i) {
+    auto posted = c->Post("/v1/jobs", params, mesh, "model/x-off");
+    ASSERT_TRUE(posted);
+    ASSERT_EQ(posted->status, 202) << posted->body;
+    kept.push_back(parse_json(posted->body).value("id", ""));
+    wait_job(*c, kept.back());
+  }
+  const nlohmann::json refused = expect_problem(c->Post("/v1/jobs", params, mesh, "model/x-off"), 503);
+  EXPECT_EQ(refused.value("type", ""), "urn:meshdenoise:problem:store-full") << refused.dump();
+  for (const auto& id : kept)
+    EXPECT_EQ(c->Get("/v1/jobs/" + id)->status, 200) << id << " was evicted before its lifetime";
 }
 
 }  // namespace
