@@ -1,6 +1,7 @@
 #include "cli/options.h"
 
 #include <algorithm>
+#include <cctype>
 #include <iterator>
 #include <sstream>
 #include <string_view>
@@ -81,6 +82,23 @@ const OptionSpec kOptions[] = {
      "{\"files\": [one summary, or {\"input\", \"output\", \"error\"}, per IN, in\n"
      "order], \"succeeded\": N, \"failed\": N}.",
      [](CliOptions& o, const std::string&) { o.report = true; }},
+    {"--max-input", "", "BYTES",
+     "read at most BYTES of any input (a file, a FIFO, standard input, a\n"
+     "--params file; default 268435456, the server's --max-body); beyond it\n"
+     "the input is refused (exit 3) before it is decoded.",
+     [](CliOptions& o, const std::string& v) { o.limits.max_input_bytes = parse_limit("--max-input", v); }},
+    {"--max-decoded-bytes", "", "BYTES",
+     "bytes a decoder may allocate for one input (default 1073741824, the\n"
+     "server's); sizes a file declares are checked before allocating.",
+     [](CliOptions& o, const std::string& v) {
+       o.limits.decode.max_decoded_bytes = parse_limit("--max-decoded-bytes", v);
+     }},
+    {"--max-faces", "", "N",
+     "faces per surface (default 5000000, the server's)",
+     [](CliOptions& o, const std::string& v) { o.limits.decode.max_faces = parse_limit("--max-faces", v); }},
+    {"--max-vertices", "", "N",
+     "vertices per surface (default 5000000, the server's)",
+     [](CliOptions& o, const std::string& v) { o.limits.decode.max_vertices = parse_limit("--max-vertices", v); }},
     {"--threads", "", "N",
      "worker threads, [1, 1024] (default: hardware concurrency); the output\n"
      "does not depend on it.",
@@ -228,6 +246,21 @@ int parse_threads(const std::string& text) {
     throw UsageError("--threads must be an integer in [1, 1024], got \"" + text + "\"");
   }
   return static_cast<int>(value);
+}
+
+std::int64_t parse_limit(const std::string& option, const std::string& text) {
+  std::size_t used = 0;
+  long long value = 0;
+  try {
+    value = std::stoll(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || text.empty() || !std::isdigit(static_cast<unsigned char>(text[0])) || value < 1 ||
+      value > (1LL << 40)) {
+    throw UsageError(option + " must be an integer in [1, 2^40], got \"" + text + "\"");
+  }
+  return static_cast<std::int64_t>(value);
 }
 
 CliOptions parse_command_line(int argc, char** argv) {
