@@ -69,8 +69,9 @@ Errors errors(const RangeImage& im, const RangeSensor& sensor) {
 TEST(RangeScan, AxialNoiseOnAPlaneMatchesThePublishedSigmaAtEachDistance) {
   for (const RangeSensor& sensor : {kinect_v1(), kinect_v2()})
     for (const double z : {0.6, 1.0, 1.6, 2.4}) {
-      SCOPED_TRACE(testing::Message() << (sensor.kind == SensorKind::StructuredLight ? "structured light" : "time of flight")
-                                      << " at " << z << " m");
+      SCOPED_TRACE(
+          testing::Message() << (sensor.kind == SensorKind::StructuredLight ? "structured light" : "time of flight")
+                             << " at " << z << " m");
       const RangeImage im = capture(wall(z), sensor, {7, 0});
       const Errors e = errors(im, sensor);
       ASSERT_GT(e.count, static_cast<int>(0.95 * im.depth.size()));  // the wall fills the view
@@ -130,7 +131,8 @@ TEST(RangeScan, PixelsBeyondSeventyFiveDegreesOfIncidenceAreLost) {
       if (std::isnan(im.incidence[i])) continue;
       if (im.incidence[i] > 75 * kPi / 180) {
         ++beyond;
-        EXPECT_TRUE(std::isnan(im.depth[i])) << "pixel " << i << " reported at " << im.incidence[i] * 180 / kPi << " degrees";
+        EXPECT_TRUE(std::isnan(im.depth[i]))
+            << "pixel " << i << " reported at " << im.incidence[i] * 180 / kPi << " degrees";
       } else if (im.incidence[i] < 73 * kPi / 180) {
         ++below;
         below_reported += !std::isnan(im.depth[i]);
@@ -220,7 +222,8 @@ TEST(RangeScan, NoisyAndCleanShareFacesOrderAndRays) {
       }
     }
     const Vertices N = face_normals(s.clean.V, s.clean.F);
-    for (Eigen::Index f = 0; f < s.clean.F.rows(); ++f) ASSERT_LT(N.row(f).dot(s.clean.V.row(s.clean.F(f, 0))), 0) << "face " << f;
+    for (Eigen::Index f = 0; f < s.clean.F.rows(); ++f)
+      ASSERT_LT(N.row(f).dot(s.clean.V.row(s.clean.F(f, 0))), 0) << "face " << f;
   }
 }
 
@@ -230,9 +233,12 @@ TEST(RangeScan, TheSameSeedGivesByteIdenticalScans) {
     const RangeScan a = scan_shape(shape, sensor, {0.3, 0.8, 5}), b = scan_shape(shape, sensor, {0.3, 0.8, 5});
     ASSERT_EQ(a.clean.F.rows(), b.clean.F.rows());
     ASSERT_EQ(a.noisy.rows(), b.noisy.rows());
-    EXPECT_EQ(0, std::memcmp(a.clean.F.data(), b.clean.F.data(), sizeof(std::int32_t) * static_cast<std::size_t>(a.clean.F.size())));
-    EXPECT_EQ(0, std::memcmp(a.clean.V.data(), b.clean.V.data(), sizeof(double) * static_cast<std::size_t>(a.clean.V.size())));
-    EXPECT_EQ(0, std::memcmp(a.noisy.data(), b.noisy.data(), sizeof(double) * static_cast<std::size_t>(a.noisy.size())));
+    EXPECT_EQ(0, std::memcmp(a.clean.F.data(), b.clean.F.data(),
+                             sizeof(std::int32_t) * static_cast<std::size_t>(a.clean.F.size())));
+    EXPECT_EQ(0, std::memcmp(a.clean.V.data(), b.clean.V.data(),
+                             sizeof(double) * static_cast<std::size_t>(a.clean.V.size())));
+    EXPECT_EQ(0,
+              std::memcmp(a.noisy.data(), b.noisy.data(), sizeof(double) * static_cast<std::size_t>(a.noisy.size())));
     const RangeScan c = scan_shape(shape, sensor, {0.3, 0.8, 6});
     EXPECT_FALSE(c.noisy.rows() == a.noisy.rows() && c.noisy == a.noisy);
   }
@@ -253,7 +259,8 @@ TEST(CorpusScanCases, AreRebuiltFromTheirNameAndShareTheScansMesh) {
     SCOPED_TRACE(noise);
     ASSERT_TRUE(std::find(names.begin(), names.end(), noise) != names.end());
     const std::uint64_t seed = hash_name(shape.name + "/" + noise);
-    const NoisyCase a = make_noisy_case(shape, noise, seed), b = make_noisy_case(make_shape("torus_mid", {}), noise, seed);
+    const NoisyCase a = make_noisy_case(shape, noise, seed),
+                    b = make_noisy_case(make_shape("torus_mid", {}), noise, seed);
     ASSERT_EQ(a.clean.F, b.clean.F);
     ASSERT_EQ(a.clean.V, b.clean.V);
     ASSERT_EQ(a.noisy, b.noisy);

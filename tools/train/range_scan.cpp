@@ -82,12 +82,14 @@ class Bvh {
   }
 
   Vec3 corner(std::int32_t f, int k) const { return mesh_.V.row(mesh_.F(f, k)).transpose(); }
-  Vec3 normal(std::int32_t f) const { return (corner(f, 1) - corner(f, 0)).cross(corner(f, 2) - corner(f, 0)).normalized(); }
+  Vec3 normal(std::int32_t f) const {
+    return (corner(f, 1) - corner(f, 0)).cross(corner(f, 2) - corner(f, 0)).normalized();
+  }
 
  private:
   struct Node {
     Vec3 lo, hi;
-    std::int32_t left = 0;  // children at left, left + 1 (inner nodes)
+    std::int32_t left = 0;              // children at left, left + 1 (inner nodes)
     std::int32_t first = 0, count = 0;  // triangles order_[first, first + count) (leaves)
   };
 
@@ -119,10 +121,12 @@ class Bvh {
     int axis = 0;
     (chi - clo).maxCoeff(&axis);
     const std::int32_t mid = first + (last - first) / 2;
-    std::nth_element(order_.begin() + first, order_.begin() + mid, order_.begin() + last, [&](std::int32_t a, std::int32_t b) {
-      const double ca = centroid_[static_cast<std::size_t>(a)][axis], cb = centroid_[static_cast<std::size_t>(b)][axis];
-      return ca < cb || (ca == cb && a < b);  // a strict total order: the same tree everywhere
-    });
+    std::nth_element(order_.begin() + first, order_.begin() + mid, order_.begin() + last,
+                     [&](std::int32_t a, std::int32_t b) {
+                       const double ca = centroid_[static_cast<std::size_t>(a)][axis],
+                                    cb = centroid_[static_cast<std::size_t>(b)][axis];
+                       return ca < cb || (ca == cb && a < b);  // a strict total order: the same tree everywhere
+                     });
     const std::size_t left = nodes_.size();
     nodes_.resize(left + 2);
     nodes_[index].left = static_cast<std::int32_t>(left);
@@ -202,7 +206,9 @@ class Scene {
 };
 
 // The image's ray through sampled pixel coordinates (col, row), possibly fractional.
-Vec3 ray(const RangeImage& im, double col, double row) { return {(col - im.cx) / im.focal, (row - im.cy) / im.focal, 1}; }
+Vec3 ray(const RangeImage& im, double col, double row) {
+  return {(col - im.cx) / im.focal, (row - im.cy) / im.focal, 1};
+}
 
 // Time-of-flight multipath (decision 58): light that reaches the surface point after a
 // bounce off the object's own nearby surface travels further, so the measured phase is late
@@ -252,8 +258,8 @@ RangeSensor kinect_v2() {
 
 double axial_sigma(const RangeSensor& sensor, double z, double theta) {
   const double grazing = theta * theta / ((kHalfPi - theta) * (kHalfPi - theta));
-  if (sensor.kind == SensorKind::StructuredLight)  // Nguyen, Izadi, Lovell 2012, Eq. 4
-    return 0.0012 + 0.0019 * (z - 0.4) * (z - 0.4) + 0.0001 / std::sqrt(z) * grazing;
+  if (sensor.kind == SensorKind::StructuredLight)  // Nguyen, Izadi, Lovell 2012: the grazing term beyond 60 degrees
+    return 0.0012 + 0.0019 * (z - 0.4) * (z - 0.4) + (theta > kHalfPi / 1.5 ? 0.0001 / std::sqrt(z) * grazing : 0.0);
   // Fankhauser, Bloesch, Rodriguez, Kaestner, Hutter, Siegwart 2015, "Kinect v2 for mobile
   // robot navigation: evaluation and modeling", the axial model fitted to their measurements.
   return 0.0015 - 0.0005 * z + 0.0003 * z * z + 0.0001 * std::pow(z, 1.5) * grazing;
@@ -296,7 +302,8 @@ RangeImage capture(const TriMesh& scene_mesh, const RangeSensor& sensor, const C
   std::vector<Sample> centre(n);
   for (int r = 0; r < im.rows; ++r)
     for (int c = 0; c < im.cols; ++c) {
-      const std::size_t i = static_cast<std::size_t>(r) * static_cast<std::size_t>(im.cols) + static_cast<std::size_t>(c);
+      const std::size_t i =
+          static_cast<std::size_t>(r) * static_cast<std::size_t>(im.cols) + static_cast<std::size_t>(c);
       centre[i] = scene.trace(ray(im, c, r));
       if (!centre[i].object) continue;
       im.clean_depth[i] = centre[i].z;
@@ -305,11 +312,12 @@ RangeImage capture(const TriMesh& scene_mesh, const RangeSensor& sensor, const C
 
   for (int r = 0; r < im.rows; ++r)
     for (int c = 0; c < im.cols; ++c) {
-      const std::size_t i = static_cast<std::size_t>(r) * static_cast<std::size_t>(im.cols) + static_cast<std::size_t>(c);
+      const std::size_t i =
+          static_cast<std::size_t>(r) * static_cast<std::size_t>(im.cols) + static_cast<std::size_t>(c);
       if (!centre[i].object) continue;  // background: cut away
       const double theta = im.incidence[i];
       // Beyond about 75 degrees too little of the pattern or the modulated light comes back
-      // (Nguyen et al. 2012 measure up to 70-80 degrees; Fankhauser et al. 2015 likewise).
+      // to be measured (issue 48's figure; both models' noise diverges towards 90 degrees).
       if (theta > max_theta) continue;
       const Vec3 dir = ray(im, c, r);
       const Vec3 p = centre[i].z * dir;
@@ -319,11 +327,12 @@ RangeImage capture(const TriMesh& scene_mesh, const RangeSensor& sensor, const C
         // returns no pattern (the shadows beside every near edge of a Kinect v1 image).
         if (scene.blocked(p, Vec3(sensor.baseline_m, 0, 0))) continue;
         // Lateral noise: the correlation window's position is uncertain by about a pixel,
-        // sigma_L = 0.8 + 0.035 theta / (pi/2 - theta) native pixels (Nguyen et al. 2012,
-        // Eq. 3), so the depth is that of a nearby point of the surface, reported on this
-        // pixel's ray. On a slope or at an edge that reads as depth noise and ragged edges.
+        // sigma_L = 0.8 + 0.035 theta / (pi/2 - theta) native pixels (Nguyen et al. 2012), so the depth is that of a
+        // nearby point of the surface, reported on this pixel's ray. On a slope or at an edge that reads as depth noise
+        // and ragged edges.
         const double sigma_l = (0.8 + 0.035 * theta / (kHalfPi - theta)) / sensor.stride;
-        const Sample moved = scene.trace(ray(im, c + sigma_l * gauss(options.seed, i, 0), r + sigma_l * gauss(options.seed, i, 1)));
+        const Sample moved =
+            scene.trace(ray(im, c + sigma_l * gauss(options.seed, i, 0), r + sigma_l * gauss(options.seed, i, 1)));
         if (std::isnan(moved.z)) continue;  // the window slid off the object into nothing
         z = moved.z;
       } else {
@@ -335,7 +344,8 @@ RangeImage capture(const TriMesh& scene_mesh, const RangeSensor& sensor, const C
         for (const auto& [dc, dr] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
           const int cc = c + dc, rr = r + dr;
           if (cc < 0 || rr < 0 || cc >= im.cols || rr >= im.rows) continue;
-          const double zn = centre[static_cast<std::size_t>(rr) * static_cast<std::size_t>(im.cols) + static_cast<std::size_t>(cc)].z;
+          const double zn =
+              centre[static_cast<std::size_t>(rr) * static_cast<std::size_t>(im.cols) + static_cast<std::size_t>(cc)].z;
           if (!std::isnan(zn) && std::abs(zn - z) > jump_threshold(sensor, 0.5 * (z + zn))) edge = true;
         }
         if (edge) {
@@ -365,7 +375,8 @@ double jump_threshold(const RangeSensor& sensor, double z) {
 RangeScan mesh_range_image(const RangeImage& im, const RangeSensor& sensor) {
   const auto at = [&](int c, int r) { return r * im.cols + c; };
   const auto valid = [&](int i) {
-    return !std::isnan(im.depth[static_cast<std::size_t>(i)]) && !std::isnan(im.clean_depth[static_cast<std::size_t>(i)]);
+    return !std::isnan(im.depth[static_cast<std::size_t>(i)]) &&
+           !std::isnan(im.clean_depth[static_cast<std::size_t>(i)]);
   };
   const auto joined = [&](int a, int b) {
     for (const std::vector<double>* d : {&im.depth, &im.clean_depth}) {
@@ -384,8 +395,9 @@ RangeScan mesh_range_image(const RangeImage& im, const RangeSensor& sensor) {
       // x right, y down: (a, cc, b) faces the camera. The diagonal of smaller depth
       // difference, where both are there (on the reported depths, as a scanner sees them).
       const auto gap = [&](int p, int q) {
-        return valid(p) && valid(q) ? std::abs(im.depth[static_cast<std::size_t>(p)] - im.depth[static_cast<std::size_t>(q)])
-                                    : std::numeric_limits<double>::infinity();
+        return valid(p) && valid(q)
+                   ? std::abs(im.depth[static_cast<std::size_t>(p)] - im.depth[static_cast<std::size_t>(q)])
+                   : std::numeric_limits<double>::infinity();
       };
       if (gap(a, d) <= gap(b, cc) && std::isfinite(gap(a, d))) {
         add(a, cc, d);
@@ -400,7 +412,8 @@ RangeScan mesh_range_image(const RangeImage& im, const RangeSensor& sensor) {
   std::vector<int> parent(im.depth.size());
   std::iota(parent.begin(), parent.end(), 0);
   const auto find = [&](int x) {
-    while (parent[static_cast<std::size_t>(x)] != x) x = parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
+    while (parent[static_cast<std::size_t>(x)] != x)
+      x = parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
     return x;
   };
   for (const auto& t : tris)
@@ -436,7 +449,9 @@ RangeScan mesh_range_image(const RangeImage& im, const RangeSensor& sensor) {
   }
   out.clean.F.resize(static_cast<Eigen::Index>(kept.size()), 3);
   for (std::size_t f = 0; f < kept.size(); ++f)
-    for (int k = 0; k < 3; ++k) out.clean.F(static_cast<Eigen::Index>(f), k) = vertex[static_cast<std::size_t>(kept[f][static_cast<std::size_t>(k)])];
+    for (int k = 0; k < 3; ++k)
+      out.clean.F(static_cast<Eigen::Index>(f), k) =
+          vertex[static_cast<std::size_t>(kept[f][static_cast<std::size_t>(k)])];
   return out;
 }
 
@@ -445,7 +460,8 @@ RangeScan scan_shape(const TriMesh& shape, const RangeSensor& sensor, const Scan
   const double scale = pose.object_size_m / (hi - lo).maxCoeff();
   const Vec3 mid = 0.5 * (lo + hi);
   // A uniformly random rotation: a normalised quaternion of four Gaussian draws.
-  Eigen::Quaterniond q(gauss(pose.seed, 0, 10), gauss(pose.seed, 0, 11), gauss(pose.seed, 0, 12), gauss(pose.seed, 0, 13));
+  Eigen::Quaterniond q(gauss(pose.seed, 0, 10), gauss(pose.seed, 0, 11), gauss(pose.seed, 0, 12),
+                       gauss(pose.seed, 0, 13));
   q.normalize();
   const Eigen::Matrix3d R = q.toRotationMatrix();
   TriMesh placed = shape;

@@ -44,7 +44,8 @@ RangeSensor kinect_v2();
 
 // The published axial noise (standard deviation of the reported depth, metres) at depth z
 // (metres) and angle of incidence theta (radians). Structured light: Nguyen, Izadi, Lovell
-// 2012, sigma = 0.0012 + 0.0019 (z - 0.4)^2 + 0.0001 / sqrt(z) * theta^2 / (pi/2 - theta)^2.
+// 2012, sigma = 0.0012 + 0.0019 (z - 0.4)^2, plus 0.0001 / sqrt(z) * theta^2 / (pi/2 - theta)^2
+// beyond 60 degrees of incidence.
 // Time of flight: Fankhauser et al. 2015 (Kinect v2), sigma = 0.0015 - 0.0005 z + 0.0003 z^2
 // + 0.0001 z^1.5 theta^2 / (pi/2 - theta)^2, about 1.3-1.7 mm from 0.5 to 2.5 m.
 double axial_sigma(const RangeSensor& sensor, double z, double theta);
@@ -80,8 +81,8 @@ RangeImage capture(const TriMesh& scene, const RangeSensor& sensor, const Captur
 
 // A meshed range image: clean and noisy positions of the same vertices and faces.
 struct RangeScan {
-  TriMesh clean;                  // vertices on their rays at the noise-free depth
-  Vertices noisy;                 // the same vertices at the reported depth
+  TriMesh clean;                    // vertices on their rays at the noise-free depth
+  Vertices noisy;                   // the same vertices at the reported depth
   std::vector<std::int32_t> pixel;  // per vertex, its pixel in the image (row * cols + col)
 };
 
