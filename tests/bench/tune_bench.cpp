@@ -184,17 +184,25 @@ std::vector<Case> build_scan_cases(const fs::path& data, const std::string& only
   std::vector<std::string> kinds[2];
   for (const std::string& noise : train::scan_noise_names())
     if (std::count(noise.begin(), noise.end(), ':') == 2) kinds[noise.rfind("scan_sl:", 0) == 0 ? 0 : 1].push_back(noise);
+  // Each mesh once, in the validation set's order, with its clean mesh (an "irregular" case's
+  // truth is a refinement of the same surface: used only where the mesh has no other case).
+  std::vector<std::string> order;
+  std::map<std::string, std::pair<const Case*, bool>> truth;  // mesh -> (case, refined)
+  const std::vector<Case> validation = build_cases(data, "validation", "");
+  for (const Case& v : validation) {
+    const bool refined = v.config == "irregular";
+    const auto [it, fresh] = truth.try_emplace(v.mesh, &v, refined);
+    if (fresh) order.push_back(v.mesh);
+    else if (it->second.second && !refined) it->second = {&v, false};
+  }
   std::vector<Case> cases;
-  std::set<std::string> seen;
-  std::size_t index = 0;
-  for (const Case& v : build_cases(data, "validation", "")) {
-    if (v.config == "irregular" || !seen.insert(v.mesh).second) continue;  // the clean mesh, once
-    const std::size_t k = index++;
-    if (!only.empty() && only != v.mesh) continue;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const std::string& mesh = order[k];
+    if (!only.empty() && only != mesh) continue;
     for (const auto& list : kinds) {
       const std::string& config = list[k % list.size()];
-      const train::NoisyCase pair = train::scan_case(v.truth, config, case_seed(v.mesh, config));
-      cases.push_back({"scans", v.mesh, config, pair.clean, TriMesh{pair.noisy, pair.clean.F}});
+      const train::NoisyCase pair = train::scan_case(truth.at(mesh).first->truth, config, case_seed(mesh, config));
+      cases.push_back({"scans", mesh, config, pair.clean, TriMesh{pair.noisy, pair.clean.F}});
     }
   }
   return cases;
