@@ -175,6 +175,57 @@ TEST(RangeScan, NoTriangleSpansADepthJump) {
   }
 }
 
+// Structured light's two other terms. The projector, 7.5 cm to the camera's +x, cannot light
+// a strip of the wall on the board's -x side that the camera sees: those pixels are lost (time
+// of flight, lit from the camera, reports them). And the lateral noise (Nguyen et al.'s sigma_L
+// pixels) reads as depth noise of tan(theta) sigma_L z / f on a slope.
+TEST(RangeScan, StructuredLightHasProjectorShadowsAndLateralNoise) {
+  // Board x in [-0.15, 0.25], y in [-0.2, 0.2] at 1.0 m; wall at 1.5 m. A wall point (x, y, 1.5)
+  // is shadowed where its segment to the projector crosses the board, x in [-0.2625, 0.3375];
+  // the camera sees the wall beyond the board's outline, x < -0.225 or x > 0.375.
+  const TriMesh scene = join(square(Vec3(0.05, 0, 1.0), Vec3::UnitX(), Vec3::UnitY(), 0.4), wall(1.5));
+  for (const RangeSensor& sensor : {kinect_v1(), kinect_v2()}) {
+    const RangeImage im = capture(scene, sensor, {17, 0});
+    int strip = 0, strip_reported = 0, other_side = 0, other_reported = 0;
+    for (int r = 0; r < im.rows; ++r)
+      for (int c = 0; c < im.cols; ++c) {
+        const std::size_t i = static_cast<std::size_t>(r * im.cols + c);
+        if (std::isnan(im.clean_depth[i]) || im.clean_depth[i] < 1.4) continue;
+        const Vec3 p = im.point(c, r, im.clean_depth[i]);
+        if (std::abs(p.y()) > 0.15) continue;
+        if (p.x() > -0.255 && p.x() < -0.235) ++strip, strip_reported += !std::isnan(im.depth[i]);
+        if (p.x() > 0.40 && p.x() < 0.45) ++other_side, other_reported += !std::isnan(im.depth[i]);
+      }
+    ASSERT_GT(strip, 100);
+    ASSERT_GT(other_side, 100);
+    EXPECT_GT(other_reported, 0.98 * other_side);
+    if (sensor.kind == SensorKind::StructuredLight) {
+      EXPECT_EQ(strip_reported, 0);
+    } else {
+      EXPECT_GT(strip_reported, 0.98 * strip);
+    }
+  }
+  // A plane at 60 degrees to the view at 1.2 m: pixels seen at 55-60 degrees of incidence.
+  const double tilt = 60 * kPi / 180;
+  const Vec3 n(std::sin(tilt), 0, -std::cos(tilt));
+  const TriMesh slope = square(Vec3(0, 0, 1.2), Vec3::UnitY(), n.cross(Vec3::UnitY()).normalized(), 6);
+  const RangeSensor sl = kinect_v1();
+  const RangeImage im = capture(slope, sl, {19, 0});
+  double ss = 0, expected = 0;
+  int count = 0;
+  for (std::size_t i = 0; i < im.depth.size(); ++i) {
+    const double theta = im.incidence[i];
+    if (std::isnan(im.depth[i]) || theta < 55 * kPi / 180 || theta > 60 * kPi / 180) continue;
+    const double z = im.clean_depth[i];
+    const double lateral = (0.8 + 0.035 * theta / (kPi / 2 - theta)) * z / sl.focal_px * std::tan(theta);
+    ss += std::pow(im.depth[i] - z, 2);
+    expected += std::pow(axial_sigma(sl, z, theta), 2) + lateral * lateral;
+    ++count;
+  }
+  ASSERT_GT(count, 1000);
+  EXPECT_NEAR(std::sqrt(ss / expected), 1.0, 0.1);
+}
+
 // Time of flight in a concave corner: light bounced off the other face arrives late, so the
 // depth is too long near the crease and not far from it.
 TEST(RangeScan, TimeOfFlightReadsConcaveCornersTooFar) {
