@@ -331,3 +331,48 @@ TEST(CorpusScanCases, AreRebuiltFromTheirNameAndShareTheScansMesh) {
 
 }  // namespace
 }  // namespace mdn::train
+
+// The turntable variant (fuse_scans): a sphere of 0.3 m fused from six views at 1.2 m. Its
+// faces point outwards, its clean vertices lie on the clean surface, the fused surface sits
+// within the sensor's noise of it (averaging several views, below one view's sigma), the
+// unseen bottom stays open while most of the sphere is covered, and it is seeded.
+namespace mdn::train {
+namespace {
+
+TEST(RangeScan, FusedTurntableScanOfASphere) {
+  const TriMesh ball = test::sphere(5);  // radius 1 around the origin, scaled to 0.3 m across
+  for (const RangeSensor& sensor : {kinect_v1(), kinect_v2()}) {
+    SCOPED_TRACE(sensor.kind == SensorKind::StructuredLight ? "structured light" : "time of flight");
+    const ScanPose pose{0.3, 1.2, 9};
+    const RangeScan s = fuse_scans(ball, sensor, pose);
+    validate_mesh(s.clean);
+    ASSERT_EQ(s.noisy.rows(), s.clean.V.rows());
+    EXPECT_GT(s.clean.F.rows(), 2000);
+    const Vertices N = face_normals(s.noisy, s.clean.F);
+    double outward = 0, area = 0, rms = 0;
+    for (Eigen::Index f = 0; f < s.clean.F.rows(); ++f) {
+      const Vec3 a = s.noisy.row(s.clean.F(f, 0)), b = s.noisy.row(s.clean.F(f, 1)), c = s.noisy.row(s.clean.F(f, 2));
+      outward += N.row(f).dot((a + b + c).normalized()) > 0;
+      area += 0.5 * (b - a).cross(c - a).norm();
+    }
+    EXPECT_GT(outward, 0.99 * static_cast<double>(s.clean.F.rows()));
+    // Covered: more than 70% of the sphere's area (pi * 0.3^2), less than all of it.
+    EXPECT_GT(area, 0.7 * kPi * 0.09);
+    EXPECT_LT(area, 1.02 * kPi * 0.09);
+    for (Eigen::Index v = 0; v < s.noisy.rows(); ++v) {
+      // The clean vertex is on the polyhedron inscribed in the 0.15 m sphere (level 5: within 0.1%).
+      ASSERT_NEAR(s.clean.V.row(v).norm(), 0.15, 0.0003) << "vertex " << v;
+      rms += (s.noisy.row(v) - s.clean.V.row(v)).squaredNorm();
+    }
+    rms = std::sqrt(rms / static_cast<double>(s.noisy.rows()));
+    EXPECT_LT(rms, axial_sigma(sensor, 1.2, 0));
+    EXPECT_GT(rms, 0.0);
+    const RangeScan again = fuse_scans(ball, sensor, pose);
+    EXPECT_EQ(again.clean.F, s.clean.F);
+    EXPECT_EQ(
+        0, std::memcmp(again.noisy.data(), s.noisy.data(), sizeof(double) * static_cast<std::size_t>(s.noisy.size())));
+  }
+}
+
+}  // namespace
+}  // namespace mdn::train

@@ -210,14 +210,20 @@ std::vector<std::string> base_noise_names() {
 std::vector<std::string> scan_noise_names() {
   // Decision 60: per sensor, objects at three distances across the sensors' range (0.6, 1.2
   // and 2.2 m), each about a third (structured light) or a quarter (time of flight) of its
-  // distance in size, so that a scan holds 2,000-30,000 faces like the rest of the corpus,
+  // distance in size, so that a scan holds 800-32,000 faces like the rest of the corpus,
   // and a second pose of the middle one. The noise in mean edge lengths is set by the
-  // distance (the footprint and sigma(z) both grow with it), the detail by the size.
+  // distance (the footprint and sigma(z) both grow with it), the detail by the size. Then a
+  // turntable station's fused scan per sensor (six views, range_scan.h's fuse_scans).
   return {"scan_sl:0.2:0.6",   "scan_sl:0.4:1.2",  "scan_sl:0.7:2.2",   "scan_sl:0.4:1.2:1",
-          "scan_tof:0.15:0.6", "scan_tof:0.3:1.2", "scan_tof:0.55:2.2", "scan_tof:0.3:1.2:1"};
+          "scan_tof:0.15:0.6", "scan_tof:0.3:1.2", "scan_tof:0.55:2.2", "scan_tof:0.3:1.2:1",
+          "fused_sl:0.4:1.2",  "fused_tof:0.3:1.2"};
 }
 
-bool is_scan_noise(const std::string& noise) { return noise.rfind("scan_sl:", 0) == 0 || noise.rfind("scan_tof:", 0) == 0; }
+bool is_scan_noise(const std::string& noise) {
+  for (const char* kind : {"scan_sl:", "scan_tof:", "fused_sl:", "fused_tof:"})
+    if (noise.rfind(kind, 0) == 0) return true;
+  return false;
+}
 
 std::vector<std::string> noise_names() {
   std::vector<std::string> all = base_noise_names();
@@ -299,12 +305,14 @@ NoisyCase scan_case(const TriMesh& mesh, const std::string& noise, std::uint64_t
   const std::string kind = noise.substr(0, noise.find(':'));
   const std::vector<double> v = parse_levels(noise);
   if (!is_scan_noise(noise) || v.size() < 2 || v.size() > 3) throw std::invalid_argument("unknown noise: " + noise);
-  const RangeSensor sensor = kind == "scan_sl" ? kinect_v1() : kinect_v2();
+  const RangeSensor sensor = kind.ends_with("_sl") ? kinect_v1() : kinect_v2();
+  const bool fused = kind.rfind("fused_", 0) == 0;
   // The pose is the seed's; a pose that sees fewer than 100 faces of the shape (a thin part
   // edge-on) is replaced by the next seed's, so that every name makes a case (decision 60).
   for (std::uint64_t attempt = 0;; ++attempt) {
     try {
-      RangeScan s = scan_shape(mesh, sensor, {v[0], v[1], seed + attempt});
+      const ScanPose pose{v[0], v[1], seed + attempt};
+      RangeScan s = fused ? fuse_scans(mesh, sensor, pose) : scan_shape(mesh, sensor, pose);
       return {std::move(s.clean), std::move(s.noisy)};
     } catch (const std::runtime_error&) {
       if (attempt == 7) throw;

@@ -81,6 +81,33 @@ class Bvh {
     return best;
   }
 
+  // The point of the mesh nearest to p (the surface's, not only the vertices').
+  Vec3 closest_point(const Vec3& p) const {
+    Vec3 best = p;
+    double best_d2 = std::numeric_limits<double>::infinity();
+    std::array<std::int32_t, 128> stack{};
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const Node& node = nodes_[static_cast<std::size_t>(stack[--top])];
+      if (box_distance2(node, p) >= best_d2) continue;
+      if (node.count > 0) {
+        for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
+          const std::int32_t f = order_[static_cast<std::size_t>(k)];
+          const Vec3 q = closest_on_triangle(p, corner(f, 0), corner(f, 1), corner(f, 2));
+          const double d2 = (q - p).squaredNorm();
+          if (d2 < best_d2) best_d2 = d2, best = q;
+        }
+      } else {  // the nearer child on top of the stack
+        const bool left_first = box_distance2(nodes_[static_cast<std::size_t>(node.left)], p) <=
+                                box_distance2(nodes_[static_cast<std::size_t>(node.left + 1)], p);
+        stack[top++] = left_first ? node.left + 1 : node.left;
+        stack[top++] = left_first ? node.left : node.left + 1;
+      }
+    }
+    return best;
+  }
+
   Vec3 corner(std::int32_t f, int k) const { return mesh_.V.row(mesh_.F(f, k)).transpose(); }
   Vec3 normal(std::int32_t f) const {
     return (corner(f, 1) - corner(f, 0)).cross(corner(f, 2) - corner(f, 0)).normalized();
@@ -132,6 +159,32 @@ class Bvh {
     nodes_[index].left = static_cast<std::int32_t>(left);
     build(left, first, mid);
     build(left + 1, mid, last);
+  }
+
+  static double box_distance2(const Node& node, const Vec3& p) {
+    return (node.lo - p).cwiseMax(p - node.hi).cwiseMax(0.0).squaredNorm();
+  }
+
+  // Ericson, Real-Time Collision Detection, 5.1.5: the Voronoi regions of the triangle's
+  // vertices, edges and face in turn.
+  static Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+    const Vec3 ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+    if (d1 <= 0 && d2 <= 0) return a;
+    const Vec3 bp = p - b;
+    const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+    if (d3 >= 0 && d4 <= d3) return b;
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;
+    const Vec3 cp = p - c;
+    const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+    if (d6 >= 0 && d5 <= d6) return c;
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+    const double denom = 1 / (va + vb + vc);
+    return a + vb * denom * ab + vc * denom * ac;
   }
 
   static bool slab(const Node& node, const Vec3& o, const Vec3& inv, double t_min, double t_max) {
@@ -239,6 +292,31 @@ double multipath_bias(const Scene& scene, const Vec3& p, Vec3 n, const Vec3& vie
 double sigma_before_quantisation(const RangeSensor& sensor, double z, double theta) {
   const double s = axial_sigma(sensor, z, theta), q = depth_step(sensor, z);
   return std::sqrt(std::max(0.25 * s * s, s * s - q * q / 12));
+}
+
+// Components through shared vertices; the small ones (islands of flying pixels, specks at
+// silhouettes, fused crumbs) dropped as scanner software does (decision 59).
+std::vector<std::array<int, 3>> drop_small_components(const std::vector<std::array<int, 3>>& tris,
+                                                      std::size_t vertices) {
+  std::vector<int> parent(vertices);
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto find = [&](int x) {
+    while (parent[static_cast<std::size_t>(x)] != x)
+      x = parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
+    return x;
+  };
+  for (const auto& t : tris)
+    for (int k = 1; k < 3; ++k) {
+      const int x = find(t[0]), y = find(t[static_cast<std::size_t>(k)]);
+      if (x != y) parent[static_cast<std::size_t>(std::max(x, y))] = std::min(x, y);
+    }
+  std::vector<int> faces_of(vertices, 0);
+  for (const auto& t : tris) ++faces_of[static_cast<std::size_t>(find(t[0]))];
+  const int keep = std::max(20, static_cast<int>(0.02 * static_cast<double>(tris.size())));
+  std::vector<std::array<int, 3>> kept;
+  for (const auto& t : tris)
+    if (faces_of[static_cast<std::size_t>(find(t[0]))] >= keep) kept.push_back(t);
+  return kept;
 }
 
 }  // namespace
@@ -407,31 +485,11 @@ RangeScan mesh_range_image(const RangeImage& im, const RangeSensor& sensor) {
         add(b, cc, d);
       }
     }
-  // Components through shared vertices; the small ones (islands of flying pixels, specks at
-  // silhouettes) dropped as scanner software does.
-  std::vector<int> parent(im.depth.size());
-  std::iota(parent.begin(), parent.end(), 0);
-  const auto find = [&](int x) {
-    while (parent[static_cast<std::size_t>(x)] != x)
-      x = parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
-    return x;
-  };
-  for (const auto& t : tris)
-    for (int k = 1; k < 3; ++k) {
-      const int x = find(t[0]), y = find(t[static_cast<std::size_t>(k)]);
-      if (x != y) parent[static_cast<std::size_t>(std::max(x, y))] = std::min(x, y);
-    }
-  std::vector<int> faces_of(im.depth.size(), 0);
-  for (const auto& t : tris) ++faces_of[static_cast<std::size_t>(find(t[0]))];
-  const int keep = std::max(20, static_cast<int>(0.02 * static_cast<double>(tris.size())));
+  const std::vector<std::array<int, 3>> kept = drop_small_components(tris, im.depth.size());
   std::vector<std::int32_t> vertex(im.depth.size(), -1);
   std::vector<char> used(im.depth.size(), 0);
-  std::vector<std::array<int, 3>> kept;
-  for (const auto& t : tris)
-    if (faces_of[static_cast<std::size_t>(find(t[0]))] >= keep) {
-      kept.push_back(t);
-      for (const int p : t) used[static_cast<std::size_t>(p)] = 1;
-    }
+  for (const auto& t : kept)
+    for (const int p : t) used[static_cast<std::size_t>(p)] = 1;
   RangeScan out;
   std::int32_t count = 0;
   for (std::size_t p = 0; p < used.size(); ++p)
@@ -455,7 +513,10 @@ RangeScan mesh_range_image(const RangeImage& im, const RangeSensor& sensor) {
   return out;
 }
 
-RangeScan scan_shape(const TriMesh& shape, const RangeSensor& sensor, const ScanPose& pose) {
+namespace {
+// The shape scaled to the pose's size, turned by the pose's seeded rotation, centred at the
+// origin (metres).
+TriMesh place(const TriMesh& shape, const ScanPose& pose) {
   const Vec3 lo = shape.V.colwise().minCoeff().transpose(), hi = shape.V.colwise().maxCoeff().transpose();
   const double scale = pose.object_size_m / (hi - lo).maxCoeff();
   const Vec3 mid = 0.5 * (lo + hi);
@@ -466,14 +527,191 @@ RangeScan scan_shape(const TriMesh& shape, const RangeSensor& sensor, const Scan
   const Eigen::Matrix3d R = q.toRotationMatrix();
   TriMesh placed = shape;
   for (Eigen::Index v = 0; v < placed.V.rows(); ++v)
-    placed.V.row(v) = (R * (scale * (shape.V.row(v).transpose() - mid)) + Vec3(0, 0, pose.distance_m)).transpose();
+    placed.V.row(v) = (R * (scale * (shape.V.row(v).transpose() - mid))).transpose();
+  return placed;
+}
+
+// A mesh moved by x -> R x + t.
+TriMesh moved(const TriMesh& m, const Eigen::Matrix3d& R, const Vec3& t) {
+  TriMesh out = m;
+  for (Eigen::Index v = 0; v < m.V.rows(); ++v) out.V.row(v) = (R * m.V.row(v).transpose() + t).transpose();
+  return out;
+}
+
+CaptureOptions booth(const ScanPose& pose, std::uint64_t seed) {
   CaptureOptions options;
-  options.seed = mix(pose.seed ^ 0x5ca11);
+  options.seed = seed;
   options.wall_depth_m = pose.distance_m + pose.object_size_m + 0.2;  // behind the bounding sphere
-  RangeScan s = mesh_range_image(capture(placed, sensor, options), sensor);
+  return options;
+}
+}  // namespace
+
+RangeScan scan_shape(const TriMesh& shape, const RangeSensor& sensor, const ScanPose& pose) {
+  const TriMesh placed = moved(place(shape, pose), Eigen::Matrix3d::Identity(), Vec3(0, 0, pose.distance_m));
+  RangeScan s = mesh_range_image(capture(placed, sensor, booth(pose, mix(pose.seed ^ 0x5ca11))), sensor);
   if (s.clean.F.rows() < 100)
     throw std::runtime_error("scan_shape: " + std::to_string(s.clean.F.rows()) + " faces in view, fewer than 100");
   return s;
+}
+
+RangeScan fuse_scans(const TriMesh& shape, const RangeSensor& sensor, const ScanPose& pose,
+                     const FusedOptions& options) {
+  if (options.views < 1 || options.voxels_across < 8)
+    throw std::invalid_argument("fuse_scans: views >= 1, voxels_across >= 8");
+  const TriMesh object = place(shape, pose);
+  const double d = pose.distance_m;
+  // Decision 58: voxels of the object's size over voxels_across, never below the footprint;
+  // truncation at four voxels or the noise's reach, whichever is larger.
+  const double voxel = std::max(pose.object_size_m / options.voxels_across, d * sensor.stride / sensor.focal_px);
+  const double trunc = std::max(4 * voxel, 4 * axial_sigma(sensor, d, 0) + depth_step(sensor, d));
+  const Vec3 lo = object.V.colwise().minCoeff().transpose() - Vec3::Constant(2 * trunc);
+  const Vec3 span = object.V.colwise().maxCoeff().transpose() + Vec3::Constant(2 * trunc) - lo;
+  const int nx = static_cast<int>(std::ceil(span.x() / voxel)) + 1,
+            ny = static_cast<int>(std::ceil(span.y() / voxel)) + 1,
+            nz = static_cast<int>(std::ceil(span.z() / voxel)) + 1;
+  const auto at = [&](int i, int j, int k) {
+    return (static_cast<std::size_t>(k) * static_cast<std::size_t>(ny) + static_cast<std::size_t>(j)) *
+               static_cast<std::size_t>(nx) +
+           static_cast<std::size_t>(i);
+  };
+  const auto centre = [&](int i, int j, int k) { return Vec3(lo + voxel * Vec3(i, j, k)); };
+  std::vector<double> sdf(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz),
+                          0);
+  std::vector<double> weight(sdf.size(), 0);
+
+  // The turntable: the object turns about the camera's vertical (y) axis in equal steps from a
+  // seeded start, seen from `elevation_deg` above; each view a capture with its own draws.
+  const double elevation = options.elevation_deg * std::numbers::pi / 180;
+  const Eigen::Matrix3d tilt = Eigen::AngleAxisd(-elevation, Vec3::UnitX()).toRotationMatrix();
+  for (int view = 0; view < options.views; ++view) {
+    const double phi = 2 * std::numbers::pi * (view / static_cast<double>(options.views) + uniform(pose.seed, 0, 20));
+    const Eigen::Matrix3d R = tilt * Eigen::AngleAxisd(phi, Vec3::UnitY()).toRotationMatrix();
+    const Vec3 t(0, 0, d);
+    const RangeImage im = capture(moved(object, R, t), sensor,
+                                  booth(pose, mix(pose.seed ^ (0xf05edull + static_cast<std::uint64_t>(view)))));
+    // Curless and Levoy 1996 (KinectFusion's fusion, Newcombe et al. 2011): each voxel's
+    // projective signed distance to the reported surface, truncated, averaged over views;
+    // voxels further behind the surface than the truncation are left as they are (unseen).
+    for (int k = 0; k < nz; ++k)
+      for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+          const Vec3 q = R * centre(i, j, k) + t;
+          if (q.z() <= 0) continue;
+          const long c = std::lround(im.focal * q.x() / q.z() + im.cx),
+                     r = std::lround(im.focal * q.y() / q.z() + im.cy);
+          if (c < 0 || r < 0 || c >= im.cols || r >= im.rows) continue;
+          const double z = im.depth[static_cast<std::size_t>(r * im.cols + c)];
+          if (std::isnan(z) || z - q.z() < -trunc) continue;
+          const std::size_t v = at(i, j, k);
+          sdf[v] = (sdf[v] * weight[v] + std::min(1.0, (z - q.z()) / trunc)) / (weight[v] + 1);
+          weight[v] += 1;
+        }
+  }
+
+  // Surface nets (Gibson 1998): one vertex per cell whose eight corners are all seen and
+  // change sign, at the mean of its edges' zero crossings; one quad per voxel edge that
+  // changes sign between four such cells. Negative is inside.
+  const auto cell = [&](int i, int j, int k) {
+    return (static_cast<std::size_t>(k) * static_cast<std::size_t>(ny - 1) + static_cast<std::size_t>(j)) *
+               static_cast<std::size_t>(nx - 1) +
+           static_cast<std::size_t>(i);
+  };
+  std::vector<std::int32_t> cell_vertex(
+      static_cast<std::size_t>(nx - 1) * static_cast<std::size_t>(ny - 1) * static_cast<std::size_t>(nz - 1), -1);
+  std::vector<Vec3> positions;
+  for (int k = 0; k + 1 < nz; ++k)
+    for (int j = 0; j + 1 < ny; ++j)
+      for (int i = 0; i + 1 < nx; ++i) {
+        bool seen = true, inside = false, outside = false;
+        for (int c = 0; c < 8 && seen; ++c) {
+          const std::size_t v = at(i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2));
+          seen = weight[v] > 0;
+          (sdf[v] < 0 ? inside : outside) = true;
+        }
+        if (!seen || !inside || !outside) continue;
+        Vec3 sum = Vec3::Zero();
+        int crossings = 0;
+        for (int a = 0; a < 8; ++a)
+          for (const int b : {a | 1, a | 2, a | 4}) {  // the cell's 12 edges, each once
+            if (b == a) continue;
+            const int ia = i + (a & 1), ja = j + ((a >> 1) & 1), ka = k + (a >> 2);
+            const int ib = i + (b & 1), jb = j + ((b >> 1) & 1), kb = k + (b >> 2);
+            const double sa = sdf[at(ia, ja, ka)], sb = sdf[at(ib, jb, kb)];
+            if ((sa < 0) == (sb < 0)) continue;
+            sum += centre(ia, ja, ka) + sa / (sa - sb) * (centre(ib, jb, kb) - centre(ia, ja, ka));
+            ++crossings;
+          }
+        cell_vertex[cell(i, j, k)] = static_cast<std::int32_t>(positions.size());
+        positions.push_back(sum / crossings);
+      }
+  std::vector<std::array<int, 3>> tris;
+  const int n[3] = {nx, ny, nz};
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+        for (int axis = 0; axis < 3; ++axis) {
+          int p[3] = {i, j, k};
+          if (p[axis] + 1 >= n[axis]) continue;
+          const std::size_t va = at(i, j, k);
+          int q[3] = {i, j, k};
+          ++q[axis];
+          const std::size_t vb = at(q[0], q[1], q[2]);
+          if (weight[va] <= 0 || weight[vb] <= 0 || (sdf[va] < 0) == (sdf[vb] < 0)) continue;
+          // The four cells around the edge, counter-clockwise about +axis (u, w = the next two
+          // axes in cyclic order): (-,-), (0,-), (0,0), (-,0).
+          const int u = (axis + 1) % 3, w = (axis + 2) % 3;
+          if (p[u] < 1 || p[w] < 1 || p[u] >= n[u] - 1 || p[w] >= n[w] - 1) continue;
+          std::array<int, 4> quad{};
+          bool complete = true;
+          const int du[4] = {-1, 0, 0, -1}, dw[4] = {-1, -1, 0, 0};
+          for (int c = 0; c < 4 && complete; ++c) {
+            int x[3] = {i, j, k};
+            x[u] += du[c];
+            x[w] += dw[c];
+            quad[static_cast<std::size_t>(c)] = cell_vertex[cell(x[0], x[1], x[2])];
+            complete = quad[static_cast<std::size_t>(c)] >= 0;
+          }
+          if (!complete) continue;
+          if (sdf[va] >= 0) std::swap(quad[1], quad[3]);  // outside at the start: the normal is -axis
+          const auto P = [&](int c) { return positions[static_cast<std::size_t>(quad[static_cast<std::size_t>(c)])]; };
+          if ((P(0) - P(2)).squaredNorm() <= (P(1) - P(3)).squaredNorm()) {
+            tris.push_back({quad[0], quad[1], quad[2]});
+            tris.push_back({quad[0], quad[2], quad[3]});
+          } else {
+            tris.push_back({quad[0], quad[1], quad[3]});
+            tris.push_back({quad[1], quad[2], quad[3]});
+          }
+        }
+  const std::vector<std::array<int, 3>> kept = drop_small_components(tris, positions.size());
+  std::vector<std::int32_t> index(positions.size(), -1);
+  std::int32_t count = 0;
+  for (const auto& t : kept)
+    for (const int v : t)
+      if (index[static_cast<std::size_t>(v)] < 0) index[static_cast<std::size_t>(v)] = 0;
+  for (std::size_t v = 0; v < positions.size(); ++v)
+    if (index[v] == 0)
+      index[v] = count++;
+    else
+      index[v] = -1;
+  // Decision 58: the fused surface has no pixel to follow, so a vertex's ground truth is the
+  // nearest point of the clean surface.
+  const Bvh bvh(object);
+  RangeScan out;
+  out.noisy.resize(count, 3);
+  out.clean.V.resize(count, 3);
+  for (std::size_t v = 0; v < positions.size(); ++v)
+    if (index[v] >= 0) {
+      out.noisy.row(index[v]) = positions[v].transpose();
+      out.clean.V.row(index[v]) = bvh.closest_point(positions[v]).transpose();
+    }
+  out.clean.F.resize(static_cast<Eigen::Index>(kept.size()), 3);
+  for (std::size_t f = 0; f < kept.size(); ++f)
+    for (int c = 0; c < 3; ++c)
+      out.clean.F(static_cast<Eigen::Index>(f), c) =
+          index[static_cast<std::size_t>(kept[f][static_cast<std::size_t>(c)])];
+  if (out.clean.F.rows() < 100)
+    throw std::runtime_error("fuse_scans: " + std::to_string(out.clean.F.rows()) + " faces fused, fewer than 100");
+  return out;
 }
 
 }  // namespace mdn::train

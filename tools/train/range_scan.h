@@ -108,4 +108,18 @@ struct ScanPose {
 // in front of a wall and meshed. Throws std::runtime_error if fewer than 100 faces remain.
 RangeScan scan_shape(const TriMesh& shape, const RangeSensor& sensor, const ScanPose& pose);
 
+// A turntable station's output (issue 48's fused variant): `views` captures of the shape turning
+// about the camera's vertical axis in equal steps, seen from `elevation_deg` above, fused into
+// a truncated signed distance volume (Curless and Levoy 1996, as KinectFusion does) and meshed
+// by surface nets (decision 58). Noisy vertices are the fused surface's, each clean vertex
+// the nearest point of the clean surface (there is no pixel to share); `pixel` is empty.
+// Positions in metres around the object's centre. The bottom, never seen, stays open.
+struct FusedOptions {
+  int views = 6;              // captures around the turntable, >= 1
+  double elevation_deg = 25;  // the sensor above the turntable's plane
+  int voxels_across = 48;     // voxel = object size / this, at least one pixel footprint
+};
+RangeScan fuse_scans(const TriMesh& shape, const RangeSensor& sensor, const ScanPose& pose,
+                     const FusedOptions& options = {});
+
 }  // namespace mdn::train
