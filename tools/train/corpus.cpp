@@ -212,11 +212,11 @@ std::vector<std::string> scan_noise_names() {
   // and 2.2 m), each about a third (structured light) or a quarter (time of flight) of its
   // distance in size, so that a scan holds 800-32,000 faces like the rest of the corpus,
   // and a second pose of the middle one. The noise in mean edge lengths is set by the
-  // distance (the footprint and sigma(z) both grow with it), the detail by the size. Then a
-  // turntable station's fused scan per sensor (six views, range_scan.h's fuse_scans).
+  // distance (the footprint and sigma(z) both grow with it), the detail by the size. The
+  // fused kinds ("fused_sl:SIZE:DIST", "fused_tof:SIZE:DIST") are built by name but not listed:
+  // their ground truth is not a surface on thin parts yet (decision 60).
   return {"scan_sl:0.2:0.6",   "scan_sl:0.4:1.2",  "scan_sl:0.7:2.2",   "scan_sl:0.4:1.2:1",
-          "scan_tof:0.15:0.6", "scan_tof:0.3:1.2", "scan_tof:0.55:2.2", "scan_tof:0.3:1.2:1",
-          "fused_sl:0.4:1.2",  "fused_tof:0.3:1.2"};
+          "scan_tof:0.15:0.6", "scan_tof:0.3:1.2", "scan_tof:0.55:2.2", "scan_tof:0.3:1.2:1"};
 }
 
 bool is_scan_noise(const std::string& noise) {

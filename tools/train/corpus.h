@@ -34,9 +34,10 @@ std::vector<std::string> noise_names();
 // The depth-camera kinds (issue 48; decision 60): "scan_sl:SIZE:DIST" (structured light,
 // Kinect v1 class) and "scan_tof:SIZE:DIST" (time of flight, Kinect v2 class), optionally
 // ":POSE" (another pose at the same distance): the shape scaled to SIZE metres (its bounding
-// box's longest side), seen from DIST metres by one view of range_scan.h's sensor; and
-// "fused_sl:SIZE:DIST", "fused_tof:SIZE:DIST", a turntable's six views fused (fuse_scans).
-// The case's clean mesh is the scan's, not the shape's.
+// box's longest side), seen from DIST metres by one view of range_scan.h's sensor. The case's
+// clean mesh is the scan's, not the shape's. "fused_sl:SIZE:DIST" and "fused_tof:SIZE:DIST"
+// (a turntable's six views fused, fuse_scans) are built by make_noisy_case and scan_case but
+// are not in the list (decision 60).
 std::vector<std::string> scan_noise_names();
 bool is_scan_noise(const std::string& noise);
 // The configurations a shape gets: all of them, or every fifth of the others and every
