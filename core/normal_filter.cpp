@@ -281,6 +281,23 @@ void to_double(const std::vector<float>& n, Vertices& out) {
   }
 }
 
+// Decision 53: with guidance, phi of Eq. 7's range factor is read from the guidance normals,
+// which do not change, so once per pair before the iterations: the same pass and arithmetic as
+// an iteration's (range_pass), on the guidance in single precision, without the 1/||n_i - n_j||.
+template <class Neighbours>
+std::vector<float> guidance_factors(const Vertices& guidance, const Topology& topo, const PairIndex& pairs,
+                                    const Neighbours& nb, float inv_range, const NormalFilterSettings& s, Executor& ex) {
+  std::vector<float> g, phi(static_cast<std::size_t>(pairs.pair_start.back()));
+  to_float4(guidance, g);
+  NormalFilterSettings phi_only;
+  phi_only.bilateral_switch = s.bilateral_switch;
+  phi_only.l1_median = false;  // denominators 1: phi alone
+  ex.parallel_for(guidance.rows(), [&](std::int64_t begin, std::int64_t end) {
+    range_pass(g.data(), topo.ff_offsets, pairs, nb, inv_range, phi_only, nullptr, phi, begin, end);
+  });
+  return phi;
+}
+
 }  // namespace
 
 void check_guidance(const Vertices& guidance, std::int64_t faces) {
@@ -319,37 +336,27 @@ Vertices detail::l1_median_normal_filter(const Vertices& V, const Triangles& F, 
   if (compact16 || compact32)
     std::vector<std::int32_t>().swap(pairs.pair_of);  // before the iterations' arrays (peak memory)
   std::vector<float> range(static_cast<std::size_t>(pairs.pair_start.back()));
+  // Runs body with the form of N(i) chosen above.
+  const auto with_neighbours = [&](const auto& body) {
+    if (compact16)
+      body(*compact16);
+    else if (compact32)
+      body(*compact32);
+    else
+      body(AbsoluteNeighbours{topo.ff_faces.data(), pairs.pair_of.data()});
+  };
 
   // Eq. 7 typo: both denominators mean 1 - cos(sigma_gamma) (core/README.md, decision 8).
   const auto inv_range = static_cast<float>(1.0 / (1.0 - std::cos(s.sigma_gamma_deg * std::numbers::pi / 180.0)));
   // The iterations run in single precision (decision 36).
   std::vector<float> current, next(static_cast<std::size_t>(4 * nf));
   to_float4(normals, current);
-  // Decision 53: with guidance, phi of Eq. 7's range factor is read from the guidance normals,
-  // which do not change, so once per pair before the iterations: the same pass and arithmetic
-  // as an iteration's, on the guidance in single precision, without the 1/||n_i - n_j||.
-  std::vector<float> guide_phi;
-  if (s.guidance) {
-    std::vector<float> g;
-    to_float4(*s.guidance, g);
-    guide_phi.resize(range.size());
-    NormalFilterSettings phi_only = s;
-    phi_only.l1_median = false;  // denominators 1: phi alone
-    auto fill = [&](const auto& neighbours) {
-      ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
-        range_pass(g.data(), topo.ff_offsets, pairs, neighbours, inv_range, phi_only, nullptr, guide_phi, begin, end);
-      });
-    };
-    if (compact16)
-      fill(*compact16);
-    else if (compact32)
-      fill(*compact32);
-    else
-      fill(AbsoluteNeighbours{topo.ff_faces.data(), pairs.pair_of.data()});
-  }
+  std::vector<float> guide_phi;  // decision 53: phi of the guidance, once per pair
+  if (s.guidance)
+    with_neighbours([&](const auto& nb) { guide_phi = guidance_factors(*s.guidance, topo, pairs, nb, inv_range, s, ex); });
   const float* guided = s.guidance ? guide_phi.data() : nullptr;
   if (s.on_iteration) s.on_iteration(0, normals);
-  auto iterate = [&](const auto& neighbours) {
+  with_neighbours([&](const auto& neighbours) {
     for (int it = 0; it < s.iterations; ++it) {
       checkpoint(progress, Stage::NormalFilter, static_cast<double>(it) / s.iterations);
       ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
@@ -364,13 +371,7 @@ Vertices detail::l1_median_normal_filter(const Vertices& V, const Triangles& F, 
         s.on_iteration(it + 1, normals);
       }
     }
-  };
-  if (compact16)
-    iterate(*compact16);
-  else if (compact32)
-    iterate(*compact32);
-  else
-    iterate(AbsoluteNeighbours{topo.ff_faces.data(), pairs.pair_of.data()});
+  });
   if (progress) progress->on_progress(Stage::NormalFilter, 1.0);
   to_double(current, normals);
   return normals;

@@ -91,10 +91,16 @@ TEST(L1MedianFilter, EveryNeighbourFormGivesTheSameNormals) {
   const Vertices noisy = add_noise(clean, spec);
   const Topology t = Topology::build(clean.F, static_cast<std::int32_t>(clean.V.rows()));
   Executor ex(2);
-  const Vertices plain = detail::l1_median_normal_filter(noisy, clean.F, t, {}, &ex, nullptr, detail::NeighbourForm::Plain);
-  for (auto form : {detail::NeighbourForm::Auto, detail::NeighbourForm::Compact16, detail::NeighbourForm::Compact32}) {
-    const Vertices other = detail::l1_median_normal_filter(noisy, clean.F, t, {}, &ex, nullptr, form);
-    EXPECT_TRUE((plain.array() == other.array()).all()) << static_cast<int>(form);
+  // Unguided, and guided by the clean normals (decision 53's pass reads N(i) the same way).
+  const Vertices truth = face_normals(clean.V, clean.F);
+  NormalFilterSettings guided;
+  guided.guidance = &truth;
+  for (const NormalFilterSettings& s : {NormalFilterSettings{}, guided}) {
+    const Vertices plain = detail::l1_median_normal_filter(noisy, clean.F, t, s, &ex, nullptr, detail::NeighbourForm::Plain);
+    for (auto form : {detail::NeighbourForm::Auto, detail::NeighbourForm::Compact16, detail::NeighbourForm::Compact32}) {
+      const Vertices other = detail::l1_median_normal_filter(noisy, clean.F, t, s, &ex, nullptr, form);
+      EXPECT_TRUE((plain.array() == other.array()).all()) << static_cast<int>(form) << (s.guidance ? " guided" : "");
+    }
   }
 }
 
