@@ -12,10 +12,11 @@
 //       parameters), the noise estimate, the cost, the clean inputs and Fandisk. --grid-cache F
 //       keeps each case's label-grid best in F (TSV) and reuses it: delete F when the method
 //       changes (the grid is most of the report's time).
-//   tune_bench guided  [--data DIR] [--jobs N] [--set S] [--only MESH] [--grid-cache F]
+//   tune_bench guided  [--data DIR] [--jobs N] [--set S] [--only MESH] [--grid-cache F] [--max-faces N]
 //       issue 48's oracle experiment: auto's pick held fixed, without guidance and with the clean
 //       face normals plus random angular errors (6 and 10 degrees) as the normal filter's
-//       guidance (decision 53); ratios per case, per noise kind and per surface class.
+//       guidance (decision 53); ratios per case, per noise kind and per surface class. The grid's
+//       best (--grid-cache) costs most of the time: --max-faces leaves larger cases out.
 //
 // The sets (issue 31). The trained model learns from tools/train's corpus, never from these
 // meshes. "validation": every CGAL demo mesh of 1,000 to 20,000 triangles that is not a corpus
@@ -38,6 +39,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <numeric>
@@ -589,9 +591,9 @@ double sharp_edge_share(const TriMesh& m) {
 }
 
 int guided_command(const fs::path& data, int jobs, const std::string& which, const std::string& only,
-                   const fs::path& grid_cache) {
+                   const fs::path& grid_cache, std::int64_t max_faces) {
   std::vector<Case> cases = build_cases(data, which, only);
-  std::erase_if(cases, [](const Case& c) { return c.config == "clean"; });
+  std::erase_if(cases, [&](const Case& c) { return c.config == "clean" || c.truth.num_faces() > max_faces; });
   GridCache cache(grid_cache);
   // The runs of a case, MSAE each: a parameter set and a guidance (none, 6 or 10 degrees).
   // s30: the pick with sigma_gamma 30 degrees (the pick's is 90 on most cases, where Eq. 7's
@@ -688,7 +690,7 @@ int guided_command(const fs::path& data, int jobs, const std::string& which, con
                "                         [--grid-cache FILE] [ROWS.tsv]\n"
                "       tune_bench noise [--data DIR] [--jobs N] [--set train|validation|all]\n"
                "       tune_bench clean [--data DIR] [--jobs N] [--only MESH]\n"
-               "       tune_bench guided [--data DIR] [--jobs N] [--set S] [--only MESH] [--grid-cache FILE]\n");
+               "       tune_bench guided [--data DIR] [--jobs N] [--set S] [--only MESH] [--grid-cache FILE] [--max-faces N]\n");
   std::exit(code);
 }
 
@@ -703,6 +705,7 @@ int main(int argc, char** argv) {
   std::string which = "all", only;
   bool with_search = false;
   fs::path grid_cache;
+  std::int64_t max_faces = std::numeric_limits<std::int64_t>::max();  // guided: larger cases left out
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     const auto value = [&]() -> std::string {
@@ -715,6 +718,7 @@ int main(int argc, char** argv) {
     else if (a == "--only") only = value();
     else if (a == "--search") with_search = true;
     else if (a == "--grid-cache") grid_cache = value();
+    else if (a == "--max-faces") max_faces = std::stoll(value());
     else if (a == "--help" || a == "-h") usage(0);
     else if (!a.empty() && a[0] != '-' && file.empty()) file = a;
     else usage(2);
@@ -725,7 +729,7 @@ int main(int argc, char** argv) {
     if (command == "report") return report(data, jobs, which, file, with_search, only, grid_cache);
     if (command == "noise") return noise_command(data, jobs, which);
     if (command == "clean") return clean_command(data, jobs, only);
-    if (command == "guided") return guided_command(data, jobs, which, only, grid_cache);
+    if (command == "guided") return guided_command(data, jobs, which, only, grid_cache, max_faces);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "tune_bench: %s\n", e.what());
     return 1;
