@@ -294,6 +294,13 @@ std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options, 
     if (bits > 0) encoder.SetAttributeQuantization(type, bits);
   // Draco's speed is the inverse of the compression level (0 = best compression).
   const int speed = 10 - options.compression_level;
+  // Speeds 0 and 1 (levels 10 and 9) predict positions with Draco's constrained
+  // multi-parallelogram scheme, which writes out of bounds (SIGSEGV, the whole process) on an
+  // explicit position grid narrower than about 1e-6 (a mesh collapsed to a point, or a tiny
+  // one; issue 49, item 0). Such a grid takes the plain parallelogram prediction instead; the
+  // other settings stay as asked (decision 77).
+  if (speed <= 1 && box && box->range < kMinConstrainedPredictionRange)
+    encoder.SetAttributePredictionScheme(draco::GeometryAttribute::POSITION, draco::MESH_PREDICTION_PARALLELOGRAM);
   std::string out = encode_with_speed(encoder, mesh, speed);
   // What is written must read back. Draco's speed 10 (sequential encoding) writes a payload
   // its own decoder refuses when a point is not used by any face (found by fuzz_off with

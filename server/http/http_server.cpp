@@ -19,15 +19,14 @@
 #include <utility>
 
 #include "core/params.h"
-#include "server/http/connection_gate.h"
+#include "server/http/transport/connection_gate.h"
 #include "server/http/embedded.h"
-#include "server/http/job_routes.h"
+#include "server/http/routes/job_routes.h"
 #include "server/http/problem.h"
-#include "server/http/request_body.h"
+#include "server/http/routes/request_body.h"
 #include "server/http/secure_random.h"
-#include "server/http/service_parts.h"
-#include "server/http/service_routes.h"
-#include "server/http/web_routes.h"
+#include "server/http/routes/service_routes.h"
+#include "server/http/routes/web_routes.h"
 #include "service/job_json.h"
 #include "service/params_json.h"
 
