@@ -81,7 +81,7 @@ json_field() { python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))[
 #    bytes unchanged. It goes to OUTPUT only once the server said 200.
 call "$tmp/sync" -D "$tmp/sync.headers" -H "Content-Type: $type" -H "X-Denoise-Params: $params" \
   --data-binary @"$input" "$url/v1/denoise" >/dev/null
-grep -i '^x-denoise-params:\|^server-timing:' "$tmp/sync.headers" >&2 || true
+grep -i '^x-denoise-params:\|^x-denoise-summary:\|^server-timing:' "$tmp/sync.headers" >&2 || true
 
 # 2. Asynchronous: 202 + Location, wait until finished (long polls: each GET answers when the
 #    job finishes, or after 30 s), download the result.

@@ -48,6 +48,8 @@ export async function denoise(bytes, mediaType, params = {}, baseUrl = process.e
     mediaType: response.headers.get('Content-Type'),
     params: JSON.parse(response.headers.get('X-Denoise-Params')),
     timing: response.headers.get('Server-Timing'),
+    // What ran, bounded (issue 51); the full report: ?report=1 or the async job's result.reports.
+    summary: JSON.parse(response.headers.get('X-Denoise-Summary') ?? 'null'),
   };
 }
 

@@ -87,6 +87,8 @@ def main():
         resp_headers, data = request(base, "POST", "/v1/denoise", body, headers)
         print("effective parameters:", resp_headers["X-Denoise-Params"], file=sys.stderr)
         print("timings:", resp_headers["Server-Timing"], file=sys.stderr)
+        # What ran, bounded; the full report is in the async job's result (or ?report=1).
+        print("what ran:", resp_headers.get("X-Denoise-Summary"), file=sys.stderr)
     else:
         resp_headers, _ = request(base, "POST", "/v1/jobs", body, headers)
         location = resp_headers["Location"]
@@ -97,6 +99,8 @@ def main():
                 break
             if job["state"] in ("failed", "cancelled"):
                 fail(1, f"the job {job['state']}: {job.get('error', {}).get('detail')}")
+        reports = job["result"]["reports"]  # the full report: measures, predictions, the pick
+        print("report: %d surface(s), modes %s" % (len(reports), [r["mode"] for r in reports]), file=sys.stderr)
         _, data = request(base, "GET", location + "/result")
     with open(args[1], "wb") as f:
         f.write(data)

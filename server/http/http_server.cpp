@@ -40,7 +40,7 @@ using nlohmann::json;
 constexpr const char* kExposedHeaders =
     "Location, Retry-After, X-Request-Id, Server-Timing, Content-Disposition, Idempotent-Replayed, "
     "X-Denoise-Params, X-Denoise-Input-Bytes, X-Denoise-Output-Bytes, X-Denoise-Vertices, X-Denoise-Faces, "
-    "X-Denoise-Notes, X-Denoise-Report";
+    "X-Denoise-Notes, X-Denoise-Summary";
 constexpr const char* kAllowedRequestHeaders =
     "Authorization, Content-Type, X-Request-Id, X-Denoise-Params, Idempotency-Key";
 // Header fields a request may carry (431 beyond; cpp-httplib 0.11.4 has no such limit).

@@ -2,12 +2,13 @@
 """The pipelines users already run (issue 18), with the real tools pinned in tests/tools:
 
   gltf-transform optimize (EXT_meshopt_compression) -> service -> gltfpack -> Khronos validator
+  gltfpack -c (EXT_meshopt_compression, KHR_mesh_quantization) -> service -> gltfpack -> validator
   gltf-transform draco    (KHR_draco_mesh_compression) -> service -> Khronos validator
 
 against a live meshdenoise-server on loopback. The service must keep the input's compression
-(meshopt in: none out, which gltfpack accepts; Draco in: Draco out); every output validates
-with no errors and loads in three.js (GLTFLoader + DRACOLoader in headless Chromium,
-tests/tools/check_three.mjs).
+(meshopt in: meshopt out, quantized positions kept quantized, issue 51; Draco in: Draco out);
+every output validates with no errors and loads in three.js (GLTFLoader + DRACOLoader +
+MeshoptDecoder in headless Chromium, tests/tools/check_three.mjs).
 
 Usage: pipelines_test.py --server BINARY --cli BINARY --tools DIR
 """
@@ -36,6 +37,14 @@ def validate(tools, path):
     report = json.loads(out.strip().splitlines()[-1])
     check(report["errors"] == 0, "%s: %d validator errors: %s" % (path, report["errors"], report["messages"]))
     return report
+
+
+def glb_position_type(glb):
+    """(componentType, normalized) of the first primitive's POSITION in a .glb."""
+    length = int.from_bytes(glb[12:16], "little")
+    doc = json.loads(glb[20:20 + length])
+    accessor = doc["accessors"][doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"]]
+    return accessor["componentType"], accessor.get("normalized", False)
 
 
 def main():
@@ -73,9 +82,18 @@ def main():
             check(b"EXT_meshopt_compression" in open(p("optimized.glb"), "rb").read(),
                   "gltf-transform optimize wrote no EXT_meshopt_compression")
             out = denoise(p("optimized.glb"), p("optimized-denoised.glb"))
-            check(b"KHR_draco_mesh_compression" not in out and b"EXT_meshopt_compression" not in out,
-                  "meshopt in should give an uncompressed glTF out")
+            check(b"KHR_draco_mesh_compression" not in out and b"EXT_meshopt_compression" in out,
+                  "meshopt in should give a meshopt glTF out")
             run([gltfpack, "-i", p("optimized-denoised.glb"), "-o", p("packed.glb")], what="gltfpack")
+            # 1b. gltfpack's own meshopt (quantized positions), the service, gltfpack again.
+            run([gltfpack, "-c", "-i", p("plain.glb"), "-o", p("gltfpack.glb")], what="gltfpack -c")
+            out = denoise(p("gltfpack.glb"), p("gltfpack-denoised.glb"))
+            check(b"EXT_meshopt_compression" in out and b"KHR_mesh_quantization" in out,
+                  "a gltfpack input should come back with EXT_meshopt_compression and KHR_mesh_quantization")
+            check(glb_position_type(out) == glb_position_type(open(p("gltfpack.glb"), "rb").read()),
+                  "POSITION should keep gltfpack's component type: %s, was %s"
+                  % (glb_position_type(out), glb_position_type(open(p("gltfpack.glb"), "rb").read())))
+            run([gltfpack, "-c", "-i", p("gltfpack-denoised.glb"), "-o", p("gltfpack-repacked.glb")], what="gltfpack -c (again)")
             # 2. Draco: glTF-Transform's draco, then the service: Draco stays.
             run([gltf_transform, "draco", p("plain.glb"), p("draco.glb")], what="gltf-transform draco")
             check(b"KHR_draco_mesh_compression" in open(p("draco.glb"), "rb").read(), "gltf-transform draco wrote no Draco")
@@ -84,7 +102,8 @@ def main():
         finally:
             processes.stop_all()
 
-        outputs = ["optimized-denoised.glb", "packed.glb", "draco-denoised.glb"]
+        outputs = ["optimized-denoised.glb", "packed.glb", "gltfpack-denoised.glb", "gltfpack-repacked.glb",
+                   "draco-denoised.glb"]
         for name in outputs:
             report = validate(args.tools, p(name))
             log("%s: %d errors, %d warnings, %d bytes" % (name, report["errors"], report["warnings"], os.path.getsize(p(name))))

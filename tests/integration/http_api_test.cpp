@@ -62,12 +62,33 @@ TEST_F(HttpApi, SynchronousDenoiseEqualsCliOutputByteForByte) {
   expected_params["output"]["format"] = "off";
   EXPECT_EQ(effective, expected_params);
   EXPECT_EQ(effective["n_normal"], 12);
-  // What ran: auto mode (the default) chose the unpinned fields and says what it measured.
-  const json report = parse_json(r->get_header_value("X-Denoise-Report"));
-  ASSERT_TRUE(report.is_array() && report.size() == 1) << report;
+  // What ran, in the bounded summary header (issue 51): auto mode chose the unpinned fields.
+  const json summary = parse_json(r->get_header_value("X-Denoise-Summary"));
+  EXPECT_LT(r->get_header_value("X-Denoise-Summary").size(), 1000u);
+  EXPECT_EQ(summary["surfaces"], 1);
+  EXPECT_EQ(summary["more"], 0);
+  EXPECT_EQ(summary["ran"][0]["mode"], "auto");
+  EXPECT_EQ(summary["ran"][0]["params"]["n_normal"], 12);
+  EXPECT_EQ(summary["ran"][0]["params"]["sigma_gamma"], 35);
+  EXPECT_FALSE(r->has_header("X-Denoise-Report"));
+  // The full report: ?report=1 answers multipart/mixed, the mesh and then the result's JSON
+  // with what auto measured.
+  auto full = c->Post("/v1/denoise?report=1", headers, noisy, "model/x-off");
+  ASSERT_TRUE(full);
+  ASSERT_EQ(full->status, 200) << full->body;
+  const std::string type = full->get_header_value("Content-Type");
+  ASSERT_EQ(type.rfind("multipart/mixed; boundary=", 0), 0u) << type;
+  const std::string boundary = "--" + type.substr(type.find('=') + 1);
+  const std::size_t mesh_at = full->body.find("\r\n\r\n") + 4;
+  const std::size_t json_part = full->body.find("\r\n" + boundary + "\r\nContent-Type: application/json\r\n\r\n");
+  ASSERT_NE(json_part, std::string::npos) << full->body.substr(0, 300);
+  EXPECT_EQ(full->body.substr(mesh_at, json_part - mesh_at), expected);
+  const std::size_t json_at = full->body.find("\r\n\r\n", json_part + 2) + 4;
+  const json result = parse_json(full->body.substr(json_at, full->body.rfind("\r\n" + boundary + "--") - json_at));
+  const json& report = result["reports"];
+  ASSERT_TRUE(report.is_array() && report.size() == 1) << result;
   EXPECT_EQ(report[0]["mode"], "auto");
   EXPECT_EQ(report[0]["params"]["n_normal"], 12);
-  EXPECT_EQ(report[0]["params"]["sigma_gamma"], 35);
   EXPECT_TRUE(report[0]["params"]["alpha"].is_number());
   EXPECT_GT(report[0]["measures"]["noise"].get<double>(), 0);
   const std::string timing = r->get_header_value("Server-Timing");

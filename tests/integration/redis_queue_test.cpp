@@ -223,7 +223,7 @@ TEST_F(RedisQueue, ThreeReplicasRoundRobinResultsEqualTheCli) {
     auto a = memory.client()->Get("/v1/jobs/" + local + "/result");
     auto b = replicas[0]->client()->Get("/v1/jobs/" + ids[0] + "/result");
     ASSERT_TRUE(a && b);
-    for (const char* h : {"X-Denoise-Params", "X-Denoise-Report", "X-Denoise-Vertices", "X-Denoise-Faces",
+    for (const char* h : {"X-Denoise-Params", "X-Denoise-Summary", "X-Denoise-Vertices", "X-Denoise-Faces",
                           "X-Denoise-Output-Bytes", "Content-Type", "Content-Disposition"})
       EXPECT_EQ(b->get_header_value(h), a->get_header_value(h)) << h;
   }

@@ -27,6 +27,61 @@ bool is_text(io::Format format, std::string_view bytes) {
   return format == io::Format::Off || format == io::Format::Obj || format == io::Format::Gltf;
 }
 
+// Issue 51: no response header may grow with the model or the asset (a default nginx, a cloud
+// load balancer or a CDN fails or drops a response whose headers pass 4-8 KB). The summary and
+// the notes headers stay under kMaxHeaderBytes; the full report is in the job's resource and,
+// for any result, in the ?report=1 multipart answer (decision 72).
+constexpr std::size_t kMaxHeaderBytes = 1000;
+
+// What ran, per surface (mode and the method's parameters), as many surfaces as fit; "more"
+// counts the rest. Timings are in Server-Timing.
+std::string report_summary(const json& reports) {
+  json summary = {{"surfaces", reports.size()}, {"ran", json::array()}};
+  std::size_t shown = 0;
+  for (const json& r : reports) {
+    json item = {{"mode", r.value("mode", "")}, {"params", r.value("params", json::object())}};
+    item["params"].erase("mode");
+    json next = summary;
+    next["ran"].push_back(item);
+    next["more"] = reports.size() - shown - 1;
+    if (next.dump().size() > kMaxHeaderBytes) break;
+    summary = std::move(next);
+    ++shown;
+  }
+  summary["more"] = reports.size() - shown;
+  return summary.dump();
+}
+
+// The notes, joined, cut at a note's end to stay under kMaxHeaderBytes.
+std::string notes_header(const std::vector<std::string>& notes) {
+  std::string text;
+  std::size_t shown = 0;
+  for (const auto& n : notes) {
+    const std::string next = text + (text.empty() ? "" : "; ") + header_safe(n);
+    if (next.size() + 40 > kMaxHeaderBytes) break;
+    text = next;
+    ++shown;
+  }
+  if (shown < notes.size()) text += (text.empty() ? "" : "; ") + std::to_string(notes.size() - shown) + " more in the report";
+  return text;
+}
+
+// ?report=1: the result and its report in one answer, multipart/mixed (RFC 2046): the mesh
+// first, then the job's result JSON (format, notes, reports: what GET /v1/jobs/{id} holds).
+constexpr const char* kBoundary = "mdn-result-3f1e9c7a";
+
+std::shared_ptr<const std::string> multipart_body(const JobSnapshot& s) {
+  const service::JobOutput& out = *s.output;
+  auto body = std::make_shared<std::string>();
+  *body += std::string("--") + kBoundary + "\r\nContent-Type: " + out.media_type +
+           "\r\nContent-Disposition: attachment; filename=\"" + service::output_file_name({}, out.format) + "\"\r\n\r\n";
+  *body += out.bytes;
+  *body += std::string("\r\n--") + kBoundary + "\r\nContent-Type: application/json\r\n\r\n";
+  *body += output_summary(s).dump();
+  *body += std::string("\r\n--") + kBoundary + "--\r\n";
+  return body;
+}
+
 }  // namespace
 
 json reports_json(const JobSnapshot& s) {
@@ -56,8 +111,9 @@ void write_result(Context& ctx, const JobSnapshot& s) {
   // cpp-httplib computes them (a suffix range counts from the end, an open one runs to it),
   // the last byte clamped to the result's (RFC 9110, 14.1.2).
   const Ranges& ranges = request_ranges();
+  const bool with_report = ctx.req.get_param_value("report") == "1";  // decision 72
   std::size_t offset = 0, length = out.bytes.size();
-  if (ranges.size() == 1) {
+  if (ranges.size() == 1 && !with_report) {
     auto [first, last] = ranges.front();
     const auto size = std::int64_t(out.bytes.size());
     const bool ok = (first >= 0 && first < size && (last < 0 || last >= first)) || (first < 0 && last > 0);
@@ -84,7 +140,8 @@ void write_result(Context& ctx, const JobSnapshot& s) {
   // (glb, Draco, binary PLY, STL) would not shrink and go as they are.
   const auto output = s.output;  // keeps the bytes alive while they are written
   std::shared_ptr<const std::string> body(output, &output->bytes);
-  if (res.status == 200 && is_text(out.format, *body) && body->size() >= kGzipMinBytes &&
+  if (with_report) body = multipart_body(s);
+  if (res.status == 200 && !with_report && is_text(out.format, *body) && body->size() >= kGzipMinBytes &&
       accepts_gzip(ctx.req.get_header_value("Accept-Encoding"))) {
     body = std::make_shared<const std::string>(gzip(*body, 1));
     res.set_header("Content-Encoding", "gzip");
@@ -94,24 +151,20 @@ void write_result(Context& ctx, const JobSnapshot& s) {
     offset = 0;
     length = body->size();  // gzipped or not
   }
-  res.set_content_provider(length, out.media_type,
+  const std::string media_type = with_report ? std::string("multipart/mixed; boundary=") + kBoundary : out.media_type;
+  res.set_content_provider(length, media_type,
                            [body, offset](std::size_t at, std::size_t n, DataSink& sink) {
                              return sink.write(body->data() + offset + at, n);
                            });
-  res.set_header("Content-Disposition", "attachment; filename=\"" + service::output_file_name({}, out.format) + "\"");
+  if (!with_report) res.set_header("Content-Disposition", "attachment; filename=\"" + service::output_file_name({}, out.format) + "\"");
   res.set_header("X-Denoise-Params", service::to_json(out.effective).dump());
   res.set_header("X-Denoise-Input-Bytes", std::to_string(s.input_bytes));
   res.set_header("X-Denoise-Output-Bytes", std::to_string(out.bytes.size()));
   res.set_header("X-Denoise-Vertices", std::to_string(out.vertices));
   res.set_header("X-Denoise-Faces", std::to_string(out.faces));
-  // The job's JSON always has the reports; the header only when it stays small.
-  if (std::string report = reports_json(s).dump(); report.size() <= 8192)
-    res.set_header("X-Denoise-Report", report);
-  if (!out.notes.empty()) {
-    std::string notes;
-    for (const auto& n : out.notes) notes += (notes.empty() ? "" : "; ") + n;
-    res.set_header("X-Denoise-Notes", header_safe(notes));
-  }
+  // A bounded summary; the full report: the job's resource, or ?report=1 (decision 72).
+  res.set_header("X-Denoise-Summary", report_summary(reports_json(s)));
+  if (!out.notes.empty()) res.set_header("X-Denoise-Notes", notes_header(out.notes));
   // Server-Timing (W3C): per-stage milliseconds, shown by browsers' developer tools.
   res.set_header("Server-Timing", server_timing(s));
 }
