@@ -24,14 +24,6 @@ std::string accepted_extensions() {
 
 }  // namespace
 
-io::Limits cli_limits() {
-  io::Limits limits;
-  limits.max_faces = 100'000'000;
-  limits.max_vertices = 100'000'000;
-  limits.max_decoded_bytes = std::int64_t{16} << 30;
-  return limits;
-}
-
 io::Format input_format(const std::string& path, const std::string& bytes) {
   if (auto format = io::format_from_extension(path)) return *format;
   if (auto format = io::sniff_format(bytes)) return *format;
@@ -48,10 +40,10 @@ std::optional<io::Format> output_format_by_name(const std::string& path) {
                    " names no format this tool writes (accepted: " + accepted_extensions() + ")");
 }
 
-LoadedMesh decode_mesh(const std::string& path, const std::string& bytes, io::Format format) {
+LoadedMesh decode_mesh(const std::string& path, const std::string& bytes, io::Format format, const io::Limits& limits) {
   return blame_file(path, [&] {
     LoadedMesh loaded;
-    loaded.document = io::decode(bytes, format, io::DecodeOptions{cli_limits(), resource_dir(path, format)});
+    loaded.document = io::decode(bytes, format, io::DecodeOptions{limits, resource_dir(path, format)});
     loaded.merged = merge_surfaces(loaded.document->surfaces());
     mdn::validate_mesh(loaded.merged);
     loaded.scene = scene_mesh(loaded.document->surfaces(), loaded.document->placements());
@@ -60,9 +52,9 @@ LoadedMesh decode_mesh(const std::string& path, const std::string& bytes, io::Fo
   });
 }
 
-LoadedMesh load_mesh(const std::string& path) {
-  const std::string bytes = read_file(path);
-  return decode_mesh(path, bytes, input_format(path, bytes));
+LoadedMesh load_mesh(const std::string& path, const InputLimits& limits) {
+  const std::string bytes = read_file(path, limits.max_input_bytes);
+  return decode_mesh(path, bytes, input_format(path, bytes), limits.decode);
 }
 
 json measure(const mdn::TriMesh& truth, const std::string& truth_path, const mdn::TriMesh& result,

@@ -15,13 +15,10 @@
 #include "core/io/document.h"
 #include "core/mesh.h"
 #include "cli/files.h"
+#include "cli/options.h"
 #include "service/reference.h"
 
 namespace mdn::cli {
-
-// The CLI runs on the user's own machine: the server's request limits would only get in the
-// way, but declared sizes are still checked so a corrupt header cannot exhaust memory.
-io::Limits cli_limits();
 
 // IN's format by its extension, else by its contents; throws FileError when neither tells.
 io::Format input_format(const std::string& path, const std::string& bytes);
@@ -55,8 +52,8 @@ struct LoadedMesh {
 // shared with the server's reference comparison (service/reference.h).
 using service::merge_surfaces;
 using service::scene_mesh;
-LoadedMesh decode_mesh(const std::string& path, const std::string& bytes, io::Format format);
-LoadedMesh load_mesh(const std::string& path);
+LoadedMesh decode_mesh(const std::string& path, const std::string& bytes, io::Format format, const io::Limits& limits);
+LoadedMesh load_mesh(const std::string& path, const InputLimits& limits);
 
 // MSAE and E_v of `result` against the ground truth (Sec. 7). Both need the same faces in the
 // same order; formats that renumber them (Draco) cannot be compared after the fact.

@@ -39,7 +39,9 @@ JobStore::Submitted MemoryJobStore::submit(service::JobInput input, const std::o
   }
   pool_.check_admission();  // draining, queue full: before the store's own limit, as always
   // An accepted job stays retrievable for its whole result lifetime: when every stored-job
-  // slot is taken, new jobs are refused rather than old ones evicted early.
+  // slot is taken, new jobs are refused rather than old ones evicted early; except that a
+  // result already downloaded, or a job cancelled, gives its slot up first (decision 62).
+  if (int(jobs_.size()) >= options_.max_stored) evict_done_locked();
   if (int(jobs_.size()) >= options_.max_stored) {
     Problem p = make_problem(ProblemType::StoreFull, "all " + std::to_string(options_.max_stored) +
                                  " stored-job slots hold jobs within their result lifetime; retry later");
@@ -159,6 +161,21 @@ void MemoryJobStore::drop_locked(const std::string& id) {
   asked_.erase(id);
   for (auto k = idempotency_.begin(); k != idempotency_.end();)
     k = k->second.job_id == id ? idempotency_.erase(k) : std::next(k);
+}
+
+void MemoryJobStore::evict_done_locked() {
+  const std::string* oldest = nullptr;
+  std::optional<Clock::time_point> oldest_at;
+  for (const auto& [id, job] : jobs_) {
+    const JobState state = job->state();
+    if (!((state == JobState::Succeeded && job->result_fetched()) || state == JobState::Cancelled)) continue;
+    const auto finished = job->finished_at();
+    if (finished && (!oldest_at || *finished < *oldest_at)) {
+      oldest = &id;
+      oldest_at = finished;
+    }
+  }
+  if (oldest) drop_locked(std::string(*oldest));
 }
 
 void MemoryJobStore::sweep_locked() {

@@ -54,6 +54,9 @@ class MemoryJobStore final : public JobStore {
   std::shared_ptr<Job> find_job(const std::string& id);
   JobSnapshot snapshot(const Job& job) const;
   void sweep_locked();  // mutex_ held: drops finished jobs past their result lifetime
+  // mutex_ held: drops the job finished longest ago among those whose result was downloaded or
+  // that were cancelled (decision 62), if any.
+  void evict_done_locked();
   void drop_locked(const std::string& id);  // mutex_ held: the job and its keys
   int store_retry_after_s_locked() const;  // mutex_ held: until a stored-job slot frees
   std::vector<std::shared_ptr<Job>> all();  // after a sweep

@@ -110,6 +110,16 @@ void BodyReader::check_stall(Context& ctx, std::chrono::steady_clock::time_point
   // The gate's stream says why a read gave up: the body's total deadline, or a gap longer than
   // the read timeout (or, outside the gate, a failure that long after the last byte).
   const BodyReadTimeout why = last_body_read_timeout();
+  if (why == BodyReadTimeout::BadFraming) {
+    close_after_response(ctx.res);  // what follows cannot be framed: never read it
+    throw HttpError(make_problem(ProblemType::BadBody,
+                                 "the request body's chunked coding is invalid (RFC 9112 7.1: a chunk size is 1 to 16 "
+                                 "hexadecimal digits, its line at most 4096 bytes, each chunk followed by CRLF)"));
+  }
+  if (why == BodyReadTimeout::TooSlow) {
+    close_after_response(ctx.res);
+    throw HttpError(make_problem(ProblemType::RequestTimeout, "the request body arrived slower than the server's minimum rate"));
+  }
   if (why == BodyReadTimeout::BodyDeadline) {
     close_after_response(ctx.res);  // the rest of the body may still come: never read it
     char seconds[32];
