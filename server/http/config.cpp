@@ -414,8 +414,9 @@ std::string help_text() {
   out << "  --help     this text\n  --version  print the version\n\n"
       << "API: GET /openapi.yaml describes every route; GET /v1/params lists the parameters.\n"
       << "SIGTERM/SIGINT: /readyz turns 503, new jobs get 503, accepted jobs finish within\n"
-      << "--drain-grace seconds and the process exits as soon as the last one ends (results not\n"
-      << "downloaded yet do not hold it; jobs still stuck 5 s after the grace are not waited for).\n\n"
+      << "--drain-grace seconds and the process exits as soon as the last one ends and the results\n"
+      << "that clients are still polling for are fetched (a result nobody asked about for 3 s does\n"
+      << "not hold it; jobs still stuck 5 s after the grace are not waited for).\n\n"
       << "Exit codes: 0 stopped after a clean drain, 1 the drain ran out of grace (or a fatal\n"
       << "error), 2 bad configuration, 3 cannot listen on --host:--port (e.g. the port is in use;\n"
       << "a second server is refused rather than sharing the port).\n";

@@ -4,7 +4,7 @@
 // `parameters` list. A field left empty is not sent (auto chooses it, or the strength's value or
 // the default applies); a value entered is sent and kept (pinned). Every row carries
 // data-field="name" (output fields "output.name"), so a test can compare the form with
-// /v1/params. Deprecated fields, and values the server always refuses, are not offered.
+// /v1/params. Deprecated fields are not offered.
 
 const el = (tag, props = {}, ...children) => {
   const node = Object.assign(document.createElement(tag), props);
@@ -25,11 +25,6 @@ export const STRENGTHS = {
   medium: { label: 'Medium', params: { mode: 'manual', alpha: 0.1, sigma_theta: 30, n_aniso: 2, sigma_gamma: 30, n_normal: 20, n_vertex: 10 } },
   strong: { label: 'Strong', params: { mode: 'manual', alpha: 0.2, sigma_theta: 45, n_aniso: 6, sigma_gamma: 45, n_normal: 60, n_vertex: 30 } },
 };
-
-// Values the schema lists that the server refuses whatever the input (422: the schema's own
-// description says so); offering them would only produce an error. None today: every output
-// setting the schema lists (core/io's one table, issue 51) is written, meshopt included.
-const NEVER_WORKS = {};
 
 // What the mode values mean, in a line each (the schema's description is written for the API).
 const MODE_LABELS = { auto: 'auto: chosen per surface', search: 'search: auto, then refined (slow)', manual: 'manual: the values given', none: 'none: convert only' };
@@ -79,9 +74,8 @@ export class ParamForm {
       kind = 'enum';
       control = el('select', { id });
       control.append(el('option', { value: '' }));  // not sent; its label is set by refreshPlaceholders
-      const never = NEVER_WORKS[path] ?? [];
       for (const v of prop.enum) {
-        if (v === prop.default || never.includes(v)) continue;  // the empty option stands for the default
+        if (v === prop.default) continue;  // the empty option stands for the default
         const text = v === null ? 'same as input' : path === 'mode' ? MODE_LABELS[v] ?? v : String(v);
         control.append(el('option', { value: JSON.stringify(v), textContent: text }));
       }

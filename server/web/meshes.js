@@ -1,11 +1,12 @@
 // Mesh files to triangles for display, mesh information and how far the result's vertices
 // moved. Every format the service reads is drawn: OFF, OBJ, PLY and STL are read in the page's
 // worker (mesh_worker.js), off the main thread; glb / gltf (GLTFLoader, Draco through
-// DRACOLoader, which has its own workers) and drc (DRACOLoader) here. A mesh is one indexed
+// DRACOLoader, which has its own workers, EXT_meshopt_compression through MeshoptDecoder) and drc (DRACOLoader) here. A mesh is one indexed
 // BufferGeometry in world coordinates.
 import * as THREE from './vendor/three/build/three.module.js';
 import { GLTFLoader } from './vendor/three/examples/jsm/loaders/GLTFLoader.js';
 import { DRACOLoader } from './vendor/three/examples/jsm/loaders/DRACOLoader.js';
+import { MeshoptDecoder } from './vendor/three/examples/jsm/libs/meshopt_decoder.module.js';
 
 const draco = new DRACOLoader().setDecoderPath('/web/vendor/three/examples/jsm/libs/draco/');
 
@@ -89,7 +90,7 @@ async function parseHere(blob, format) {
     const p = g.getAttribute('position');
     return { positions: Float32Array.from(p.array), indices: g.index ? Uint32Array.from(g.index.array) : Uint32Array.from({ length: p.count }, (_, i) => i) };
   }
-  const loader = new GLTFLoader().setDRACOLoader(draco);
+  const loader = new GLTFLoader().setDRACOLoader(draco).setMeshoptDecoder(MeshoptDecoder);
   const gltf = await new Promise((resolve, reject) => loader.parse(format === 'glb' ? bytes : new TextDecoder().decode(bytes), '', resolve, reject));
   return merge(gltf.scene);
 }

@@ -40,7 +40,8 @@ set(MDN_THREE_FILES
   examples/jsm/utils/BufferGeometryUtils.js
   examples/jsm/utils/SkeletonUtils.js
   examples/jsm/libs/draco/draco_decoder.wasm
-  examples/jsm/libs/draco/draco_wasm_wrapper.js)
+  examples/jsm/libs/draco/draco_wasm_wrapper.js
+  examples/jsm/libs/meshopt_decoder.module.js)
 
 set(mdn_vendor_dir ${CMAKE_CURRENT_BINARY_DIR}/web/vendor/three)
 set(mdn_vendor_inputs "")

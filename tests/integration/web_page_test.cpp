@@ -171,12 +171,14 @@ TEST(WebPage, DenoisesAnUploadedMeshAndShowsBeforeAndAfter) {
   // page to draw as inputs.
   json formats = json::array();
   for (const std::string format_params : {R"({"format":"glb"})", R"({"format":"gltf","draco":false})",
-                                          R"({"format":"drc"})", R"({"format":"obj"})", R"({"format":"ply"})",
+                                          R"({"format":"glb","compression":"meshopt"})", R"({"format":"drc"})", R"({"format":"obj"})", R"({"format":"ply"})",
                                           R"({"format":"stl"})"}) {
     const json p = {{"mode", "manual"}, {"n_normal", 0}, {"n_vertex", 0}, {"output", json::parse(format_params)}};
     auto r = c->Post("/v1/denoise", {{"X-Denoise-Params", p.dump()}}, mesh, "model/x-off");
     ASSERT_TRUE(r && r->status == 200) << format_params;
-    const std::string name = dir + "/noisy-cube." + json::parse(format_params).at("format").get<std::string>();
+    const json fp = json::parse(format_params);
+    const std::string name = dir + "/noisy-cube" + (fp.contains("compression") ? "-" + fp.at("compression").get<std::string>() : "") + "." +
+                             fp.at("format").get<std::string>();
     write_file(name, r->body);
     formats.push_back(name);
   }

@@ -203,5 +203,15 @@ TEST(WebPageReading, ResultsInViewInWordsAndKeptWhenTheServerGoesAway) {
   fs::remove_all(dir);
 }
 
+// Item 7 through the API: an empty file in a form is named empty (it was "not a off file (no
+// mesh format recognised)").
+TEST(WebPageReading, AnEmptyMeshFileInAFormIsSaidToBeEmpty) {
+  ServerProcess server({"--workers", "1"});
+  ASSERT_TRUE(server.started()) << server.log();
+  auto r = server.client()->Post("/v1/jobs", httplib::MultipartFormDataItems{{"mesh", "", "scan.off", "application/octet-stream"}});
+  const json problem = expect_problem(r, 400);
+  EXPECT_EQ(problem.value("detail", ""), "the form's 'mesh' file (scan.off) is empty: 0 bytes, no mesh in it") << problem.dump();
+}
+
 }  // namespace
 }  // namespace mdn::test

@@ -219,6 +219,9 @@ service::JobInput BodyReader::read_job_input(Context& ctx) {
     if (!form.count("mesh")) throw HttpError(make_problem(ProblemType::BadForm, "the form has no 'mesh' field"));
     if (form.count("params")) set_params(std::move(form["params"].bytes), "form field");
     FormFile& mesh = form["mesh"];
+    if (mesh.bytes.empty())  // said as it is, not as a file of no format (issue 50, item 7)
+      throw HttpError(make_problem(ProblemType::EmptyBody, "the form's 'mesh' file" + (mesh.filename.empty() ? std::string() : " (" + mesh.filename + ")") +
+                                                               " is empty: 0 bytes, no mesh in it"));
     input.format = resolve_format(mesh.content_type, mesh.bytes, mesh.filename);
     input.bytes = std::move(mesh.bytes);
   } else {
