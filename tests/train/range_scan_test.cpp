@@ -321,6 +321,16 @@ TEST(CorpusScanCases, AreRebuiltFromTheirNameAndShareTheScansMesh) {
     EXPECT_THROW(apply_noise(shape.mesh, noise, seed), std::invalid_argument);
   }
   EXPECT_THROW(make_noisy_case(shape, "scan_sl:0.3", 1), std::invalid_argument);
+  // The fused kinds are built from their names too, though no list holds them (decision 60).
+  for (const std::string noise : {"fused_sl:0.4:1.2", "fused_tof:0.3:1.2"}) {
+    ASSERT_TRUE(is_scan_noise(noise));
+    ASSERT_TRUE(std::find(names.begin(), names.end(), noise) == names.end());
+    const NoisyCase a = make_noisy_case(shape, noise, 3), b = make_noisy_case(shape, noise, 3);
+    ASSERT_EQ(a.noisy.rows(), a.clean.V.rows());
+    EXPECT_GT(a.clean.F.rows(), 1000);
+    EXPECT_EQ(a.clean.F, b.clean.F);
+    EXPECT_EQ(a.noisy, b.noisy);
+  }
   // A shape over 12,000 faces keeps every fifth of the other kinds but every depth-camera kind.
   const Shape large{"large", "organic", test::sphere(6)};
   ASSERT_GT(large.mesh.F.rows(), 12000);
