@@ -343,9 +343,10 @@ TEST(CorpusScanCases, AreRebuiltFromTheirNameAndShareTheScansMesh) {
 }  // namespace mdn::train
 
 // The turntable variant (fuse_scans): a sphere of 0.3 m fused from six views at 1.2 m. Its
-// faces point outwards, its clean vertices lie on the clean surface, the fused surface sits
-// within the sensor's noise of it (averaging several views, below one view's sigma), the
-// unseen bottom stays open while most of the sphere is covered, and it is seeded.
+// faces point outwards, its clean vertices (the fusion of the noise-free depths) lie within a
+// third of a voxel of the sphere, the fused surface sits within the sensor's noise of them
+// (averaging several views, below one view's sigma), the unseen bottom stays open while most
+// of the sphere is covered, and it is seeded.
 namespace mdn::train {
 namespace {
 
@@ -371,7 +372,9 @@ TEST(RangeScan, FusedTurntableScanOfASphere) {
     EXPECT_LT(area, 1.02 * kPi * 0.09);
     for (Eigen::Index v = 0; v < s.noisy.rows(); ++v) {
       // The clean vertex is on the polyhedron inscribed in the 0.15 m sphere (level 5: within 0.1%).
-      ASSERT_NEAR(s.clean.V.row(v).norm(), 0.15, 0.0003) << "vertex " << v;
+      // The clean vertex is the noise-free depths' fusion: within 2 mm (a third of a voxel) of
+      // the sphere.
+      ASSERT_NEAR(s.clean.V.row(v).norm(), 0.15, 0.002) << "vertex " << v;
       rms += (s.noisy.row(v) - s.clean.V.row(v)).squaredNorm();
     }
     rms = std::sqrt(rms / static_cast<double>(s.noisy.rows()));
