@@ -10,7 +10,8 @@
 #                      with noise added (0.3 mean edge lengths along the normal) and denoised by
 #                      the built meshdenoise with its default parameters, and the displacement
 #                      heat map (scripts/render_figures.mjs: three.js in headless Chromium)
-#   architecture.png   docs/architecture.dot, drawn by graphviz's dot
+#   architecture.png   docs/architecture.dot (regenerated from the folders by
+#                      scripts/architecture_dot.py), drawn by graphviz's dot
 # Each plot is stamped with the commit and this command.
 # Usage: bash scripts/make-figures.sh [BUILD_DIR]     (default build/release)
 # Needs: bash scripts/install-deps.sh build test figures, and a build with the benchmarks
@@ -54,5 +55,6 @@ done
 node "$root/scripts/render_figures.mjs" "$out/denoised.png" "$stamp" \
   "A CAD part: fandisk, noise 0.3 edge lengths" "$work/fandisk_noisy.off" "$work/fandisk_denoised.off" \
   "A scan: bunny00, noise 0.3 edge lengths" "$work/bunny00_noisy.off" "$work/bunny00_denoised.off"
+python3 "$root/scripts/architecture_dot.py" > "$root/docs/architecture.dot"  # from the folders as they are
 dot -Tpng -Gdpi=110 "$root/docs/architecture.dot" -o "$out/architecture.png"
 echo "make-figures.sh: wrote $(cd "$out" && ls *.png | tr '\n' ' ')" >&2

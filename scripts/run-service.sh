@@ -7,4 +7,4 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 bash "$root/scripts/install-deps.sh" build
 cmake --preset release -S "$root" -DMDN_BUILD_TESTS=OFF -DMDN_BUILD_BENCH=OFF >/dev/null
 cmake --build "$root/build/release" -j"$(nproc)" --target meshdenoise-server meshdenoise
-exec "$root/build/release/server/http/meshdenoise-server" "$@"
+exec "$root/build/release/server/meshdenoise-server" "$@"

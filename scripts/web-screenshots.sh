@@ -21,7 +21,7 @@ meshes="$(bash "$root/scripts/fetch-cgal-data.sh" "$root/third_party_data")"
 "$build/cli/meshdenoise" --add-noise '{"kind":"along_normal","sigma":0.3,"seed":1}' \
   "$meshes/bunny00.off" "$work/bunny-noisy.off"
 
-"$build/server/http/meshdenoise-server" --host 127.0.0.1 --port 0 --port-file "$work/port" --workers 1 \
+"$build/server/meshdenoise-server" --host 127.0.0.1 --port 0 --port-file "$work/port" --workers 1 \
   >"$work/server.log" 2>&1 &
 server_pid=$!
 for _ in $(seq 100); do [ -s "$work/port" ] && break; sleep 0.1; done

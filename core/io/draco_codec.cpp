@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
 
 #include "core/errors.h"
 #include "core/io/detail.h"
@@ -273,7 +274,12 @@ void check_draco_encodable(const draco::Mesh& mesh, const EncodeOptions& options
 }
 
 std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options, const std::optional<QuantizationBox>& box) {
-  check_encode_options(options);
+  // The request's ranges were checked where it was parsed (output_settings.h); this guards only
+  // against what Draco's quantiser cannot take at all.
+  for (const int bits : {options.normal_bits, options.texcoord_bits, options.color_bits, options.generic_bits})
+    if (bits < 0 || bits > 30) throw std::invalid_argument("draco_encode: quantisation bits outside [0, 30]");
+  if (options.position_bits < 1 || options.position_bits > 30 || options.compression_level < 0 || options.compression_level > 10)
+    throw std::invalid_argument("draco_encode: position_bits outside [1, 30] or compression_level outside [0, 10]");
   CancelPoll(options.cancel).check();  // the encoder itself runs to its end
   check_draco_encodable(mesh, options);
   // The tables of the largest setting in use (encode_check.h), against the same bound as decoding.
@@ -294,6 +300,13 @@ std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options, 
     if (bits > 0) encoder.SetAttributeQuantization(type, bits);
   // Draco's speed is the inverse of the compression level (0 = best compression).
   const int speed = 10 - options.compression_level;
+  // Speeds 0 and 1 (levels 10 and 9) predict positions with Draco's constrained
+  // multi-parallelogram scheme, which writes out of bounds (SIGSEGV, the whole process) on an
+  // explicit position grid narrower than about 1e-6 (a mesh collapsed to a point, or a tiny
+  // one; issue 49, item 0). Such a grid takes the plain parallelogram prediction instead; the
+  // other settings stay as asked (decision 77).
+  if (speed <= 1 && box && box->range < kMinConstrainedPredictionRange)
+    encoder.SetAttributePredictionScheme(draco::GeometryAttribute::POSITION, draco::MESH_PREDICTION_PARALLELOGRAM);
   std::string out = encode_with_speed(encoder, mesh, speed);
   // What is written must read back. Draco's speed 10 (sequential encoding) writes a payload
   // its own decoder refuses when a point is not used by any face (found by fuzz_off with

@@ -30,6 +30,11 @@ struct QuantizationBox {
 // range, so that the grid's margins stay finite).
 inline constexpr double kMaxDracoSpan = 8.5e37;
 
+// Below this edge of an explicit position grid, levels 9 and 10 predict positions with the
+// plain parallelogram scheme (decision 77): Draco 1.5's constrained multi-parallelogram crashes
+// on grids narrower than 3e-7 to 1e-6 (measured on 10 x 10 grids, every position_bits).
+inline constexpr float kMinConstrainedPredictionRange = 1e-5f;
+
 // Throws UnsupportedError (HTTP 422) for a mesh Draco's encoder cannot take with `options`: a
 // value of any attribute it quantises (POSITION always, the others when their bits are not 0)
 // that is not finite or lies outside the float grid Draco can build, or only degenerate

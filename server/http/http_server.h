@@ -1,5 +1,5 @@
 // The HTTP service: route table, handlers, CORS, auth, request ids, access logs and metrics,
-// over cpp-httplib and the parts main() builds (service_parts.h): the metrics, the WorkerPool
+// over cpp-httplib and the parts main() builds (ServiceParts, below): the metrics, the WorkerPool
 // (this process's workers; synchronous jobs) and a JobStore (asynchronous jobs: in memory, or
 // shared through Redis with --queue; job_store.h). The service never picks its store itself.
 //
@@ -13,9 +13,10 @@
 #include <vector>
 
 #include "server/http/config.h"
-#include "server/http/worker_pool.h"
+#include "server/http/jobs/job_store.h"
+#include "server/http/jobs/worker_pool.h"
 #include "server/http/log.h"
-#include "server/http/service_parts.h"
+#include "server/http/metrics.h"
 
 namespace mdn::http {
 
@@ -24,6 +25,17 @@ namespace mdn::http {
 class BindError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+};
+
+// What the HTTP service runs on: the metrics, this process's worker pool (its workers run every
+// job, synchronous or not) and the job store (where asynchronous jobs live). The composition
+// root builds them (server/service_parts.h: make_service_parts); a test may build its own.
+// Members are destroyed in reverse order: the store (which runs its jobs on the pool) first,
+// then the pool (whose finish hook counts into the metrics), then the metrics.
+struct ServiceParts {
+  std::unique_ptr<Metrics> metrics;
+  std::unique_ptr<WorkerPool> pool;
+  std::unique_ptr<JobStore> store;
 };
 
 // One route: method and path template as in proto/openapi.yaml ("/v1/jobs/{id}").

@@ -27,6 +27,7 @@
 #include "core/io/document.h"
 #include "core/noise.h"
 #include "server/http/http_server.h"
+#include "server/service_parts.h"
 #include "bench_stats.h"
 #include "service/job_runner.h"
 

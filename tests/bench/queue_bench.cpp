@@ -53,6 +53,7 @@
 #include "core/io/document.h"
 #include "core/noise.h"
 #include "server/http/http_server.h"
+#include "server/service_parts.h"
 #include "bench_stats.h"
 #include "support/ports.h"
 #include "support/shapes.h"

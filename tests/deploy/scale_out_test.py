@@ -239,7 +239,7 @@ def main():
             return answers
 
         def victim(k):
-            mesh, done = noisy_icosphere_off(2, 0.02, seed=100 + k), 0
+            mesh, done = noisy_icosphere_off(3, 0.02, seed=100 + k), 0
             while time.monotonic() < desync_end:
                 rid = "victim-%d-%d" % (k, done)
                 r = denoise_through(lb, mesh, rid)

@@ -57,7 +57,7 @@ inline std::string source_dir() {
   const char* dir = std::getenv("MDN_SOURCE_DIR");
   return dir ? dir : MDN_DEFAULT_SOURCE_DIR;
 }
-inline std::string server_binary() { return build_dir() + "/server/http/meshdenoise-server"; }
+inline std::string server_binary() { return build_dir() + "/server/meshdenoise-server"; }
 inline std::string cli_binary() { return build_dir() + "/cli/meshdenoise"; }
 
 inline std::string read_file(const fs::path& path) {

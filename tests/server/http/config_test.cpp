@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "core/io/document.h"
-#include "server/http/service_parts.h"
+#include "server/service_parts.h"
 
 namespace mdn::http {
 namespace {
