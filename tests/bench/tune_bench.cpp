@@ -31,8 +31,10 @@
 // "scans" (issue 48; decision 60): each validation mesh seen by the virtual depth camera of
 // tools/train/range_scan.h, once by structured light and once by time of flight, at the
 // corpus's three distances in turn by the mesh's index (tools/train's scan_noise_names()
-// without the second pose): the scan's noise-free mesh is the truth. The report adds how many
-// came back unfiltered.
+// without the second pose): the scan's noise-free mesh is the truth. "fused": the same
+// meshes fused from a turntable's six views (range_scan.h's fuse_scans), the two sensors in
+// turn; the fusion of the noise-free depths is the truth. The report adds how many came back
+// unfiltered.
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -135,10 +137,10 @@ Case make_case(const std::string& set, const std::string& name, const TriMesh& c
 }
 
 // Every case of the sets asked for, in a fixed order.
-std::vector<Case> build_scan_cases(const fs::path& data, const std::string& only);
+std::vector<Case> build_scan_cases(const fs::path& data, const std::string& only, bool fused);
 
 std::vector<Case> build_cases(const fs::path& data, const std::string& which, const std::string& only) {
-  if (which == "scans") return build_scan_cases(data, only);
+  if (which == "scans" || which == "fused") return build_scan_cases(data, only, which == "fused");
   const fs::path dir = bench::cgal_meshes(data);
   std::vector<fs::path> files;
   for (const auto& entry : fs::directory_iterator(dir))
@@ -189,9 +191,11 @@ std::vector<Case> build_cases(const fs::path& data, const std::string& which, co
 
 // The "scans" set: the validation set's meshes (the same selection, through build_cases), each
 // scanned by both sensor kinds; the distances in turn by the mesh's index.
-std::vector<Case> build_scan_cases(const fs::path& data, const std::string& only) {
-  std::vector<std::string> kinds[2];  // one view by structured light, by time of flight
-  for (const std::string& noise : train::scan_noise_names())
+// "fused": the same meshes, each fused from a turntable's views by one sensor, in turn.
+std::vector<Case> build_scan_cases(const fs::path& data, const std::string& only, bool fused) {
+  std::vector<std::vector<std::string>> kinds(fused ? 1 : 2);  // one view by structured light, by time of flight
+  if (fused) kinds[0] = train::fused_noise_names();
+  for (const std::string& noise : fused ? std::vector<std::string>{} : train::scan_noise_names())
     if (std::count(noise.begin(), noise.end(), ':') == 2) kinds[noise.rfind("scan_sl:", 0) == 0 ? 0 : 1].push_back(noise);
   // Each mesh once, in the validation set's order, with its clean mesh (an "irregular" case's
   // truth is a refinement of the same surface: used only where the mesh has no other case).
@@ -211,7 +215,7 @@ std::vector<Case> build_scan_cases(const fs::path& data, const std::string& only
     for (const auto& list : kinds) {
       const std::string& config = list[k % list.size()];
       const train::NoisyCase pair = train::scan_case(truth.at(mesh).first->truth, config, case_seed(mesh, config));
-      cases.push_back({"scans", mesh, config, pair.clean, TriMesh{pair.noisy, pair.clean.F}});
+      cases.push_back({fused ? "fused" : "scans", mesh, config, pair.clean, TriMesh{pair.noisy, pair.clean.F}});
     }
   }
   return cases;
@@ -425,7 +429,7 @@ int report(const fs::path& data, int jobs, const std::string& which, const fs::p
     std::vector<std::string> groups{c.set, "all"};
     if (c.config == kSpikes) groups = {c.set + ":" + kSpikes};
     if (c.config == kHighNoise || c.config == "impulse") groups.push_back(c.set + ":" + c.config);  // the issue's hard rows
-    if (c.set == "scans") groups.push_back(c.set + ":" + c.config.substr(0, c.config.find(':')));  // per sensor kind
+    if (c.set == "scans" || c.set == "fused") groups.push_back(c.set + ":" + c.config.substr(0, c.config.find(':')));  // per sensor kind
     for (const std::string& set : groups) {
       ratio_best[set].push_back(rb);
       ratio_paper[set].push_back(rp);
@@ -463,8 +467,8 @@ int report(const fs::path& data, int jobs, const std::string& which, const fs::p
   std::map<std::string, std::vector<std::string>> unfiltered;
   std::map<std::string, int> scanned;
   for (std::size_t i = 0; i < cases.size(); ++i) {
-    if (cases[i].set != "scans") continue;
-    const std::string kind = cases[i].config.substr(0, cases[i].config.find(':'));
+    if (cases[i].set != "scans" && cases[i].set != "fused") continue;
+    const std::string kind = cases[i].set + ":" + cases[i].config.substr(0, cases[i].config.find(':'));
     ++scanned[kind];
     // The output's error is the input's (to rounding: the unit box's round trip moves an
     // unfiltered vertex by an ulp or so).
@@ -472,7 +476,7 @@ int report(const fs::path& data, int jobs, const std::string& which, const fs::p
       unfiltered[kind].push_back(cases[i].mesh + "/" + cases[i].config);
   }
   for (const auto& [kind, n] : scanned) {
-    std::printf("\nscans:%s: %zu of %d returned unfiltered (MSAE(auto) = MSAE(input))", kind.c_str(), unfiltered[kind].size(), n);
+    std::printf("\n%s: %zu of %d returned unfiltered (MSAE(auto) = MSAE(input))", kind.c_str(), unfiltered[kind].size(), n);
     for (const std::string& name : unfiltered[kind]) std::printf(" %s", name.c_str());
   }
   if (!scanned.empty()) std::printf("\n");
@@ -764,8 +768,8 @@ int guided_command(const fs::path& data, int jobs, const std::string& which, con
 
 [[noreturn]] void usage(int code) {
   std::fprintf(code ? stderr : stdout,
-               "usage: tune_bench search [--data DIR] [--jobs N] [--set train|validation|all|scans] [--only MESH] OUT.tsv\n"
-               "       tune_bench report [--data DIR] [--jobs N] [--set train|validation|all|scans] [--search] [--only MESH]\n"
+               "usage: tune_bench search [--data DIR] [--jobs N] [--set train|validation|all|scans|fused] [--only MESH] OUT.tsv\n"
+               "       tune_bench report [--data DIR] [--jobs N] [--set train|validation|all|scans|fused] [--search] [--only MESH]\n"
                "                         [--grid-cache FILE] [ROWS.tsv]\n"
                "       tune_bench noise [--data DIR] [--jobs N] [--set train|validation|all]\n"
                "       tune_bench clean [--data DIR] [--jobs N] [--only MESH]\n"

@@ -219,6 +219,8 @@ std::vector<std::string> scan_noise_names() {
           "scan_tof:0.15:0.6", "scan_tof:0.3:1.2", "scan_tof:0.55:2.2", "scan_tof:0.3:1.2:1"};
 }
 
+std::vector<std::string> fused_noise_names() { return {"fused_sl:0.4:1.2", "fused_tof:0.3:1.2"}; }
+
 bool is_scan_noise(const std::string& noise) {
   for (const char* kind : {"scan_sl:", "scan_tof:", "fused_sl:", "fused_tof:"})
     if (noise.rfind(kind, 0) == 0) return true;

@@ -39,6 +39,8 @@ std::vector<std::string> noise_names();
 // (a turntable's six views fused, fuse_scans) are built by make_noisy_case and scan_case but
 // are not in the list (decision 60).
 std::vector<std::string> scan_noise_names();
+// The fused turntable kinds tune_bench's "fused" set measures (one per sensor).
+std::vector<std::string> fused_noise_names();
 bool is_scan_noise(const std::string& noise);
 // The configurations a shape gets: all of them, or every fifth of the others and every
 // depth-camera kind for shapes over 12,000 faces (a scan resamples the shape, so its cost does

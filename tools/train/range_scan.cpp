@@ -578,6 +578,8 @@ RangeScan fuse_scans(const TriMesh& shape, const RangeSensor& sensor, const Scan
   std::vector<double> sdf(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz),
                           0);
   std::vector<double> weight(sdf.size(), 0);
+  // The same fusion of the noise-free depths of the same pixels: the ground truth (decision 58).
+  std::vector<double> clean_sdf(sdf.size(), 0), clean_weight(sdf.size(), 0);
 
   // The turntable: the object turns about the camera's vertical (y) axis in equal steps from a
   // seeded start, seen from `elevation_deg` above; each view a capture with its own draws.
@@ -600,11 +602,19 @@ RangeScan fuse_scans(const TriMesh& shape, const RangeSensor& sensor, const Scan
           const long c = std::lround(im.focal * q.x() / q.z() + im.cx),
                      r = std::lround(im.focal * q.y() / q.z() + im.cy);
           if (c < 0 || r < 0 || c >= im.cols || r >= im.rows) continue;
-          const double z = im.depth[static_cast<std::size_t>(r * im.cols + c)];
-          if (std::isnan(z) || z - q.z() < -trunc) continue;
+          const std::size_t pixel = static_cast<std::size_t>(r * im.cols + c);
+          const double z = im.depth[pixel], zc = im.clean_depth[pixel];
+          if (std::isnan(z)) continue;
           const std::size_t v = at(i, j, k);
-          sdf[v] = (sdf[v] * weight[v] + std::min(1.0, (z - q.z()) / trunc)) / (weight[v] + 1);
-          weight[v] += 1;
+          if (z - q.z() >= -trunc) {
+            sdf[v] = (sdf[v] * weight[v] + std::min(1.0, (z - q.z()) / trunc)) / (weight[v] + 1);
+            weight[v] += 1;
+          }
+          if (zc - q.z() >= -trunc) {
+            clean_sdf[v] =
+                (clean_sdf[v] * clean_weight[v] + std::min(1.0, (zc - q.z()) / trunc)) / (clean_weight[v] + 1);
+            clean_weight[v] += 1;
+          }
         }
   }
 
@@ -618,32 +628,41 @@ RangeScan fuse_scans(const TriMesh& shape, const RangeSensor& sensor, const Scan
   };
   std::vector<std::int32_t> cell_vertex(
       static_cast<std::size_t>(nx - 1) * static_cast<std::size_t>(ny - 1) * static_cast<std::size_t>(nz - 1), -1);
+  // The cell's vertex in a volume: the mean of its edges' zero crossings, if its eight
+  // corners were seen and change sign.
+  const auto cell_point = [&](const std::vector<double>& f, const std::vector<double>& w, int i, int j,
+                              int k) -> std::optional<Vec3> {
+    bool inside = false, outside = false;
+    for (int c = 0; c < 8; ++c) {
+      const std::size_t v = at(i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2));
+      if (w[v] <= 0) return std::nullopt;
+      (f[v] < 0 ? inside : outside) = true;
+    }
+    if (!inside || !outside) return std::nullopt;
+    Vec3 sum = Vec3::Zero();
+    int crossings = 0;
+    for (int a = 0; a < 8; ++a)
+      for (const int b : {a | 1, a | 2, a | 4}) {  // the cell's 12 edges, each once
+        if (b == a) continue;
+        const int ia = i + (a & 1), ja = j + ((a >> 1) & 1), ka = k + (a >> 2);
+        const int ib = i + (b & 1), jb = j + ((b >> 1) & 1), kb = k + (b >> 2);
+        const double sa = f[at(ia, ja, ka)], sb = f[at(ib, jb, kb)];
+        if ((sa < 0) == (sb < 0)) continue;
+        sum += centre(ia, ja, ka) + sa / (sa - sb) * (centre(ib, jb, kb) - centre(ia, ja, ka));
+        ++crossings;
+      }
+    return sum / crossings;
+  };
   std::vector<Vec3> positions;
+  std::vector<std::array<int, 3>> cell_of;  // each vertex's cell
   for (int k = 0; k + 1 < nz; ++k)
     for (int j = 0; j + 1 < ny; ++j)
-      for (int i = 0; i + 1 < nx; ++i) {
-        bool seen = true, inside = false, outside = false;
-        for (int c = 0; c < 8 && seen; ++c) {
-          const std::size_t v = at(i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2));
-          seen = weight[v] > 0;
-          (sdf[v] < 0 ? inside : outside) = true;
+      for (int i = 0; i + 1 < nx; ++i)
+        if (const auto p = cell_point(sdf, weight, i, j, k)) {
+          cell_vertex[cell(i, j, k)] = static_cast<std::int32_t>(positions.size());
+          positions.push_back(*p);
+          cell_of.push_back({i, j, k});
         }
-        if (!seen || !inside || !outside) continue;
-        Vec3 sum = Vec3::Zero();
-        int crossings = 0;
-        for (int a = 0; a < 8; ++a)
-          for (const int b : {a | 1, a | 2, a | 4}) {  // the cell's 12 edges, each once
-            if (b == a) continue;
-            const int ia = i + (a & 1), ja = j + ((a >> 1) & 1), ka = k + (a >> 2);
-            const int ib = i + (b & 1), jb = j + ((b >> 1) & 1), kb = k + (b >> 2);
-            const double sa = sdf[at(ia, ja, ka)], sb = sdf[at(ib, jb, kb)];
-            if ((sa < 0) == (sb < 0)) continue;
-            sum += centre(ia, ja, ka) + sa / (sa - sb) * (centre(ib, jb, kb) - centre(ia, ja, ka));
-            ++crossings;
-          }
-        cell_vertex[cell(i, j, k)] = static_cast<std::int32_t>(positions.size());
-        positions.push_back(sum / crossings);
-      }
   std::vector<std::array<int, 3>> tris;
   const int n[3] = {nx, ny, nz};
   for (int k = 0; k < nz; ++k)
@@ -693,17 +712,28 @@ RangeScan fuse_scans(const TriMesh& shape, const RangeSensor& sensor, const Scan
       index[v] = count++;
     else
       index[v] = -1;
-  // Decision 58: the fused surface has no pixel to follow, so a vertex's ground truth is the
-  // nearest point of the clean surface.
+  // Decision 58: a fused vertex has no pixel to follow; its ground truth is the same cell's
+  // vertex in the fusion of the noise-free depths, else the nearest such vertex among the 26
+  // cells around, else the nearest point of the clean surface.
   const Bvh bvh(object);
   RangeScan out;
   out.noisy.resize(count, 3);
   out.clean.V.resize(count, 3);
-  for (std::size_t v = 0; v < positions.size(); ++v)
-    if (index[v] >= 0) {
-      out.noisy.row(index[v]) = positions[v].transpose();
-      out.clean.V.row(index[v]) = bvh.closest_point(positions[v]).transpose();
-    }
+  for (std::size_t v = 0; v < positions.size(); ++v) {
+    if (index[v] < 0) continue;
+    const auto [ci, cj, ck] = cell_of[v];
+    std::optional<Vec3> truth = cell_point(clean_sdf, clean_weight, ci, cj, ck);
+    for (int dk = -1; dk <= 1 && !cell_point(clean_sdf, clean_weight, ci, cj, ck); ++dk)
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int di = -1; di <= 1; ++di) {
+          const int i = ci + di, j = cj + dj, k = ck + dk;
+          if (i < 0 || j < 0 || k < 0 || i + 1 >= nx || j + 1 >= ny || k + 1 >= nz) continue;
+          const auto p = cell_point(clean_sdf, clean_weight, i, j, k);
+          if (p && (!truth || (*p - positions[v]).squaredNorm() < (*truth - positions[v]).squaredNorm())) truth = p;
+        }
+    out.noisy.row(index[v]) = positions[v].transpose();
+    out.clean.V.row(index[v]) = (truth ? *truth : bvh.closest_point(positions[v])).transpose();
+  }
   out.clean.F.resize(static_cast<Eigen::Index>(kept.size()), 3);
   for (std::size_t f = 0; f < kept.size(); ++f)
     for (int c = 0; c < 3; ++c)
