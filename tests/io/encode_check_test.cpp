@@ -7,7 +7,6 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
-#include <cstdio>
 #include <limits>
 #include <string>
 #include <vector>
@@ -15,6 +14,7 @@
 #include "core/io/document.h"
 #include "gltf_fixtures.h"
 #include "io_test_support.h"
+#include "support/shapes.h"
 
 namespace mdn::io {
 namespace {
@@ -96,14 +96,7 @@ TEST(EncodeCheck, DracoAtEveryLevelWritesCollapsedAndTinyMeshes) {
   for (const Shape& shape : kShapes) {
     TriMesh g = test_io::grid(10);
     g.V = (g.V.array() * shape.scale + shape.offset).matrix();
-    std::string off = "OFF\n" + std::to_string(g.V.rows()) + " " + std::to_string(g.F.rows()) + " 0\n";
-    char line[128];
-    for (Eigen::Index i = 0; i < g.V.rows(); ++i) {
-      std::snprintf(line, sizeof line, "%.17g %.17g %.17g\n", g.V(i, 0), g.V(i, 1), g.V(i, 2));
-      off += line;
-    }
-    for (Eigen::Index f = 0; f < g.F.rows(); ++f)
-      off += "3 " + std::to_string(g.F(f, 0)) + " " + std::to_string(g.F(f, 1)) + " " + std::to_string(g.F(f, 2)) + "\n";
+    const std::string off = test::off_text(g);
     auto doc = decode(off, Format::Off);
     for (const Format out : {Format::Drc, Format::Glb, Format::Gltf})
       for (int level = 0; level <= 10; ++level) {
