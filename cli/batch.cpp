@@ -127,7 +127,8 @@ int run_batch(const CliOptions& options) {
       std::string line;
       try {
         // The one denoise path, as a single run's (cli/denoise.h).
-        const DenoisedFile file = denoise_file(read_input(inputs[i]), outputs[i], params, threads_per_job, cancel);
+        const DenoisedFile file = denoise_file(read_input(inputs[i], options.limits), outputs[i], params,
+                                               threads_per_job, options.limits.decode, cancel);
         reports[i] = file.summary;
         codes[i] = kExitOk;
         if (options.progress) {

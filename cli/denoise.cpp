@@ -9,18 +9,20 @@
 
 namespace mdn::cli {
 
-InputFile read_input(const std::string& path) {
-  InputFile in{.path = path, .bytes = read_file(path)};
+InputFile read_input(const std::string& path, const InputLimits& limits) {
+  InputFile in{.path = path, .bytes = read_file(path, limits.max_input_bytes)};
   in.format = input_format(path, in.bytes);
   in.data_beside = in.format == io::Format::Gltf && service::has_external_uris(in.bytes);
   return in;
 }
 
-GroundTruth load_truth(const std::string& path) { return {load_mesh(path).scene, path}; }
+GroundTruth load_truth(const std::string& path, const InputLimits& limits) {
+  return {load_mesh(path, limits).scene, path};
+}
 
 DenoisedFile denoise_file(InputFile in, const std::string& out_path, const service::JobParams& params, int threads,
-                          CliProgress& progress, const GroundTruth* truth) {
-  service::JobOutput output = denoise_input(in.path, std::move(in.bytes), in.format, params, threads, progress);
+                          const io::Limits& limits, CliProgress& progress, const GroundTruth* truth) {
+  service::JobOutput output = denoise_input(in.path, std::move(in.bytes), in.format, params, threads, limits, progress);
   DenoisedFile file;
   file.summary = service::output_to_json(output);  // before the bytes move out
   file.faces = output.faces;

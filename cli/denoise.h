@@ -23,14 +23,14 @@ struct InputFile {
   io::Format format = io::Format::Off;
   bool data_beside = false;  // a .gltf whose buffers or images are files beside it
 };
-InputFile read_input(const std::string& path);
+InputFile read_input(const std::string& path, const InputLimits& limits);
 
 // A ground truth for --metrics: the mesh as its scene shows it, and where it came from.
 struct GroundTruth {
   mdn::TriMesh scene;
   std::string path;
 };
-GroundTruth load_truth(const std::string& path);
+GroundTruth load_truth(const std::string& path, const InputLimits& limits);
 
 // What denoising one file gave: the --report summary (input and output paths included), the
 // metrics against the ground truth when one was given, and the faces (the batch's line).
@@ -43,8 +43,8 @@ struct DenoisedFile {
 // Runs IN through the shared job runner, measures the computed surfaces against `truth` (if
 // any; before writing, so a failed comparison leaves no OUT) and writes OUT with the one output
 // writer. A problem with the input is a FileError naming it. The input's bytes go to the job,
-// which frees them once decoded.
+// which frees them once decoded under `limits`.
 DenoisedFile denoise_file(InputFile in, const std::string& out_path, const service::JobParams& params, int threads,
-                          CliProgress& progress, const GroundTruth* truth = nullptr);
+                          const io::Limits& limits, CliProgress& progress, const GroundTruth* truth = nullptr);
 
 }  // namespace mdn::cli

@@ -17,13 +17,23 @@
 namespace mdn::cli {
 namespace {
 
+std::string too_large(const std::string& what, std::int64_t max_bytes) {
+  return "cannot read " + what + ": it holds more than " + std::to_string(max_bytes) +
+         " bytes (the limit of --max-input)";
+}
+
 // Reads fd to its end straight into the string (a regular file's size is known up front, so it
-// is one read of the whole file); `what` names the source in errors.
-std::string read_all(int fd, const std::string& what, std::size_t size_hint) {
-  std::string bytes(std::max<std::size_t>(size_hint + 1, 1 << 16), '\0');
+// is one read of the whole file), never holding more than max_bytes + 1 bytes: one byte past
+// the limit is enough to refuse the input. `what` names the source in errors.
+std::string read_all(int fd, const std::string& what, std::size_t size_hint, std::int64_t max_bytes) {
+  const auto cap = static_cast<std::size_t>(max_bytes) + 1;
+  std::string bytes(std::min(std::max<std::size_t>(size_hint + 1, 1 << 16), cap), '\0');
   std::size_t length = 0;
   for (;;) {
-    if (length == bytes.size()) bytes.resize(bytes.size() * 2);
+    if (length == bytes.size()) {
+      if (length >= cap) throw FileError(too_large(what, max_bytes));
+      bytes.resize(std::min(bytes.size() * 2, cap));
+    }
     const ssize_t n = ::read(fd, bytes.data() + length, bytes.size() - length);
     if (n == 0) break;
     if (n < 0) {
@@ -32,6 +42,7 @@ std::string read_all(int fd, const std::string& what, std::size_t size_hint) {
     }
     length += static_cast<std::size_t>(n);
   }
+  if (length > static_cast<std::size_t>(max_bytes)) throw FileError(too_large(what, max_bytes));
   bytes.resize(length);
   return bytes;
 }
@@ -46,8 +57,8 @@ void write_bytes(const std::string& path, const std::string& bytes, const std::s
 
 }  // namespace
 
-std::string read_file(const std::string& path) {
-  if (path == kStdio) return read_all(STDIN_FILENO, "standard input", 0);
+std::string read_file(const std::string& path, std::int64_t max_bytes) {
+  if (path == kStdio) return read_all(STDIN_FILENO, "standard input", 0, max_bytes);
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw FileError("cannot read " + path + ": " + std::strerror(errno));
   struct stat info {};
@@ -56,8 +67,12 @@ std::string read_file(const std::string& path) {
     throw FileError("cannot read " + path + ": it is a directory");
   }
   const std::size_t size_hint = S_ISREG(info.st_mode) ? static_cast<std::size_t>(info.st_size) : 0;
+  if (S_ISREG(info.st_mode) && info.st_size > max_bytes) {
+    ::close(fd);
+    throw FileError(too_large(path, max_bytes));
+  }
   try {
-    std::string bytes = read_all(fd, path, size_hint);
+    std::string bytes = read_all(fd, path, size_hint, max_bytes);
     ::close(fd);
     return bytes;
   } catch (...) {
@@ -75,16 +90,22 @@ void write_file(const std::string& path, const std::string& bytes) {
     return;
   }
   std::error_code ec;
-  const fs::file_status status = fs::symlink_status(path, ec);
-  if (fs::exists(status) && !fs::is_regular_file(status)) {
-    if (fs::is_directory(status)) throw FileError("cannot write " + path + ": it is a directory");
-    write_bytes(path, bytes, path);
+  const fs::file_status link = fs::symlink_status(path, ec);
+  const fs::file_status status = fs::status(path, ec);  // what a link leads to
+  if (fs::is_directory(status)) throw FileError("cannot write " + path + ": it is a directory");
+  if (fs::exists(link) && !fs::is_regular_file(status)) {
+    write_bytes(path, bytes, path);  // a device, a pipe, a link that leads nowhere yet
     return;
   }
-  const std::string partial = path + ".partial-" + std::to_string(::getpid());
+  // Decision 61: a link is replaced at its final target, never truncated through.
+  ec.clear();
+  const fs::path target = fs::is_symlink(link) ? fs::canonical(path, ec) : fs::path(path);
+  if (ec) throw FileError("cannot write " + path + ": " + ec.message());
+  const std::string partial = target.string() + ".partial-" + std::to_string(::getpid());
   try {
     write_bytes(partial, bytes, path);
-    fs::rename(partial, path);
+    if (fs::exists(status)) fs::permissions(partial, status.permissions(), fs::perm_options::replace);
+    fs::rename(partial, target);
   } catch (const fs::filesystem_error& e) {
     fs::remove(partial, ec);
     throw FileError("cannot write " + path + ": " + e.code().message());
@@ -94,11 +115,11 @@ void write_file(const std::string& path, const std::string& bytes) {
   }
 }
 
-std::string json_argument(const std::string& option, const std::string& value) {
+std::string json_argument(const std::string& option, const std::string& value, std::int64_t max_bytes) {
   const auto first = value.find_first_not_of(" \t\r\n");
   if (first != std::string::npos && value[first] == '{') return value;
   try {
-    return read_file(value);
+    return read_file(value, max_bytes);
   } catch (const FileError& e) {
     throw UsageError(option + ": not inline JSON, and " + e.what());
   }

@@ -3,6 +3,7 @@
 // beside itself.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -22,14 +23,20 @@ class FileError : public std::runtime_error {
 // where OUT is written, as Unix filters do; a file called "-" is "./-".
 constexpr std::string_view kStdio = "-";
 
-std::string read_file(const std::string& path);
-// Writes OUT through a temporary file in the same folder and a rename, so a failure (disk
-// full, Ctrl-C) never leaves a truncated OUT behind or clobbers an existing one. Special files
-// (/dev/stdout, pipes) and symbolic links are written in place.
+// Reads a whole file, or standard input, of at most `max_bytes` (decision 61): a regular file
+// larger than that is refused before it is read, anything else (a FIFO, /dev/zero, a pipe) as
+// soon as it sends one byte more. Throws FileError naming the limit (--max-input).
+std::string read_file(const std::string& path, std::int64_t max_bytes);
+// Writes OUT through a temporary file and a rename, so a failure (disk full, Ctrl-C) never
+// leaves a truncated OUT behind or clobbers an existing one. A symbolic link to a regular file
+// is followed: the temporary file goes beside the link's final target and is renamed over it,
+// so the link stays a link and its target is replaced whole (decision 61). Special files
+// (/dev/stdout, pipes) are written in place, and so is a link that leads nowhere yet.
 void write_file(const std::string& path, const std::string& bytes);
 
-// --params / --add-noise take inline JSON (anything starting with '{' after blanks) or a file.
-std::string json_argument(const std::string& option, const std::string& value);
+// --params / --add-noise take inline JSON (anything starting with '{' after blanks) or a file
+// (read up to max_bytes).
+std::string json_argument(const std::string& option, const std::string& value, std::int64_t max_bytes);
 
 // A .gltf read from a file may reference buffers and images beside it (relative URIs inside
 // its folder); from standard input, or in any other format, nothing outside the bytes is read.

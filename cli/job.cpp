@@ -96,7 +96,7 @@ service::JobParams job_params(const CliOptions& options, json& fields) {
   service::JobParams params;
   fields = json::object();
   if (options.params) {
-    const std::string text = json_argument("--params", *options.params);
+    const std::string text = json_argument("--params", *options.params, options.limits.max_input_bytes);
     params = service::job_params_from_text(text);
     fields = json::parse(text);  // valid: job_params_from_text accepted it
   }
@@ -111,7 +111,8 @@ service::JobParams job_params(const CliOptions& options, json& fields) {
 }
 
 service::JobOutput denoise_input(const std::string& in_path, std::string in_bytes, io::Format in_format,
-                                 const service::JobParams& params, int threads, CliProgress& progress) {
+                                 const service::JobParams& params, int threads, const io::Limits& limits,
+                                 CliProgress& progress) {
   service::JobInput job{.bytes = std::move(in_bytes),
                         .format = in_format,
                         .params = params,
@@ -119,7 +120,7 @@ service::JobOutput denoise_input(const std::string& in_path, std::string in_byte
                         .resource_dir = resource_dir(in_path, in_format)};
   try {
     service::JobOutput output =
-        blame_file(in_path, [&] { return service::run_job(std::move(job), cli_limits(), &progress); });
+        blame_file(in_path, [&] { return service::run_job(std::move(job), limits, &progress); });
     progress.clear();
     return output;
   } catch (...) {

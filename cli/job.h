@@ -63,7 +63,8 @@ int default_threads(const CliOptions& options);
 // Denoises one input with the shared job runner; a problem with the input is blamed on its file.
 // The progress bar (if any) is cleared whatever happens.
 service::JobOutput denoise_input(const std::string& in_path, std::string in_bytes, io::Format in_format,
-                                 const service::JobParams& params, int threads, CliProgress& progress);
+                                 const service::JobParams& params, int threads, const io::Limits& limits,
+                                 CliProgress& progress);
 // Where a --report summary came from and went.
 void add_paths(nlohmann::json& summary, const std::string& in_path, io::Format in_format, const std::string& out_path);
 

@@ -68,11 +68,13 @@ int run_tune(const CliOptions& options) {
   if (options.add_noise || options.metrics || options.in_place)
     throw UsageError("--tune cannot be combined with --add-noise, --metrics or --in-place (it writes no mesh)");
   service::JobParams start;
-  if (options.params) start = service::job_params_from_text(json_argument("--params", *options.params));
+  if (options.params)
+    start = service::job_params_from_text(json_argument("--params", *options.params, options.limits.max_input_bytes));
   const int threads = default_threads(options);
-  const InputFile in = read_input(options.positional[0]);
-  const mdn::TriMesh truth = load_mesh(*options.tune).merged;  // the search runs in the surfaces' own frame
-  const LoadedMesh noisy = decode_mesh(in.path, in.bytes, in.format);
+  const InputFile in = read_input(options.positional[0], options.limits);
+  const mdn::TriMesh truth =
+      load_mesh(*options.tune, options.limits).merged;  // the search runs in the surfaces' own frame
+  const LoadedMesh noisy = decode_mesh(in.path, in.bytes, in.format, options.limits.decode);
   if (truth.num_vertices() != noisy.merged.num_vertices() || truth.F != noisy.merged.F) {
     throw FileError(in.path + " and the ground truth " + *options.tune +
                     " do not have the same vertices and faces in the same order (the search compares face by face)");
@@ -102,9 +104,9 @@ int run_tune(const CliOptions& options) {
 int run_measure(const CliOptions& options) {
   if (options.params || options.add_noise) throw UsageError("--params and --add-noise need an OUT file");
   const int threads = default_threads(options);
-  const InputFile in = read_input(single_files(options)[0]);
-  const GroundTruth truth = load_truth(*options.metrics);
-  const LoadedMesh loaded = decode_mesh(in.path, in.bytes, in.format);
+  const InputFile in = read_input(single_files(options)[0], options.limits);
+  const GroundTruth truth = load_truth(*options.metrics, options.limits);
+  const LoadedMesh loaded = decode_mesh(in.path, in.bytes, in.format, options.limits.decode);
   std::cout << measure(truth.scene, truth.path, loaded.scene, in.path, threads).dump(2) << "\n";
   return kExitOk;
 }
@@ -152,7 +154,7 @@ void check_output(const CliOptions& options, SingleRun& run) {
 
 std::optional<GroundTruth> truth_of(const CliOptions& options) {
   if (!options.metrics) return std::nullopt;
-  return load_truth(*options.metrics);  // read before any long work, so a bad GT fails fast
+  return load_truth(*options.metrics, options.limits);  // read before any long work, so a bad GT fails fast
 }
 
 // --report prints the summary (the metrics inside); otherwise the metrics alone, if any.
@@ -168,13 +170,13 @@ void print_result(const CliOptions& options, json summary, const std::optional<j
 // meshdenoise [options] IN OUT: the one denoise path (denoise_file), as each file of a batch.
 int run_denoise(const CliOptions& options) {
   SingleRun run = single_run(options);
-  InputFile in = read_input(run.in_path);
+  InputFile in = read_input(run.in_path, options.limits);
   const std::optional<GroundTruth> truth = truth_of(options);
   check_output(options, run);
   install_sigint_handler();
   CliProgress progress(options.progress && ::isatty(STDERR_FILENO));
-  const DenoisedFile file =
-      denoise_file(std::move(in), run.out_path, run.params, run.threads, progress, truth ? &*truth : nullptr);
+  const DenoisedFile file = denoise_file(std::move(in), run.out_path, run.params, run.threads, options.limits.decode,
+                                         progress, truth ? &*truth : nullptr);
   print_result(options, file.summary, file.metrics);
   return kExitOk;
 }
@@ -187,11 +189,12 @@ int run_add_noise(const CliOptions& options) {
   for (const auto& [key, value] : run.fields.items()) {
     if (key != "output") throw UsageError("with --add-noise, --params may only hold \"output\", not \"" + key + "\"");
   }
-  const mdn::NoiseSpec noise = service::noise_spec_from_text(json_argument("--add-noise", *options.add_noise));
-  const InputFile in = read_input(run.in_path);
+  const mdn::NoiseSpec noise =
+      service::noise_spec_from_text(json_argument("--add-noise", *options.add_noise, options.limits.max_input_bytes));
+  const InputFile in = read_input(run.in_path, options.limits);
   const std::optional<GroundTruth> truth = truth_of(options);
   check_output(options, run);
-  LoadedMesh loaded = decode_mesh(in.path, in.bytes, in.format);
+  LoadedMesh loaded = decode_mesh(in.path, in.bytes, in.format, options.limits.decode);
   std::uint64_t index = 0;
   for (mdn::TriMesh& surface : loaded.document->surfaces()) {
     mdn::NoiseSpec spec = noise;  // seed + index: identical meshes get different noise

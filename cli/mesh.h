@@ -15,12 +15,10 @@
 #include "core/io/document.h"
 #include "core/mesh.h"
 #include "cli/files.h"
+#include "cli/options.h"
+#include "service/reference.h"
 
 namespace mdn::cli {
-
-// The CLI runs on the user's own machine: the server's request limits would only get in the
-// way, but declared sizes are still checked so a corrupt header cannot exhaust memory.
-io::Limits cli_limits();
 
 // IN's format by its extension, else by its contents; throws FileError when neither tells.
 io::Format input_format(const std::string& path, const std::string& bytes);
@@ -50,17 +48,12 @@ struct LoadedMesh {
   mdn::TriMesh scene;   // the same as the scene shows it (scene_mesh), for the metrics
 };
 
-// All surfaces of a document as one mesh (indices offset), so MSAE and E_v cover a whole
-// multi-mesh glTF the same way they cover a single OFF.
-mdn::TriMesh merge_surfaces(const std::vector<mdn::TriMesh>& surfaces);
-// All surfaces as the scene shows them: each once per placement (a glTF node that instances
-// it, its world matrix applied), or once as it is when nothing places it. --metrics measures
-// both meshes in this frame, so a glTF with node transforms compares with the same mesh
-// exported in world coordinates, and two glTFs compare as they render.
-mdn::TriMesh scene_mesh(const std::vector<mdn::TriMesh>& surfaces,
-                        const std::vector<std::vector<Eigen::Matrix4d>>& placements);
-LoadedMesh decode_mesh(const std::string& path, const std::string& bytes, io::Format format);
-LoadedMesh load_mesh(const std::string& path);
+// A whole document as one mesh, and as its scene shows it (--metrics measures in that frame):
+// shared with the server's reference comparison (service/reference.h).
+using service::merge_surfaces;
+using service::scene_mesh;
+LoadedMesh decode_mesh(const std::string& path, const std::string& bytes, io::Format format, const io::Limits& limits);
+LoadedMesh load_mesh(const std::string& path, const InputLimits& limits);
 
 // MSAE and E_v of `result` against the ground truth (Sec. 7). Both need the same faces in the
 // same order; formats that renumber them (Draco) cannot be compared after the fact.

@@ -1,10 +1,12 @@
 #include "cli/options.h"
 
 #include <algorithm>
+#include <cctype>
 #include <iterator>
 #include <sstream>
 #include <string_view>
 
+#include "core/io/output_settings.h"
 #include "core/params.h"
 #include "service/params_json.h"
 
@@ -80,6 +82,23 @@ const OptionSpec kOptions[] = {
      "{\"files\": [one summary, or {\"input\", \"output\", \"error\"}, per IN, in\n"
      "order], \"succeeded\": N, \"failed\": N}.",
      [](CliOptions& o, const std::string&) { o.report = true; }},
+    {"--max-input", "", "BYTES",
+     "read at most BYTES of any input (a file, a FIFO, standard input, a\n"
+     "--params file; default 268435456, the server's --max-body); beyond it\n"
+     "the input is refused (exit 3) before it is decoded.",
+     [](CliOptions& o, const std::string& v) { o.limits.max_input_bytes = parse_limit("--max-input", v); }},
+    {"--max-decoded-bytes", "", "BYTES",
+     "bytes a decoder may allocate for one input (default 1073741824, the\n"
+     "server's); sizes a file declares are checked before allocating.",
+     [](CliOptions& o, const std::string& v) {
+       o.limits.decode.max_decoded_bytes = parse_limit("--max-decoded-bytes", v);
+     }},
+    {"--max-faces", "", "N",
+     "faces per surface (default 5000000, the server's)",
+     [](CliOptions& o, const std::string& v) { o.limits.decode.max_faces = parse_limit("--max-faces", v); }},
+    {"--max-vertices", "", "N",
+     "vertices per surface (default 5000000, the server's)",
+     [](CliOptions& o, const std::string& v) { o.limits.decode.max_vertices = parse_limit("--max-vertices", v); }},
     {"--threads", "", "N",
      "worker threads, [1, 1024] (default: hardware concurrency); the output\n"
      "does not depend on it.",
@@ -135,7 +154,36 @@ std::string options_text() {
   return out.str();
 }
 
-// The parameters, from core's param_specs() and the service's output defaults.
+// Words of `text` in lines of at most `width` columns, each indented by `indent` spaces.
+std::string wrapped(std::string_view text, std::size_t indent, std::size_t width) {
+  std::string out, line;
+  std::istringstream words{std::string(text)};
+  for (std::string word; words >> word;) {
+    if (!line.empty() && indent + line.size() + 1 + word.size() > width) {
+      out += std::string(indent, ' ') + line + "\n";
+      line.clear();
+    }
+    line += (line.empty() ? "" : " ") + word;
+  }
+  if (!line.empty()) out += std::string(indent, ' ') + line + "\n";
+  return out;
+}
+
+// The "output" object's settings from io::output_settings() (decision 69): name, range,
+// default, meaning. tests/io/output_settings_test checks this text against the table.
+std::string output_settings_text() {
+  std::ostringstream out;
+  for (const io::OutputSetting& s : io::output_settings()) {
+    out << "    output." << s.name << " " << s.range_text();
+    if (s.kind == io::SettingKind::Integer) out << ", default " << s.default_integer();
+    else if (s.kind == io::SettingKind::Choice && s.default_choice().empty()) out << ", default null";
+    else if (s.kind == io::SettingKind::Choice) out << ", default \"" << s.default_choice() << "\"";
+    out << (s.deprecated ? " (deprecated)" : "") << "\n" << wrapped(s.meaning, 8, 96);
+  }
+  return out.str();
+}
+
+// The parameters, from core's param_specs() and the output settings' table.
 std::string parameters_text() {
   std::ostringstream out;
   out << R"(Parameters (--params). By default ("mode": "auto") the six parameters of Table 1 (alpha ...
@@ -168,17 +216,9 @@ shows what ran and the choice: the model, what it read, the noise estimate and t
       << defaults.kmeans_seed << R"(
   solver "ldlt"|"cg", default ")"
       << mdn::to_string(defaults.solver) << R"("
-  output {...}  output container, glTF compression and Draco settings, defaults:
-         )"
-      << service::to_json(service::JobParams{})["output"].dump() << R"(
-         format: "off"|"obj"|"ply"|"stl"|"drc"|"glb"|"gltf", null = IN's;
-         compression: "as_input" (IN's: Draco if IN used it, else none; meshopt input
-         gives none)|"none"|"draco" ("meshopt" is not written yet); "draco": true|false
-         is still accepted (= "draco"|"none"); position_bits [8, 30];
-         normal_bits [1, 30]; texcoord_bits, color_bits, generic_bits [0, 30], 0 = lossless;
-         compression_level [0, 10] (10 = smallest)
-
+  output {...}  the output container, glTF compression and encoder settings (core/io's one table):
 )";
+  out << output_settings_text() << "\n";
   return out.str();
 }
 
@@ -206,6 +246,21 @@ int parse_threads(const std::string& text) {
     throw UsageError("--threads must be an integer in [1, 1024], got \"" + text + "\"");
   }
   return static_cast<int>(value);
+}
+
+std::int64_t parse_limit(const std::string& option, const std::string& text) {
+  std::size_t used = 0;
+  long long value = 0;
+  try {
+    value = std::stoll(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || text.empty() || !std::isdigit(static_cast<unsigned char>(text[0])) || value < 1 ||
+      value > (1LL << 40)) {
+    throw UsageError(option + " must be an integer in [1, 2^40], got \"" + text + "\"");
+  }
+  return static_cast<std::int64_t>(value);
 }
 
 CliOptions parse_command_line(int argc, char** argv) {

@@ -14,6 +14,10 @@
 
 namespace mdn::service {
 
+// The bytes of one input as it arrives, before decoding: the server's --max-body and the
+// command-line tool's --max-input default to it (decision 61).
+inline constexpr std::int64_t kDefaultMaxInputBytes = std::int64_t{256} << 20;
+
 struct JobInput {
   std::string bytes;
   io::Format format;

@@ -328,12 +328,18 @@ void read_plain_primitive(Reader& reader, const tinygltf::Primitive& prim, int m
                           const std::string& what) {
   const auto pos = prim.attributes.find("POSITION");
   if (pos == prim.attributes.end()) throw FormatError(what + ": no POSITION attribute");
+  // The declared count is checked before any attribute is allocated: an accessor without a
+  // buffer view (zeros, sparse may fill) costs its whole size from a few bytes of JSON.
+  const auto& model = reader.model();
+  if (pos->second >= 0 && pos->second < static_cast<int>(model.accessors.size()))
+    check_count(static_cast<std::int64_t>(model.accessors[static_cast<std::size_t>(pos->second)].count),
+                reader.limits().max_vertices, "vertices");
   for (const auto& [semantic, accessor] : prim.attributes) {
     Attribute a = reader.read(accessor, what + " " + semantic);
     a.semantic = semantic;
+    if (semantic == "POSITION") out.points = a.count;
     out.attributes.push_back(std::move(a));
   }
-  out.points = reader.read(pos->second, what + " POSITION").count;
   for (const auto& a : out.attributes)
     if (a.count != out.points) throw FormatError(what + ": attribute " + a.semantic + " has a different count than POSITION");
   std::vector<std::uint32_t> idx;

@@ -27,6 +27,12 @@
 // (decision 50; summed in their own row). "train": the corpus training
 // meshes among CGAL's with the same noise kinds, for comparison only. Noise seeds hash the
 // case name. `search` appends each row as it finishes and skips cases already in OUT (resumable).
+//
+// "scans" (issue 48; decision 60): each validation mesh seen by the virtual depth camera of
+// tools/train/range_scan.h, once by structured light and once by time of flight, at the
+// corpus's three distances in turn by the mesh's index (tools/train's scan_noise_names()
+// without the second pose): the scan's noise-free mesh is the truth. The report adds how many
+// came back unfiltered.
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -65,8 +71,8 @@
 #include "core/auto/tune.h"
 #include "support/noisy.h"
 #include "support/shapes.h"
-#include "../../tools/train/corpus.h"
-#include "../../tools/train/labels.h"
+#include "train/corpus.h"
+#include "train/labels.h"
 
 namespace fs = std::filesystem;
 using namespace mdn;
@@ -129,7 +135,10 @@ Case make_case(const std::string& set, const std::string& name, const TriMesh& c
 }
 
 // Every case of the sets asked for, in a fixed order.
+std::vector<Case> build_scan_cases(const fs::path& data, const std::string& only);
+
 std::vector<Case> build_cases(const fs::path& data, const std::string& which, const std::string& only) {
+  if (which == "scans") return build_scan_cases(data, only);
   const fs::path dir = bench::cgal_meshes(data);
   std::vector<fs::path> files;
   for (const auto& entry : fs::directory_iterator(dir))
@@ -173,6 +182,36 @@ std::vector<Case> build_cases(const fs::path& data, const std::string& which, co
       if (want(name)) cases.push_back(make_case("validation", name, mesh, config));
       if (want(name) && index % 3 == 1) cases.push_back(make_case("validation", name, mesh, kHighNoise));
       if (want(name) && index % 3 == 2) cases.push_back(make_case("validation", name, mesh, kSpikes));
+    }
+  }
+  return cases;
+}
+
+// The "scans" set: the validation set's meshes (the same selection, through build_cases), each
+// scanned by both sensor kinds; the distances in turn by the mesh's index.
+std::vector<Case> build_scan_cases(const fs::path& data, const std::string& only) {
+  std::vector<std::string> kinds[2];  // one view by structured light, by time of flight
+  for (const std::string& noise : train::scan_noise_names())
+    if (std::count(noise.begin(), noise.end(), ':') == 2) kinds[noise.rfind("scan_sl:", 0) == 0 ? 0 : 1].push_back(noise);
+  // Each mesh once, in the validation set's order, with its clean mesh (an "irregular" case's
+  // truth is a refinement of the same surface: used only where the mesh has no other case).
+  std::vector<std::string> order;
+  std::map<std::string, std::pair<const Case*, bool>> truth;  // mesh -> (case, refined)
+  const std::vector<Case> validation = build_cases(data, "validation", "");
+  for (const Case& v : validation) {
+    const bool refined = v.config == "irregular";
+    const auto [it, fresh] = truth.try_emplace(v.mesh, &v, refined);
+    if (fresh) order.push_back(v.mesh);
+    else if (it->second.second && !refined) it->second = {&v, false};
+  }
+  std::vector<Case> cases;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const std::string& mesh = order[k];
+    if (!only.empty() && only != mesh) continue;
+    for (const auto& list : kinds) {
+      const std::string& config = list[k % list.size()];
+      const train::NoisyCase pair = train::scan_case(truth.at(mesh).first->truth, config, case_seed(mesh, config));
+      cases.push_back({"scans", mesh, config, pair.clean, TriMesh{pair.noisy, pair.clean.F}});
     }
   }
   return cases;
@@ -334,7 +373,7 @@ int report(const fs::path& data, int jobs, const std::string& which, const fs::p
   GridCache cache(grid_cache);
   struct Out {
     double auto_msae = 0, search_msae = 0, sigma_true = 0, sigma_est = 0, auto_ms = 0, one_ms = 0, search_ms = 0, moved = 0;
-    double grid_best = 0, paper = 0;
+    double grid_best = 0, paper = 0, input_msae = 0;
     std::string chosen;
   };
   std::vector<Out> out(cases.size());
@@ -347,6 +386,7 @@ int report(const fs::path& data, int jobs, const std::string& which, const fs::p
     o.auto_msae = msae(r.mesh, c.truth);
     o.auto_ms = r.report.timings.total_ms;
     o.moved = (r.mesh.V - c.noisy.V).rowwise().norm().maxCoeff() / diagonal(c.noisy);
+    o.input_msae = msae(c.noisy, c.truth);
     o.sigma_true = true_sigma_edges(c);
     o.sigma_est = r.report.choice->noise.sigma / mean_edge_length(c.truth.V, c.truth.F);
     const DenoiseResult again = denoise(c.noisy, r.report.params);  // one run of what auto chose
@@ -385,6 +425,7 @@ int report(const fs::path& data, int jobs, const std::string& which, const fs::p
     std::vector<std::string> groups{c.set, "all"};
     if (c.config == kSpikes) groups = {c.set + ":" + kSpikes};
     if (c.config == kHighNoise || c.config == "impulse") groups.push_back(c.set + ":" + c.config);  // the issue's hard rows
+    if (c.set == "scans") groups.push_back(c.set + ":" + c.config.substr(0, c.config.find(':')));  // per sensor kind
     for (const std::string& set : groups) {
       ratio_best[set].push_back(rb);
       ratio_paper[set].push_back(rp);
@@ -417,6 +458,25 @@ int report(const fs::path& data, int jobs, const std::string& which, const fs::p
                 100.0 * in / e.size(), *std::min_element(e.begin(), e.end()), *std::max_element(e.begin(), e.end()),
                 median(cost[set]), search_cost[set].empty() ? 0.0 : median(search_cost[set]));
   }
+  // Issue 48's target row: depth-camera cases that auto returns as they came (the output's
+  // error is the input's), per sensor kind.
+  std::map<std::string, std::vector<std::string>> unfiltered;
+  std::map<std::string, int> scanned;
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    if (cases[i].set != "scans") continue;
+    const std::string kind = cases[i].config.substr(0, cases[i].config.find(':'));
+    ++scanned[kind];
+    // The output's error is the input's (to rounding: the unit box's round trip moves an
+    // unfiltered vertex by an ulp or so).
+    if (std::abs(out[i].auto_msae - out[i].input_msae) <= 1e-9 * out[i].input_msae)
+      unfiltered[kind].push_back(cases[i].mesh + "/" + cases[i].config);
+  }
+  for (const auto& [kind, n] : scanned) {
+    std::printf("\nscans:%s: %zu of %d returned unfiltered (MSAE(auto) = MSAE(input))", kind.c_str(), unfiltered[kind].size(), n);
+    for (const std::string& name : unfiltered[kind]) std::printf(" %s", name.c_str());
+  }
+  if (!scanned.empty()) std::printf("\n");
+
   std::printf("\nClean inputs (no noise added): MSAE of auto's output against the input, and its largest vertex\n"
               "displacement over the bounding-box diagonal (targets <= 0.01e-2 and <= 0.1%%).\n");
   for (std::size_t i = 0; i < cases.size(); ++i)
@@ -704,8 +764,8 @@ int guided_command(const fs::path& data, int jobs, const std::string& which, con
 
 [[noreturn]] void usage(int code) {
   std::fprintf(code ? stderr : stdout,
-               "usage: tune_bench search [--data DIR] [--jobs N] [--set train|validation|all] [--only MESH] OUT.tsv\n"
-               "       tune_bench report [--data DIR] [--jobs N] [--set train|validation|all] [--search] [--only MESH]\n"
+               "usage: tune_bench search [--data DIR] [--jobs N] [--set train|validation|all|scans] [--only MESH] OUT.tsv\n"
+               "       tune_bench report [--data DIR] [--jobs N] [--set train|validation|all|scans] [--search] [--only MESH]\n"
                "                         [--grid-cache FILE] [ROWS.tsv]\n"
                "       tune_bench noise [--data DIR] [--jobs N] [--set train|validation|all]\n"
                "       tune_bench clean [--data DIR] [--jobs N] [--only MESH]\n"

@@ -2,6 +2,7 @@
 // and stdout JSON, as a user would see them.
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -25,6 +26,7 @@
 #include "core/metrics.h"
 #include "core/noise.h"
 #include "core/params.h"
+#include "service/job_runner.h"
 #include "support/shapes.h"
 
 namespace mdn {
@@ -81,10 +83,11 @@ class Cli : public ::testing::Test {
 
   // Runs meshdenoise with the given (already quoted) arguments; stderr is not a terminal,
   // so no progress bar is drawn.
-  Result run(const std::string& args, const std::string& stdin_path = "/dev/null") const {
+  // `shell` runs first in the same shell (a ulimit, a trap, a background writer).
+  Result run(const std::string& args, const std::string& stdin_path = "/dev/null", const std::string& shell = "") const {
     const std::string out = path("stdout.txt"), err = path("stderr.txt");
-    const std::string command =
-        quote(binary()) + " " + args + " >" + quote(out) + " 2>" + quote(err) + " <" + quote(stdin_path);
+    const std::string command = shell + quote(binary()) + " " + args + " >" + quote(out) + " 2>" + quote(err) + " <" +
+                                quote(stdin_path);
     const int status = std::system(command.c_str());
     Result r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
@@ -941,6 +944,121 @@ TEST_F(Cli, TruncatedStlExitsThree) {
     EXPECT_EQ(r.code, 3) << name << ": " << r.err;
     EXPECT_NE(r.err.find(name), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(path("out.off"))) << name;
+  }
+}
+
+}  // namespace
+}  // namespace mdn
+
+namespace mdn {
+namespace {
+
+// Issue 49, item 8: --in-place on a symbolic link truncated the link's target and wrote it in
+// place, so a failed write destroyed the input. Now (decision 61) the temporary file goes
+// beside the link's target and is renamed over it: the link stays a link, the target is a new
+// file (its mode kept), and a write that fails (here: past the file-size limit) leaves it whole.
+TEST_F(Cli, InPlaceThroughASymbolicLinkReplacesTheTargetWhole) {
+  write_sphere_pair(3);
+  fs::create_directories(path("data"));
+  fs::rename(path("noisy.off"), path("data/scan.off"));
+  fs::permissions(path("data/scan.off"), fs::perms(0640), fs::perm_options::replace);
+  fs::create_symlink("data/scan.off", path("link.off"));
+  const std::string noisy = read_text(path("data/scan.off"));
+  ASSERT_GT(noisy.size(), 8192u);
+
+  // The output is larger than 4 KiB: the write fails (SIGXFSZ ignored: EFBIG) and the input stays.
+  const Result failed = run("--in-place " + quote(path("link.off")), "/dev/null", "trap '' XFSZ; ulimit -f 4; ");
+  EXPECT_EQ(failed.code, 3) << failed.err;
+  EXPECT_NE(failed.err.find("cannot write"), std::string::npos) << failed.err;
+  EXPECT_EQ(read_text(path("data/scan.off")), noisy) << "a failed write destroyed the link's target";
+  EXPECT_TRUE(fs::is_symlink(path("link.off")));
+
+  struct stat before {};
+  ASSERT_EQ(::stat(path("data/scan.off").c_str(), &before), 0);
+  const Result r = run("--in-place " + quote(path("link.off")));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::is_symlink(path("link.off"))) << "the link was replaced by a file";
+  EXPECT_EQ(fs::read_symlink(path("link.off")), fs::path("data/scan.off"));
+  const std::string denoised = read_text(path("data/scan.off"));
+  EXPECT_NE(denoised, noisy);
+  EXPECT_EQ(denoised.rfind("OFF", 0), 0u);
+  struct stat after {};
+  ASSERT_EQ(::stat(path("data/scan.off").c_str(), &after), 0);
+  EXPECT_NE(after.st_ino, before.st_ino) << "the target was truncated and rewritten in place, not replaced";
+  EXPECT_EQ(after.st_mode & 07777, 0640u);
+  for (const std::string& folder : {dir_.string(), path("data")})
+    for (const auto& entry : fs::directory_iterator(folder))
+      EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
+}
+
+// Issue 49, item 8: /dev/zero, FIFOs and standard input were read without a bound. Every input
+// is now read up to --max-input (default: the server's --max-body, 256 MiB; decision 61), and
+// a regular file's size is checked before it is read. Under a 1.5 GB address-space limit the
+// old tool ran out of memory on /dev/zero.
+TEST_F(Cli, InputsAreReadUpToABound) {
+  write_sphere_pair(1);
+  const std::string limited = "ulimit -v 1500000; ";
+  const Result zero = run("/dev/zero " + quote(path("out.off")), "/dev/null", limited);
+  EXPECT_EQ(zero.code, 3) << zero.err;
+  EXPECT_NE(zero.err.find("more than 268435456 bytes (the limit of --max-input)"), std::string::npos) << zero.err;
+
+  const Result stdin_zero = run("--max-input 4096 - " + quote(path("out.off")), "/dev/zero", limited);
+  EXPECT_EQ(stdin_zero.code, 3) << stdin_zero.err;
+  EXPECT_NE(stdin_zero.err.find("standard input: it holds more than 4096 bytes"), std::string::npos) << stdin_zero.err;
+
+  ASSERT_EQ(::mkfifo(path("fifo.off").c_str(), 0600), 0);
+  const Result fifo = run("--max-input 4096 " + quote(path("fifo.off")) + " " + quote(path("out.off")), "/dev/null",
+                          limited + "(timeout 20 sh -c " + quote("head -c 1000000 /dev/zero > " + quote(path("fifo.off"))) +
+                              " 2>/dev/null &); ");
+  EXPECT_EQ(fifo.code, 3) << fifo.err;
+  EXPECT_NE(fifo.err.find("more than 4096 bytes"), std::string::npos) << fifo.err;
+
+  const std::string size = std::to_string(fs::file_size(path("noisy.off")));
+  const Result small = run("--max-input " + std::to_string(fs::file_size(path("noisy.off")) - 1) + " " +
+                           quote(path("noisy.off")) + " " + quote(path("out.off")));
+  EXPECT_EQ(small.code, 3) << small.err;
+  EXPECT_FALSE(fs::exists(path("out.off")));
+  EXPECT_EQ(run("--max-input " + size + " " + quote(path("noisy.off")) + " " + quote(path("out.off"))).code, 0);
+
+  // The decoder's limits are the server's too, and settable.
+  const Result vertices = run("--max-vertices 10 " + quote(path("noisy.off")) + " " + quote(path("out2.off")));
+  EXPECT_EQ(vertices.code, 3) << vertices.err;
+  EXPECT_NE(vertices.err.find("more than the limit of 10"), std::string::npos) << vertices.err;
+  // --help states the defaults, which are the server's (io::Limits, the service's input bound).
+  const std::string help = run("--help").out;
+  for (const std::int64_t value : {service::kDefaultMaxInputBytes, io::Limits{}.max_decoded_bytes, io::Limits{}.max_faces,
+                                   io::Limits{}.max_vertices})
+    EXPECT_NE(help.find("default " + std::to_string(value) + ","), std::string::npos) << value;
+  for (const std::string bad : {"0", "-5", "1e3", "", "x", "1099511627777"})
+    EXPECT_EQ(run("--max-input=" + quote(bad) + " " + quote(path("noisy.off")) + " " + quote(path("out3.off"))).code, 2)
+        << bad;
+}
+
+// Issue 49, item 8: a 563-byte glTF whose POSITION accessor declares 120 million vertices
+// without a buffer view (zeros, three of them set by `sparse`) took the tool to 2.8 GB before
+// the vertex limit refused it. The declared count is checked before anything is allocated.
+TEST_F(Cli, SparseGltfDeclaringMillionsOfVerticesIsRefusedBeforeAllocating) {
+  const std::string buffer =  // sparse indices 0, 1, 2 (uint32) then three float VEC3 values
+      "AAAAAAEAAAACAAAAAAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA";
+  for (const std::int64_t count : {std::int64_t{120'000'000}, std::int64_t{14'000'001}}) {
+    const std::string gltf =
+        R"({"asset":{"version":"2.0"},"buffers":[{"byteLength":48,"uri":"data:application/octet-stream;base64,)" +
+        buffer +
+        R"("}],"bufferViews":[{"buffer":0,"byteLength":12},{"buffer":0,"byteOffset":12,"byteLength":36}],)"
+        R"("accessors":[{"componentType":5126,"count":)" +
+        std::to_string(count) +
+        R"(,"type":"VEC3","min":[0,0,0],"max":[1,1,0],"sparse":{"count":3,"indices":{"bufferView":0,)"
+        R"("componentType":5125},"values":{"bufferView":1}}}],"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],)"
+        R"("nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}],"scene":0})";
+    write_text(path("sparse.gltf"), gltf);
+    const auto start = std::chrono::steady_clock::now();
+    const Result r = run("--mode none " + quote(path("sparse.gltf")) + " " + quote(path("out.off")), "/dev/null",
+                         "ulimit -v 1000000; ");
+    EXPECT_EQ(r.code, 3) << count << ": " << r.err;
+    EXPECT_NE(r.err.find("declares " + std::to_string(count) + " vertices, more than the limit of 5000000"),
+              std::string::npos)
+        << r.err;
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(20)) << "does not hang";
   }
 }
 

@@ -39,7 +39,9 @@ JobStore::Submitted MemoryJobStore::submit(service::JobInput input, const std::o
   }
   pool_.check_admission();  // draining, queue full: before the store's own limit, as always
   // An accepted job stays retrievable for its whole result lifetime: when every stored-job
-  // slot is taken, new jobs are refused rather than old ones evicted early.
+  // slot is taken, new jobs are refused rather than old ones evicted early; except that a
+  // result already downloaded, or a job cancelled, gives its slot up first (decision 62).
+  if (int(jobs_.size()) >= options_.max_stored) evict_done_locked();
   if (int(jobs_.size()) >= options_.max_stored) {
     Problem p = make_problem(ProblemType::StoreFull, "all " + std::to_string(options_.max_stored) +
                                  " stored-job slots hold jobs within their result lifetime; retry later");
@@ -65,15 +67,26 @@ std::shared_ptr<Job> MemoryJobStore::find_job(const std::string& id) {
 
 std::shared_ptr<Job> MemoryJobStore::job(const std::string& id) { return find_job(id); }
 
+// A client that asks within this long of its last request still follows the job: about six
+// of the web page's polls during a drain (300 ms apart), two of a client polling every 1.5 s.
+constexpr std::chrono::seconds kStillFollowing{3};
+
+void MemoryJobStore::asked(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  asked_[id] = Clock::now();
+}
+
 std::optional<JobSnapshot> MemoryJobStore::find(const std::string& id, bool) {
   auto job = find_job(id);
   if (!job) return std::nullopt;
+  asked(id);
   return snapshot(*job);
 }
 
 std::optional<JobSnapshot> MemoryJobStore::wait_finished(const std::string& id, Clock::time_point deadline) {
   auto job = find_job(id);
   if (!job) return std::nullopt;
+  asked(id);
   // In slices, so that a drain ends the wait.
   for (auto now = Clock::now(); now < deadline && !pool_.draining(); now = Clock::now())
     if (job->wait_for(std::min<std::chrono::milliseconds>(
@@ -118,6 +131,18 @@ std::vector<JobSnapshot> MemoryJobStore::unfinished() {
   return out;
 }
 
+bool MemoryJobStore::results_awaited() {
+  const auto since = Clock::now() - kStillFollowing;
+  std::vector<std::shared_ptr<Job>> followed;  // asked about lately; checked outside the lock
+  {
+    std::lock_guard lock(mutex_);
+    for (const auto& [id, when] : asked_)
+      if (auto it = jobs_.find(id); when > since && it != jobs_.end()) followed.push_back(it->second);
+  }
+  return std::any_of(followed.begin(), followed.end(),
+                     [](const auto& job) { return job->state() == JobState::Succeeded && !job->result_fetched(); });
+}
+
 int MemoryJobStore::unfetched_results() {
   int n = 0;
   for (const auto& job : all())
@@ -133,8 +158,24 @@ JobSnapshot MemoryJobStore::snapshot(const Job& job) const {
 
 void MemoryJobStore::drop_locked(const std::string& id) {
   jobs_.erase(id);
+  asked_.erase(id);
   for (auto k = idempotency_.begin(); k != idempotency_.end();)
     k = k->second.job_id == id ? idempotency_.erase(k) : std::next(k);
+}
+
+void MemoryJobStore::evict_done_locked() {
+  const std::string* oldest = nullptr;
+  std::optional<Clock::time_point> oldest_at;
+  for (const auto& [id, job] : jobs_) {
+    const JobState state = job->state();
+    if (!((state == JobState::Succeeded && job->result_fetched()) || state == JobState::Cancelled)) continue;
+    const auto finished = job->finished_at();
+    if (finished && (!oldest_at || *finished < *oldest_at)) {
+      oldest = &id;
+      oldest_at = finished;
+    }
+  }
+  if (oldest) drop_locked(std::string(*oldest));
 }
 
 void MemoryJobStore::sweep_locked() {

@@ -45,6 +45,7 @@ class MemoryJobStore final : public JobStore {
   std::string_view kind() const override { return "memory"; }
   std::vector<JobSnapshot> unfinished() override;
   int unfetched_results() override;
+  bool results_awaited() override;
 
   // The job object itself (tests); null when unknown or expired.
   std::shared_ptr<Job> job(const std::string& id);
@@ -53,6 +54,9 @@ class MemoryJobStore final : public JobStore {
   std::shared_ptr<Job> find_job(const std::string& id);
   JobSnapshot snapshot(const Job& job) const;
   void sweep_locked();  // mutex_ held: drops finished jobs past their result lifetime
+  // mutex_ held: drops the job finished longest ago among those whose result was downloaded or
+  // that were cancelled (decision 62), if any.
+  void evict_done_locked();
   void drop_locked(const std::string& id);  // mutex_ held: the job and its keys
   int store_retry_after_s_locked() const;  // mutex_ held: until a stored-job slot frees
   std::vector<std::shared_ptr<Job>> all();  // after a sweep
@@ -63,6 +67,9 @@ class MemoryJobStore final : public JobStore {
   std::map<std::string, std::shared_ptr<Job>> jobs_;  // every kept job by id
   struct IdempotencyEntry { std::string fingerprint, job_id; };
   std::map<std::string, IdempotencyEntry> idempotency_;
+  // When a client last asked about each job (find, wait_finished): who still follows a result.
+  std::map<std::string, Clock::time_point> asked_;
+  void asked(const std::string& id);
 };
 
 }  // namespace mdn::http

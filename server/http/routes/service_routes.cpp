@@ -58,11 +58,11 @@ void ServiceRoutes::render_connection_metrics(std::string& out) const {
   out += "mdn_http_connections{state=\"waiting\"} " + std::to_string(c.parked) + "\n";
   out += "mdn_http_connections{state=\"queued\"} " + std::to_string(c.queued) + "\n";
   out += "# HELP mdn_http_connections_closed_total Connections closed by the gate: refused at a per-client or total cap, "
-         "evicted while waiting, head not complete in time, no thread in time.\n"
+         "evicted while waiting, head not complete in time, head over the framing limits, no thread in time.\n"
          "# TYPE mdn_http_connections_closed_total counter\n";
   const std::pair<const char*, std::int64_t> reasons[] = {{"client_limit", c.refused_client}, {"total_limit", c.refused_total},
                                                           {"evicted", c.evicted},           {"head_timeout", c.head_timeouts},
-                                                          {"queue_timeout", c.queue_timeouts}};
+                                                          {"head_refused", c.head_refusals}, {"queue_timeout", c.queue_timeouts}};
   for (const auto& [reason, n] : reasons)
     out += std::string("mdn_http_connections_closed_total{reason=\"") + reason + "\"} " + std::to_string(n) + "\n";
 }

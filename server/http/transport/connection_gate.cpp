@@ -23,6 +23,7 @@
 
 #include "server/http/transport/connection_probe.h"
 #include "server/http/transport/gate_stream.h"
+#include "server/http/transport/request_framing.h"
 #include "server/http/problem.h"
 
 namespace mdn::http {
@@ -31,6 +32,10 @@ namespace {
 using namespace gate;
 
 constexpr int kTickMs = 50;  // the gate's deadline checks
+// Decision 64: how long a refused connection is drained before it is closed, and how many may
+// linger at once (past that a refusal closes at once, as before).
+constexpr auto kLinger = std::chrono::seconds(1);  // as ConnectionProbe::linger_close
+constexpr std::int64_t kMaxLingering = 256;
 
 thread_local Conn* t_conn = nullptr;             // the connection this lane thread serves now
 thread_local const GateOptions* t_options = nullptr;  // and its gate's options
@@ -49,13 +54,14 @@ std::string raw_problem(ProblemType type, const std::string& detail, std::option
 // Best effort, never blocks: the answer fits the socket's send buffer of a fresh connection.
 void send_now(int fd, const std::string& bytes) { (void)::send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL | MSG_DONTWAIT); }
 
-// Reads what is there without blocking. False when the peer closed or the socket failed.
+// Reads what is there without blocking (a lingering connection's bytes are dropped). False
+// when the peer closed or the socket failed.
 bool read_available(Conn& c) {
   char chunk[kReadChunk];
-  while (c.available() < kMaxHeadBytes) {
+  while (c.lingering || c.available() < kMaxHeadBytes) {
     const ssize_t n = ::recv(c.fd, chunk, sizeof chunk, MSG_DONTWAIT);
     if (n > 0) {
-      c.buf.append(chunk, std::size_t(n));
+      if (!c.lingering) c.buf.append(chunk, std::size_t(n));
       continue;
     }
     if (n == 0) return false;
@@ -104,6 +110,7 @@ struct ConnectionGate::Impl {
   std::map<std::string, int> busy;  // main-lane threads serving each address now
   Counts counts;
   Lane main_lane, probe_lane;
+  std::int64_t lingering = 0;  // refused connections being drained (decision 64)
   bool stopping = false;
   std::thread gate_thread;
   std::once_flag stopped;
@@ -165,6 +172,8 @@ struct ConnectionGate::Impl {
     if (c.fd < 0) return;
     ::close(c.fd);
     c.fd = -1;
+    if (c.lingering) --lingering;
+    if (!c.counted) return;
     --counts.open;
     if (auto it = per_client.find(c.ip); it != per_client.end() && --it->second <= 0) per_client.erase(it);
   }
@@ -190,13 +199,13 @@ struct ConnectionGate::Impl {
       if (per_client[c->ip] == 0) per_client.erase(c->ip);
       ++(client_full ? counts.refused_client : counts.refused_total);
       lock.unlock();
-      send_now(fd, raw_problem(ProblemType::QueueFull,
-                               client_full ? "too many open connections from " + c->ip + " (at most " +
-                                                 std::to_string(options.max_connections_per_client) + ")"
-                                           : "the server has too many open connections",
-                               1));
-      ::shutdown(fd, SHUT_WR);
-      ::close(fd);
+      c->counted = false;
+      const std::string answer = raw_problem(ProblemType::QueueFull,
+                                             client_full ? "too many open connections from " + c->ip + " (at most " +
+                                                               std::to_string(options.max_connections_per_client) + ")"
+                                                         : "the server has too many open connections",
+                                             1);
+      refuse_locked(std::move(c), answer);
       return;
     }
     ++per_client[c->ip];
@@ -206,11 +215,43 @@ struct ConnectionGate::Impl {
     park_locked(std::move(c));
   }
 
+  // Decision 64: answers and shuts the write side, then drains what the client still sends (the
+  // request it is writing) for up to kLinger before closing, so the client reads the answer
+  // rather than a reset. Past kMaxLingering drained at once, it closes at once.
+  void refuse_locked(std::unique_ptr<Conn> c, const std::string& answer) {
+    send_now(c->fd, answer);
+    ::shutdown(c->fd, SHUT_WR);
+    if (lingering >= kMaxLingering) {
+      close_locked(*c);
+      return;
+    }
+    c->buf.clear();
+    c->off = 0;
+    c->lingering = true;
+    ++lingering;
+    c->deadline = Clock::now() + kLinger;
+    park_locked(std::move(c));
+  }
+
+  // A connection with bytes buffered: its head refused (then lingering), dispatched when whole,
+  // or parked for the rest of it.
+  void route_locked(std::unique_ptr<Conn> c) {
+    const framing::HeadState head = c->head();
+    if (head.refusal) {
+      ++counts.head_refusals;
+      refuse_locked(std::move(c), raw_problem(head.refusal->type, head.refusal->detail, std::nullopt));
+    } else if (head.complete) {
+      dispatch_locked(std::move(c));
+    } else {
+      park_locked(std::move(c));
+    }
+  }
+
   // Closes the parked connection (of `ip`, or any) parked longest ago; false if there is none.
   bool evict_oldest_locked(const std::string* ip) {
     Conn* oldest = nullptr;
     for (auto& [fd, c] : parked)
-      if ((!ip || c->ip == *ip) && (!oldest || c->parked_at < oldest->parked_at)) oldest = c.get();
+      if (!c->lingering && (!ip || c->ip == *ip) && (!oldest || c->parked_at < oldest->parked_at)) oldest = c.get();
     if (!oldest) return false;
     auto c = unpark_locked(oldest->fd);
     ++counts.evicted;
@@ -268,13 +309,18 @@ struct ConnectionGate::Impl {
         if (it == parked.end()) continue;
         Conn& c = *it->second;
         const bool open = read_available(c);
+        if (c.lingering) {
+          if (!open) close_locked(*unpark_locked(fd));
+          continue;
+        }
         if (c.idle && c.available() > 0) {
           // The next request started: its head is due within the head timeout.
           c.idle = false;
           c.deadline = Clock::now() + seconds(options.header_timeout_s);
         }
-        if (c.head_ready()) {
-          dispatch_locked(unpark_locked(fd));
+        const framing::HeadState head = c.head();
+        if (head.refusal || head.complete) {
+          route_locked(unpark_locked(fd));
         } else if (!open) {
           auto gone = unpark_locked(fd);
           close_locked(*gone);
@@ -290,7 +336,7 @@ struct ConnectionGate::Impl {
       if (now >= c->deadline) due.push_back(fd);
     for (int fd : due) {
       auto c = unpark_locked(fd);
-      if (!c->idle) {
+      if (!c->idle && !c->lingering) {
         // A head begun and not finished in time (slowloris), or a new connection that sent
         // nothing: answered 408 when something was sent, closed either way.
         ++counts.head_timeouts;
@@ -363,6 +409,12 @@ struct ConnectionGate::Impl {
       c->body_deadline.reset();
       c->timeout = ReadTimeout::None;
       c->close_after = c->linger = false;
+      const framing::HeadState head = c->head();  // whole and within the limits: the gate checked it
+      c->head_left = head.head_bytes;
+      c->chunked = head.chunked;
+      c->framing = framing::ChunkedFraming{};
+      c->body_started.reset();
+      c->body_bytes = 0;
       const bool last = c->served + 1 >= options.keep_alive_max || is_stopping();
       bool closed = false;
       GateStream stream(*c, options, Clock::now() + seconds(options.header_timeout_s));
@@ -375,7 +427,10 @@ struct ConnectionGate::Impl {
       }
       // Pipelined: the next request is already here; answered in order, on this thread
       // unless it is a probe request on the main lane (or the reverse): back to the gate.
-      if (keep && !c->head_ready()) break;
+      if (keep) {
+        const framing::HeadState next = c->head();
+        if (next.refusal || !next.complete) break;
+      }
       if (keep && c->starts_with_probe() != c->probe) break;
     }
     t_conn = nullptr;
@@ -386,13 +441,9 @@ struct ConnectionGate::Impl {
       return;
     }
     c->compact();
-    if (c->head_ready()) {
-      dispatch_locked(std::move(c));
-      return;
-    }
     c->idle = c->available() == 0;
     c->deadline = Clock::now() + seconds(c->idle ? options.keep_alive_timeout_s : options.header_timeout_s);
-    park_locked(std::move(c));
+    route_locked(std::move(c));
   }
 
   bool is_stopping() const {

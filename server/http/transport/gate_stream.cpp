@@ -38,15 +38,32 @@ bool GateStream::is_readable() const { return c_.available() > 0 || wait(POLLIN,
 bool GateStream::is_writable() const { return wait(POLLOUT, seconds(o_.write_timeout_s)); }
 
 ssize_t GateStream::read(char* ptr, size_t size) {
+  const bool body = c_.head_left == 0;
+  // Decision 63: past its grace, a body must keep up with the minimum rate whether or not
+  // bytes keep arriving (a trickle of 1 byte/s used to hold a thread for the whole body timeout).
+  std::optional<Clock::time_point> rate_deadline;
+  if (body && o_.body_min_rate > 0) {
+    if (!c_.body_started) c_.body_started = Clock::now();
+    rate_deadline = *c_.body_started + seconds(o_.body_rate_grace_s + double(c_.body_bytes) / o_.body_min_rate);
+    if (Clock::now() > *rate_deadline) {
+      c_.timeout = BodyReadTimeout::TooSlow;
+      return -1;
+    }
+  }
   while (c_.available() == 0) {
     c_.buf.clear();
     c_.off = 0;
-    const Clock::time_point deadline = c_.body_deadline.value_or(head_deadline_);
+    Clock::time_point deadline = c_.body_deadline.value_or(head_deadline_);
+    const bool rate_first = rate_deadline && *rate_deadline < deadline;
+    if (rate_first) deadline = *rate_deadline;
     const Clock::time_point now = Clock::now();
     const Clock::duration stall = seconds(o_.read_timeout_s);
     const bool deadline_first = deadline - now <= stall;
     if (!wait(POLLIN, deadline_first ? std::max(deadline - now, Clock::duration::zero()) : stall)) {
-      c_.timeout = deadline_first && c_.body_deadline ? BodyReadTimeout::BodyDeadline : BodyReadTimeout::Stall;
+      c_.timeout = !deadline_first             ? BodyReadTimeout::Stall
+                   : rate_first                ? BodyReadTimeout::TooSlow
+                   : c_.body_deadline          ? BodyReadTimeout::BodyDeadline
+                                               : BodyReadTimeout::Stall;
       return -1;
     }
     char chunk[kReadChunk];
@@ -58,9 +75,18 @@ ssize_t GateStream::read(char* ptr, size_t size) {
     }
     c_.buf.assign(chunk, std::size_t(n));
   }
-  const std::size_t n = std::min(size, c_.available());
+  // The head is the gate's, already checked; past it, at most what the framing allows: a
+  // chunked body stops at the byte that breaks its framing or its line limits.
+  std::size_t n = std::min(size, c_.available());
+  if (!body) n = std::min(n, c_.head_left);
+  if (body && c_.chunked && !c_.framing.done() && !c_.framing.feed(std::string_view(c_.buf).substr(c_.off, n))) {
+    c_.timeout = BodyReadTimeout::BadFraming;
+    return -1;
+  }
   std::memcpy(ptr, c_.buf.data() + c_.off, n);
   c_.off += n;
+  if (body) c_.body_bytes += n;
+  else c_.head_left -= n;
   return ssize_t(n);
 }
 

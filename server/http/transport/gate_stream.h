@@ -14,16 +14,19 @@
 #include <sys/socket.h>
 
 #include "server/http/transport/gate_types.h"
+#include "server/http/transport/request_framing.h"
 
 namespace mdn::http::gate {
 
 using Clock = std::chrono::steady_clock;
 
 constexpr std::size_t kReadChunk = 16384;
-// A request head longer than this is handed to the parser unfinished (it answers 414 / 400).
-constexpr std::size_t kMaxHeadBytes = 65536;
+// The most a parked connection buffers: a head longer than this is refused (request_framing.h).
+constexpr std::size_t kMaxHeadBytes = framing::kMaxHeadBytes + 1;
 
-inline Clock::duration seconds(double s) { return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s)); }
+inline Clock::duration seconds(double s) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
 
 // One client connection. Owned by the gate while parked, by one lane thread while served.
 struct Conn {
@@ -42,27 +45,25 @@ struct Conn {
   std::optional<Clock::time_point> body_deadline;
   BodyReadTimeout timeout = BodyReadTimeout::None;
   bool close_after = false, linger = false;
+  std::size_t head_left = 0;            // bytes of the current request's head not read yet
+  bool chunked = false;                 // its body is chunked: checked by `framing` as it is read
+  framing::ChunkedFraming framing;
+  std::optional<Clock::time_point> body_started;  // the first read past the head
+  std::uint64_t body_bytes = 0;
+  // A refused connection (a head over the limits, a cap): its answer is sent and its write side
+  // shut; the gate reads and drops what the client still sends until it closes or kLinger ends,
+  // so the client reads the answer instead of a reset (decision 64).
+  bool lingering = false;
+  bool counted = true;  // in the open / per-client counts (a refusal at a cap is not)
 
   std::size_t available() const { return buf.size() - off; }
   void compact() {
     buf.erase(0, off);
     off = 0;
   }
-  // Whether a whole request head is buffered (or so much that the parser should see it).
-  // A request line that cannot be one (no "HTTP/x.y" at its end) is handed over at once too,
-  // for the parser's 400.
-  bool head_ready() const {
-    if (available() >= kMaxHeadBytes) return true;
-    const std::string_view head = std::string_view(buf).substr(off);
-    if (head.find("\r\n\r\n") != std::string_view::npos) return true;
-    const std::size_t eol = head.find('\n');
-    if (eol == std::string_view::npos) return head.size() > 8192;  // the parser's 414
-    std::string_view line = head.substr(0, eol);
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    const std::size_t sp = line.rfind(' ');
-    const std::string_view version = sp == std::string_view::npos ? line : line.substr(sp + 1);
-    return !(version.size() == 8 && version.substr(0, 5) == "HTTP/" && line.find(' ') < sp);
-  }
+  std::string_view pending() const { return std::string_view(buf).substr(off); }
+  // The buffered head as far as it has arrived: complete, refused, or not yet either.
+  framing::HeadState head() const { return framing::inspect_head(pending()); }
   bool starts_with_probe() const {
     const std::string_view head = std::string_view(buf).substr(off);
     for (std::string_view path : {"GET /healthz", "GET /readyz", "GET /metrics"})
