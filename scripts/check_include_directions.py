@@ -28,9 +28,8 @@ state it; ctest runs this as include_directions):
   which do): http_server.cpp and the connection gate under it; the route handlers work on the
   service's own types (server/http/transport/http_message.h);
 - no two files include each other: the files of one module (a header and its .cpp) count as one,
-  and no module reaches itself again through its includes. KNOWN_CYCLES lists the one longer
-  cycle left (core/auto, owned by the learned-prior issue while it is open); a cycle not listed
-  fails, and so does a listed one that is gone (remove it from the list).
+  and no module reaches itself again through its includes (core/auto's one longer cycle, once
+  listed here as known, was broken by core/auto/descent.h; none is allowed now).
 
 Usage: check_include_directions.py [SOURCE_DIR]   (default: this script's repository)
 Prints every violation as FILE:LINE: INCLUDE (rule), every cycle as the modules in it, and exits
@@ -54,12 +53,6 @@ JOBS_FOR_ROUTES = {JOBS_DIR + "/job.h", JOBS_DIR + "/job_store.h", JOBS_DIR + "/
 REDIS_CHOOSER = "server/service_parts.cpp"
 # The transport: the only files that may include cpp-httplib, directly or through the gate.
 HTTPLIB = {"httplib.h", TRANSPORT_DIR + "/connection_gate.h", TRANSPORT_DIR + "/gate_stream.h"}
-# Cycles through more than two modules that are known and left to their owners, each sorted.
-# No pair of modules including each other is allowed at all.
-KNOWN_CYCLES = [
-    # recorrupted.cpp -> tune.h; tune.cpp -> denoise.h -> choice.h -> recorrupted.h (choose too)
-    ["core/auto/choice", "core/auto/choose", "core/auto/denoise", "core/auto/recorrupted", "core/auto/tune"],
-]
 TRANSPORT = {HTTP + "/http_server.cpp", TRANSPORT_DIR + "/connection_gate.h", TRANSPORT_DIR + "/connection_gate.cpp",
              TRANSPORT_DIR + "/gate_stream.h", TRANSPORT_DIR + "/gate_stream.cpp"}
 
@@ -191,19 +184,15 @@ def main():
         return 1
     loops = cycles(edges)
     pairs = sorted((a, b) for a in edges for b in edges[a] if a < b and a in edges.get(b, ()))
-    new_loops = [modules for modules in loops if modules not in KNOWN_CYCLES]
-    gone = [modules for modules in KNOWN_CYCLES if modules not in loops]
     for line in found:
         print(line)
     for a, b in pairs:
         print("%s and %s include each other (a header and its .cpp count as one module)" % (a, b))
-    for modules in new_loops:
+    for modules in loops:
         print("include cycle among %s (no module may reach itself through its includes)" % ", ".join(modules))
-    for modules in gone:
-        print("KNOWN_CYCLES lists %s, which is no longer a cycle: remove it" % ", ".join(modules))
-    print("%d files checked, %d violations, %d pairs that include each other, %d include cycles (%d known)"
-          % (checked, len(found), len(pairs), len(loops), len(loops) - len(new_loops)))
-    return 1 if found or pairs or new_loops or gone else 0
+    print("%d files checked, %d violations, %d pairs that include each other, %d include cycles"
+          % (checked, len(found), len(pairs), len(loops)))
+    return 1 if found or pairs or loops else 0
 
 
 if __name__ == "__main__":

@@ -10,7 +10,7 @@
 
 #include "core/auto/measures.h"
 #include "core/auto/noise_estimate.h"
-#include "core/auto/recorrupted.h"
+#include "core/auto/selection.h"
 #include "core/params.h"
 
 namespace mdn {

@@ -11,7 +11,7 @@
 #include "core/progress.h"
 #include "core/prefilter.h"
 #include "core/auto/surface_sample.h"
-#include "core/auto/tune.h"
+#include "core/auto/descent.h"
 
 namespace mdn {
 
@@ -98,7 +98,7 @@ bool takes_shape(const SelectionOptions& options, const NoiseEstimate& estimate,
   return options.remove_at_most > 0 && low && residual > options.remove_at_most * noise;
 }
 
-// Decision 22: the ground-truth search's coordinate descent (core/auto/tune.h), started from the
+// Decision 22: the ground-truth search's coordinate descent (core/auto/descent.h), started from the
 // pick and driven by the recorrupted score of the same draws; its result joins the candidates.
 void descend_from_pick(Selection& sel, const SurfaceSample& sample, RecorruptedScorer& scorer, const DenoiseParams& requested,
                        const SelectionOptions& options, Executor& executor, ProgressObserver* progress) {

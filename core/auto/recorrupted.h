@@ -14,6 +14,7 @@
 
 #include "core/mesh.h"
 #include "core/auto/noise_estimate.h"
+#include "core/auto/selection.h"
 #include "core/params.h"
 #include "core/topology.h"
 
@@ -35,24 +36,6 @@ struct SelectionOptions {
   std::uint64_t seed = 1;          // of the recorruption draws
   double sigma = 0;                // > 0: the noise level to use (positions' units) instead of the estimate
   bool isotropic = true;           // recorrupt every coordinate (true) or along the normal only (false); decision 20
-};
-
-struct ScoredCandidate {
-  std::string name;       // the model's pick, "paper", "search"
-  DenoiseParams params;   // mode Manual; what was scored
-  double score = 0;       // recorrupted normal error, mean over `draws` draws (lower is better)
-  int draws = 0;          // draws the score averages: the pick is among those with the most
-  double residual = 0;    // RMS of (y1 - f(y1)) along the normal, less the recorruption's share: the noise f removed (units of `noise.sigma`)
-  bool eligible = true;   // false: it removed more than remove_at_most times the noise, so it is not picked (decision 24)
-};
-
-struct Selection {
-  NoiseEstimate noise;                  // what the recorruption used
-  std::int64_t sample_faces = 0;        // faces the candidates ran on
-  std::int64_t scored_faces = 0;        // faces the score read
-  std::vector<ScoredCandidate> candidates;
-  int chosen = 0;                       // index into candidates
-  int evaluations = 0;                  // parameter sets scored (Search: with the descent's); 0: taken as clean
 };
 
 // The recorrupted score of parameter sets on a sample: owns the draws (y1, and y2's face

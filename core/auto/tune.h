@@ -4,37 +4,11 @@
 // the tuning harness that fits the ParamMode::Auto rule (tests/bench/tune_bench.cpp).
 #pragma once
 
-#include <functional>
-#include <vector>
-
+#include "core/auto/descent.h"
 #include "core/mesh.h"
 #include "core/params.h"
-#include "core/progress.h"
-#include "core/topology.h"
 
 namespace mdn {
-
-class Executor;
-
-// The searched values; the lists go beyond the paper's ranges because many optima sit at
-// their edges. Iteration counts cost nothing extra to search: one run of the longest count
-// observes every shorter one (IterationHook).
-struct TuneGrid {
-  std::vector<RegionMode> region_mode{RegionMode::Off, RegionMode::On};
-  std::vector<double> alpha{0.01, 0.03, 0.06, 0.1, 0.2, 0.4, 0.8};
-  std::vector<double> sigma_theta{15, 25, 40, 70};
-  std::vector<int> n_aniso{0, 1, 2, 4, 8, 16};
-  std::vector<double> sigma_gamma{15, 20, 25, 30, 40, 60, 90};
-  std::vector<int> n_normal{2, 3, 5, 10, 20, 30, 50, 70, 100};
-  std::vector<int> n_vertex{2, 3, 5, 10, 20, 30, 50, 80};
-};
-
-struct TuneOptions {
-  TuneGrid grid;
-  int max_rounds = 4;  // of coordinate descent over (n_aniso, sigma_gamma, alpha, sigma_theta, region)
-  int threads = 1;     // results do not depend on it
-  ProgressObserver* progress = nullptr;  // cancellation is honoured between evaluations
-};
 
 struct TuneResult {
   DenoiseParams best;       // mode Manual, region_mode On or Off
@@ -44,27 +18,6 @@ struct TuneResult {
   int evaluations = 0;      // (prefilter, sigma_gamma) settings evaluated, each over all iteration counts
   double seconds = 0;
 };
-
-// What the descent scores: one or more inputs (unit-box positions with faces F) and a score of
-// a denoised output of input t (lower is better; summed over the inputs). The ground-truth
-// search scores MSAE; ParamMode::Search the recorrupted error (core/auto/recorrupted.h).
-struct TuneProblem {
-  const Triangles& F;
-  const Topology& topo;
-  std::vector<Vertices> inputs;
-  std::function<double(int input, const Vertices& output)> score;
-  double fold_ratio = 0;  // of the noisy input (RegionMode::Auto reads it)
-};
-
-struct Descent {
-  DenoiseParams best;  // mode Manual, region_mode On or Off
-  double score = 0;
-  int evaluations = 0;
-};
-
-// The coordinate descent over options.grid from `start` (its region_mode On or Off); see
-// tune_parameters. Throws InvalidParamsError for an empty or unsorted grid list.
-Descent descend(const TuneProblem& problem, const DenoiseParams& start, const TuneOptions& options, Executor& executor);
 
 // Coordinate descent from `start` (snapped to the grid); the first round scans every value
 // of each coordinate, later rounds the neighbour each side of the current one, until a

@@ -3,8 +3,7 @@
 
 Each case writes a small source tree (a clean base plus the one file or include that breaks a
 rule) into a temporary folder, runs the checker on it and expects exit 1 with the rule named; the
-clean base alone passes. The known core/auto cycle is part of the base, so that the checker's
-"a listed cycle is gone" rule does not fire on the clean tree.
+clean base alone passes.
 """
 import os
 import subprocess
@@ -15,7 +14,7 @@ import unittest
 CHECKER = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts",
                        "check_include_directions.py")
 
-# The clean base: one file per room, each including what the rules allow, and the known cycle.
+# The clean base: one file per room, each including what the rules allow.
 BASE = {
     "core/mesh.h": "",
     "core/io/document.h": '#include "core/mesh.h"\n',
@@ -40,14 +39,18 @@ BASE = {
     "server/service_parts.cpp": ('#include "server/service_parts.h"\n#include "server/http/jobs/redis/store.h"\n'
                                  '#include "server/http/jobs/memory_job_store.h"\n'),
     "server/main.cpp": '#include "server/service_parts.h"\n',
-    "core/auto/choice.h": '#include "core/auto/recorrupted.h"\n',
+    # core/auto as it stands: the scorer reaches the descent, not the ground-truth search.
+    "core/auto/choice.h": '#include "core/auto/selection.h"\n',
     "core/auto/choose.h": '#include "core/auto/choice.h"\n',
     "core/auto/choose.cpp": '#include "core/auto/choose.h"\n#include "core/auto/recorrupted.h"\n',
     "core/auto/denoise.h": '#include "core/auto/choice.h"\n',
     "core/auto/denoise.cpp": '#include "core/auto/denoise.h"\n#include "core/auto/choose.h"\n',
-    "core/auto/recorrupted.h": "",
-    "core/auto/recorrupted.cpp": '#include "core/auto/recorrupted.h"\n#include "core/auto/tune.h"\n',
-    "core/auto/tune.h": "",
+    "core/auto/selection.h": "",
+    "core/auto/recorrupted.h": '#include "core/auto/selection.h"\n',
+    "core/auto/recorrupted.cpp": '#include "core/auto/recorrupted.h"\n#include "core/auto/descent.h"\n',
+    "core/auto/descent.h": "",
+    "core/auto/descent.cpp": '#include "core/auto/descent.h"\n',
+    "core/auto/tune.h": '#include "core/auto/descent.h"\n',
     "core/auto/tune.cpp": '#include "core/auto/tune.h"\n#include "core/auto/denoise.h"\n',
 }
 
@@ -119,14 +122,11 @@ class Rules(unittest.TestCase):
                       "service/c.h": '#include "service/a.h"\n'},
                      "include cycle among service/a, service/b, service/c")
 
-    def test_a_known_cycle_that_is_gone_must_leave_the_list(self):
-        # tune.cpp no longer includes denoise.h: the core/auto cycle is broken.
-        kept = BASE["core/auto/tune.cpp"]
-        try:
-            BASE["core/auto/tune.cpp"] = '#include "core/auto/tune.h"\n'
-            self.refused({}, "no longer a cycle")
-        finally:
-            BASE["core/auto/tune.cpp"] = kept
+    def test_the_old_core_auto_cycle_fails(self):
+        # The scorer including the ground-truth search again (which runs mdn::denoise) closes
+        # the cycle that core/auto/descent.h broke.
+        self.refused({"core/auto/recorrupted.cpp": '#include "core/auto/tune.h"\n'},
+                     "include cycle among core/auto/choose, core/auto/denoise, core/auto/recorrupted, core/auto/tune")
 
 
 if __name__ == "__main__":
