@@ -19,6 +19,7 @@
 #include "core/errors.h"
 #include "core/io/document.h"
 #include "core/io/encode_check.h"
+#include "core/io/output_settings.h"
 
 namespace {
 
@@ -98,11 +99,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (const TriMesh& m : doc->surfaces())
     if (m.V.rows() == 0 || m.F.rows() == 0) return 0;
   io::EncodeOptions options = fuzzed_options(bytes, limits);
+  // The request's output settings are checked once, where it is parsed (core/io's one table,
+  // decision 69); what fails there never reaches the encoders.
+  if (!client_error_or_ok([&] { io::check_output_options(options); }, "check_output_options")) return 0;
   const io::Format other = kFormats[size ? data[size - 1] % std::size(kFormats) : 0];
   for (const io::Format target : {MDN_FUZZ_FORMAT, other}) {
     options.format = target;
     std::string out;
-    // The job's validation step first (settings, memory), then the encoder, as run_job does.
+    // The job's validation step first (finite positions, encoder memory), then the encoder, as
+    // run_job does.
     if (!client_error_or_ok([&] { io::check_encode(*doc, options, limits); }, "check_encode")) continue;
     if (!client_error_or_ok([&] { out = doc->encode(options).bytes; }, "encode")) continue;
     // What we write must read back (without limits smaller than what we accepted).
