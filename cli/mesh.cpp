@@ -40,41 +40,6 @@ std::optional<io::Format> output_format_by_name(const std::string& path) {
                    " names no format this tool writes (accepted: " + accepted_extensions() + ")");
 }
 
-mdn::TriMesh merge_surfaces(const std::vector<mdn::TriMesh>& surfaces) {
-  std::int64_t nv = 0, nf = 0;
-  for (const auto& s : surfaces) {
-    nv += s.num_vertices();
-    nf += s.num_faces();
-  }
-  mdn::TriMesh merged;
-  merged.V.resize(nv, 3);
-  merged.F.resize(nf, 3);
-  std::int64_t v0 = 0, f0 = 0;
-  for (const auto& s : surfaces) {
-    merged.V.middleRows(v0, s.num_vertices()) = s.V;
-    merged.F.middleRows(f0, s.num_faces()) = s.F.array() + static_cast<std::int32_t>(v0);
-    v0 += s.num_vertices();
-    f0 += s.num_faces();
-  }
-  return merged;
-}
-
-mdn::TriMesh scene_mesh(const std::vector<mdn::TriMesh>& surfaces,
-                        const std::vector<std::vector<Eigen::Matrix4d>>& placements) {
-  static const std::vector<Eigen::Matrix4d> kAsIs = {Eigen::Matrix4d::Identity()};
-  std::vector<mdn::TriMesh> shown;
-  for (std::size_t i = 0; i < surfaces.size(); ++i) {
-    const auto& where = i < placements.size() && !placements[i].empty() ? placements[i] : kAsIs;
-    for (const Eigen::Matrix4d& m : where) {
-      mdn::TriMesh copy = surfaces[i];
-      // Rows are points: V * A^T + t^T.
-      copy.V = (surfaces[i].V * m.topLeftCorner<3, 3>().transpose()).rowwise() + m.topRightCorner<3, 1>().transpose();
-      shown.push_back(std::move(copy));
-    }
-  }
-  return merge_surfaces(shown);
-}
-
 LoadedMesh decode_mesh(const std::string& path, const std::string& bytes, io::Format format, const io::Limits& limits) {
   return blame_file(path, [&] {
     LoadedMesh loaded;
@@ -94,7 +59,7 @@ LoadedMesh load_mesh(const std::string& path, const InputLimits& limits) {
 
 json measure(const mdn::TriMesh& truth, const std::string& truth_path, const mdn::TriMesh& result,
              const std::string& result_path, int threads) {
-  if (truth.num_faces() != result.num_faces() || truth.F != result.F) {
+  if (!service::same_faces(truth, result)) {
     throw FileError(result_path + " and the ground truth " + truth_path +
                     " do not have the same faces in the same order (MSAE compares face by face; "
                     "Draco-compressed files renumber faces: measure while writing, or use another format)");

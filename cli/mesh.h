@@ -16,6 +16,7 @@
 #include "core/mesh.h"
 #include "cli/files.h"
 #include "cli/options.h"
+#include "service/reference.h"
 
 namespace mdn::cli {
 
@@ -47,15 +48,10 @@ struct LoadedMesh {
   mdn::TriMesh scene;   // the same as the scene shows it (scene_mesh), for the metrics
 };
 
-// All surfaces of a document as one mesh (indices offset), so MSAE and E_v cover a whole
-// multi-mesh glTF the same way they cover a single OFF.
-mdn::TriMesh merge_surfaces(const std::vector<mdn::TriMesh>& surfaces);
-// All surfaces as the scene shows them: each once per placement (a glTF node that instances
-// it, its world matrix applied), or once as it is when nothing places it. --metrics measures
-// both meshes in this frame, so a glTF with node transforms compares with the same mesh
-// exported in world coordinates, and two glTFs compare as they render.
-mdn::TriMesh scene_mesh(const std::vector<mdn::TriMesh>& surfaces,
-                        const std::vector<std::vector<Eigen::Matrix4d>>& placements);
+// A whole document as one mesh, and as its scene shows it (--metrics measures in that frame):
+// shared with the server's reference comparison (service/reference.h).
+using service::merge_surfaces;
+using service::scene_mesh;
 LoadedMesh decode_mesh(const std::string& path, const std::string& bytes, io::Format format, const io::Limits& limits);
 LoadedMesh load_mesh(const std::string& path, const InputLimits& limits);
 

@@ -6,6 +6,7 @@
 #include <sstream>
 #include <string_view>
 
+#include "core/io/output_settings.h"
 #include "core/params.h"
 #include "service/params_json.h"
 
@@ -153,7 +154,36 @@ std::string options_text() {
   return out.str();
 }
 
-// The parameters, from core's param_specs() and the service's output defaults.
+// Words of `text` in lines of at most `width` columns, each indented by `indent` spaces.
+std::string wrapped(std::string_view text, std::size_t indent, std::size_t width) {
+  std::string out, line;
+  std::istringstream words{std::string(text)};
+  for (std::string word; words >> word;) {
+    if (!line.empty() && indent + line.size() + 1 + word.size() > width) {
+      out += std::string(indent, ' ') + line + "\n";
+      line.clear();
+    }
+    line += (line.empty() ? "" : " ") + word;
+  }
+  if (!line.empty()) out += std::string(indent, ' ') + line + "\n";
+  return out;
+}
+
+// The "output" object's settings from io::output_settings() (decision 69): name, range,
+// default, meaning. tests/io/output_settings_test checks this text against the table.
+std::string output_settings_text() {
+  std::ostringstream out;
+  for (const io::OutputSetting& s : io::output_settings()) {
+    out << "    output." << s.name << " " << s.range_text();
+    if (s.kind == io::SettingKind::Integer) out << ", default " << s.default_integer();
+    else if (s.kind == io::SettingKind::Choice && s.default_choice().empty()) out << ", default null";
+    else if (s.kind == io::SettingKind::Choice) out << ", default \"" << s.default_choice() << "\"";
+    out << (s.deprecated ? " (deprecated)" : "") << "\n" << wrapped(s.meaning, 8, 96);
+  }
+  return out.str();
+}
+
+// The parameters, from core's param_specs() and the output settings' table.
 std::string parameters_text() {
   std::ostringstream out;
   out << R"(Parameters (--params). By default ("mode": "auto") the six parameters of Table 1 (alpha ...
@@ -186,17 +216,9 @@ shows what ran and the choice: the model, what it read, the noise estimate and t
       << defaults.kmeans_seed << R"(
   solver "ldlt"|"cg", default ")"
       << mdn::to_string(defaults.solver) << R"("
-  output {...}  output container, glTF compression and Draco settings, defaults:
-         )"
-      << service::to_json(service::JobParams{})["output"].dump() << R"(
-         format: "off"|"obj"|"ply"|"stl"|"drc"|"glb"|"gltf", null = IN's;
-         compression: "as_input" (IN's: Draco if IN used it, else none; meshopt input
-         gives none)|"none"|"draco" ("meshopt" is not written yet); "draco": true|false
-         is still accepted (= "draco"|"none"); position_bits [8, 30];
-         normal_bits [1, 30]; texcoord_bits, color_bits, generic_bits [0, 30], 0 = lossless;
-         compression_level [0, 10] (10 = smallest)
-
+  output {...}  the output container, glTF compression and encoder settings (core/io's one table):
 )";
+  out << output_settings_text() << "\n";
   return out.str();
 }
 

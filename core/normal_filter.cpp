@@ -7,6 +7,7 @@
 #include <numbers>
 #include <optional>
 #include <stdexcept>
+#include <string>
 
 #include "core/errors.h"
 #include "core/fast_math.h"
@@ -32,6 +33,20 @@ void range_weights(float* range, std::int64_t n, float inv_range, float sw, bool
     const float dist = std::sqrt(range[q]);
     const float denom = l1_median && dist >= sw ? dist : 1.0f;
     range[q] = detail::exp_nonpositive_f(-x * x) / denom;
+  }
+}
+
+// Guided range factors (decision 53): range[q] <- guide_phi[q] / ||n_i - n_j||, where guide_phi
+// holds phi(x_q) of the guidance normals (range_weights with l1_median = false, once per run) and
+// range[q] holds ||n_i - n_j||^2 of the current normals on entry; bilateral where
+// ||n_i - n_j|| < sw, as in range_weights. With guidance equal to the current normals this is
+// range_weights' own arithmetic: the same phi, the same division.
+MDN_AVX2_CLONE
+void guided_range_weights(float* range, const float* guide_phi, std::int64_t n, float sw, bool l1_median) {
+  for (std::int64_t q = 0; q < n; ++q) {
+    const float dist = std::sqrt(range[q]);
+    const float denom = l1_median && dist >= sw ? dist : 1.0f;
+    range[q] = guide_phi[q] / denom;
   }
 }
 
@@ -188,11 +203,12 @@ std::optional<CompactNeighbours<PairDelta>> compact_neighbours(const Topology& t
 
 // The range factor of every pair (i, j > i) for faces [begin, end), normals n (#F x 4 floats,
 // decision 36). Blocks of about kBlock pairs: gather ||n_i - n_j||^2 into range, then the
-// weights while the block is in L1 (branch-free, vectorised).
+// weights while the block is in L1 (branch-free, vectorised). guide_phi non-null: the guided
+// factors (decision 53), phi already read from the guidance normals, per pair.
 template <class Neighbours>
 void range_pass(const float* n, const std::vector<std::int32_t>& ff_offsets, const PairIndex& pairs,
-                const Neighbours& nb, float inv_range, const NormalFilterSettings& s, std::vector<float>& range,
-                std::int64_t begin, std::int64_t end) {
+                const Neighbours& nb, float inv_range, const NormalFilterSettings& s, const float* guide_phi,
+                std::vector<float>& range, std::int64_t begin, std::int64_t end) {
   const std::vector<std::int32_t>& pair_start = pairs.pair_start;
   constexpr std::int32_t kBlock = 512;
   for (std::int64_t i = begin; i < end;) {
@@ -211,7 +227,10 @@ void range_pass(const float* n, const std::vector<std::int32_t>& ff_offsets, con
         range[static_cast<std::size_t>(q)] = dx * dx + dy * dy + dz * dz;
       }
     }
-    range_weights(range.data() + q0, count, inv_range, static_cast<float>(s.bilateral_switch), s.l1_median);
+    if (guide_phi)
+      guided_range_weights(range.data() + q0, guide_phi + q0, count, static_cast<float>(s.bilateral_switch), s.l1_median);
+    else
+      range_weights(range.data() + q0, count, inv_range, static_cast<float>(s.bilateral_switch), s.l1_median);
   }
 }
 
@@ -262,7 +281,32 @@ void to_double(const std::vector<float>& n, Vertices& out) {
   }
 }
 
+// Decision 53: with guidance, phi of Eq. 7's range factor is read from the guidance normals,
+// which do not change, so once per pair before the iterations: the same pass and arithmetic as
+// an iteration's (range_pass), on the guidance in single precision, without the 1/||n_i - n_j||.
+template <class Neighbours>
+std::vector<float> guidance_factors(const Vertices& guidance, const Topology& topo, const PairIndex& pairs,
+                                    const Neighbours& nb, float inv_range, const NormalFilterSettings& s, Executor& ex) {
+  std::vector<float> g, phi(static_cast<std::size_t>(pairs.pair_start.back()));
+  to_float4(guidance, g);
+  NormalFilterSettings phi_only;
+  phi_only.bilateral_switch = s.bilateral_switch;
+  phi_only.l1_median = false;  // denominators 1: phi alone
+  ex.parallel_for(guidance.rows(), [&](std::int64_t begin, std::int64_t end) {
+    range_pass(g.data(), topo.ff_offsets, pairs, nb, inv_range, phi_only, nullptr, phi, begin, end);
+  });
+  return phi;
+}
+
 }  // namespace
+
+void check_guidance(const Vertices& guidance, std::int64_t faces) {
+  if (guidance.rows() != faces || guidance.cols() != 3)
+    throw InvalidParamsError("guidance", "the guidance normals must be one row of 3 per face (" + std::to_string(faces) +
+                                             "), got " + std::to_string(guidance.rows()) + " by " +
+                                             std::to_string(guidance.cols()));
+  if (!guidance.allFinite()) throw InvalidParamsError("guidance", "a guidance normal is not finite");
+}
 
 Vertices l1_median_normal_filter(const Vertices& V, const Triangles& F, const Topology& topo,
                                  const NormalFilterSettings& s, Executor* executor, ProgressObserver* progress) {
@@ -275,6 +319,7 @@ Vertices detail::l1_median_normal_filter(const Vertices& V, const Triangles& F, 
   Executor serial(1);
   Executor& ex = executor ? *executor : serial;
   const std::int64_t nf = F.rows();
+  if (s.guidance) check_guidance(*s.guidance, nf);
   Vertices normals = face_normals(V, F);
   if (s.iterations <= 0 || nf == 0) return normals;
 
@@ -291,18 +336,31 @@ Vertices detail::l1_median_normal_filter(const Vertices& V, const Triangles& F, 
   if (compact16 || compact32)
     std::vector<std::int32_t>().swap(pairs.pair_of);  // before the iterations' arrays (peak memory)
   std::vector<float> range(static_cast<std::size_t>(pairs.pair_start.back()));
+  // Runs body with the form of N(i) chosen above.
+  const auto with_neighbours = [&](const auto& body) {
+    if (compact16)
+      body(*compact16);
+    else if (compact32)
+      body(*compact32);
+    else
+      body(AbsoluteNeighbours{topo.ff_faces.data(), pairs.pair_of.data()});
+  };
 
   // Eq. 7 typo: both denominators mean 1 - cos(sigma_gamma) (core/README.md, decision 8).
   const auto inv_range = static_cast<float>(1.0 / (1.0 - std::cos(s.sigma_gamma_deg * std::numbers::pi / 180.0)));
   // The iterations run in single precision (decision 36).
   std::vector<float> current, next(static_cast<std::size_t>(4 * nf));
   to_float4(normals, current);
+  std::vector<float> guide_phi;  // decision 53: phi of the guidance, once per pair
+  if (s.guidance)
+    with_neighbours([&](const auto& nb) { guide_phi = guidance_factors(*s.guidance, topo, pairs, nb, inv_range, s, ex); });
+  const float* guided = s.guidance ? guide_phi.data() : nullptr;
   if (s.on_iteration) s.on_iteration(0, normals);
-  auto iterate = [&](const auto& neighbours) {
+  with_neighbours([&](const auto& neighbours) {
     for (int it = 0; it < s.iterations; ++it) {
       checkpoint(progress, Stage::NormalFilter, static_cast<double>(it) / s.iterations);
       ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
-        range_pass(current.data(), topo.ff_offsets, pairs, neighbours, inv_range, s, range, begin, end);
+        range_pass(current.data(), topo.ff_offsets, pairs, neighbours, inv_range, s, guided, range, begin, end);
       });
       ex.parallel_for(nf, [&](std::int64_t begin, std::int64_t end) {
         jacobi_step(current.data(), topo.ff_offsets, spatial, range, neighbours, next.data(), begin, end);
@@ -313,13 +371,7 @@ Vertices detail::l1_median_normal_filter(const Vertices& V, const Triangles& F, 
         s.on_iteration(it + 1, normals);
       }
     }
-  };
-  if (compact16)
-    iterate(*compact16);
-  else if (compact32)
-    iterate(*compact32);
-  else
-    iterate(AbsoluteNeighbours{topo.ff_faces.data(), pairs.pair_of.data()});
+  });
   if (progress) progress->on_progress(Stage::NormalFilter, 1.0);
   to_double(current, normals);
   return normals;

@@ -67,13 +67,15 @@ Vertices prefilter_stage(const Vertices& input, const Triangles& F, const Topolo
 }
 
 Vertices run_method(const Vertices& input, const Triangles& F, const Topology& topo, const DenoiseParams& params,
-                    Executor& executor, ProgressObserver* progress, DenoiseReport& report) {
+                    Executor& executor, ProgressObserver* progress, DenoiseReport& report, const Vertices* guidance) {
   StageTimings& times = report.timings;
   Vertices P = prefilter_stage(input, F, topo, params, executor, progress, report);
 
   // Sec. 5, Eq. 6-7.
   auto t0 = Clock::now();
-  const Vertices N = l1_median_normal_filter(P, F, topo, normal_filter_settings(params), &executor, progress);
+  NormalFilterSettings nfs = normal_filter_settings(params);
+  nfs.guidance = guidance;  // decision 53
+  const Vertices N = l1_median_normal_filter(P, F, topo, nfs, &executor, progress);
   times.normal_ms = ms_since(t0);
 
   // Sec. 6, Eq. 8, starting from the pre-filtered positions.
@@ -121,6 +123,14 @@ DenoiseResult run_pipeline(const TriMesh& input, const DenoiseParams& requested,
   Vertices P = box.apply(order.to_order(input.V));
   const Topology topo = Topology::build(F, static_cast<std::int32_t>(P.rows()), &executor);
   report.fold_ratio = fold_ratio(P, F, topo, requested.fold_angle, &executor);  // on the noisy input (decision 5)
+  // The guidance in the run's face order, checked before any work (decision 16's order; decision 53).
+  Vertices ordered_guidance;
+  if (options.guidance) {
+    check_guidance(*options.guidance, F.rows());
+    ordered_guidance.resize(F.rows(), 3);
+    for (Eigen::Index k = 0; k < F.rows(); ++k)
+      ordered_guidance.row(k) = options.guidance->row(order.face_of()[static_cast<std::size_t>(k)]);
+  }
   times.setup_ms = ms_since(t0);
 
   // ParamMode::Auto / Search: the parameters per input (core/auto/choose.h).
@@ -131,7 +141,8 @@ DenoiseResult run_pipeline(const TriMesh& input, const DenoiseParams& requested,
     times.measure_ms = ms_since(t0);
   }
 
-  P = run_method(P, F, topo, report.params, executor, progress, report);
+  P = run_method(P, F, topo, report.params, executor, progress, report,
+                 options.guidance ? &ordered_guidance : nullptr);
 
   result.mesh.V = order.to_input(box.undo(P));
   result.mesh.F = input.F;

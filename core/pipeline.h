@@ -23,6 +23,9 @@ struct RunOptions {
   int threads = 1;                        // worker threads for this call; output does not depend on it
   ProgressObserver* progress = nullptr;   // optional; progress and cancellation
   OrderKind order = OrderKind::Auto;      // memory order of the run (decision 16); output order is the input's
+  // Optional guidance normals for the normal filter (issue 48; decision 53): #F by 3, one per face
+  // in the input's face order, borrowed for the call. Null (the default): the paper's method.
+  const Vertices* guidance = nullptr;
 };
 
 // Wall-clock milliseconds per step.
@@ -81,9 +84,11 @@ Vertices prefilter_stage(const Vertices& P, const Triangles& F, const Topology& 
 
 // Sec. 4-6 with `params` as given (mode Manual): prefilter_stage, the L1-median normal filter
 // and the vertex update. Returns the denoised positions; fills report's region fields and
-// timings (not total_ms).
+// timings (not total_ms). guidance: the normal filter's optional guidance normals (#F by 3 in
+// F's order; decision 53).
 Vertices run_method(const Vertices& P, const Triangles& F, const Topology& topo, const DenoiseParams& params,
-                    Executor& executor, ProgressObserver* progress, DenoiseReport& report);
+                    Executor& executor, ProgressObserver* progress, DenoiseReport& report,
+                    const Vertices* guidance = nullptr);
 
 // The settings of the normal filter (Sec. 5) that `params` asks for.
 NormalFilterSettings normal_filter_settings(const DenoiseParams& params);

@@ -1,8 +1,9 @@
 // meshdenoise-server: parses the configuration (flags, then MDN_* variables), builds the
 // metrics, the worker pool and the job store (service_parts.h: memory or Redis), runs the HTTP service over them,
 // and drains on SIGTERM/SIGINT: /readyz turns 503, new jobs get 503, accepted jobs finish
-// within --drain-grace seconds, then the process exits 0 as soon as the last one ends (results
-// not downloaded yet do not hold it; the log counts them); a drain that runs out of grace logs
+// within --drain-grace seconds, then the process exits 0 as soon as the last one ends and the
+// results that clients are still polling for are fetched (decision 67; results nobody asks for
+// do not hold it, the log counts them); a drain that runs out of grace logs
 // every job it abandons and exits 1. A second signal stops at once. Either way the process
 // ends within kStopBound of the drain's end: a worker stuck in a step that cannot be
 // interrupted is not joined (the stuck jobs are logged, then std::_Exit(1)).

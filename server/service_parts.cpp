@@ -13,12 +13,7 @@ WorkerPoolOptions make_pool_options(const ServerConfig& c) {
   o.threads_per_job = c.threads_per_job;
   o.capacity = c.queue_capacity;
   o.time_limit = std::chrono::milliseconds(std::int64_t(c.job_time_limit_s * 1000));
-  o.limits.max_faces = c.max_faces;
-  o.limits.max_vertices = c.max_vertices;
-  o.limits.max_decoded_bytes = c.max_decoded_bytes;
-  o.limits.max_json_depth = c.max_json_depth;
-  o.limits.max_nodes = c.max_nodes;
-  o.limits.max_accessors = c.max_accessors;
+  o.limits = decode_limits(c);
   return o;
 }
 

@@ -28,10 +28,6 @@ JobOutput run(const JobInput& input, std::string* release, const io::Limits& lim
 
   JobOutput out;
   out.effective = input.params;
-  // A compression that cannot be written (meshopt, for now) is refused before any work.
-  if (is_gltf(input.params.output.format.value_or(input.format)))
-    (void)io::resolve_compression(input.params.output, io::Compression::None);
-
   // The job's time limit and cancellation reach the decoder and encoder loops too (not only
   // the core's iterations), so a job stuck in a huge input stops within its limit.
   io::Limits bounded = limits;
@@ -79,6 +75,7 @@ JobOutput run(const JobInput& input, std::string* release, const io::Limits& lim
   if (is_gltf(out.format)) out.effective.output.compression = out.compression;
   out.timings.encode_ms = ms_since(start);
   out.notes = document->notes();
+  out.notes.insert(out.notes.end(), encoded.notes.begin(), encoded.notes.end());  // what the positions became
   out.notes.insert(out.notes.end(), run_notes.begin(), run_notes.end());
   out.placements = document->placements();
   out.surfaces = std::move(document->surfaces());  // the document is done with them

@@ -1,6 +1,7 @@
 // JSON <-> JobParams. Names, ranges and defaults of the numeric method parameters come from
 // mdn::param_specs() (core/params.h), so they are defined once; this file only adds the JSON
-// typing rules, the enumerations and the "output" object, whose ranges live in kOutputInts.
+// typing rules and the enumerations; the "output" object's fields, ranges and choices come from
+// io::output_settings() (core/io/output_settings.h, decision 69).
 #include "service/params_json.h"
 
 #include <cmath>
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "core/errors.h"
+#include "core/io/output_settings.h"
 
 namespace mdn::service {
 namespace {
@@ -117,28 +119,17 @@ const std::string& string_value(const json& value, const std::string& path, cons
   return value.get_ref<const std::string&>();
 }
 
-// Draco settings of the "output" object, ranges as in proto/params.schema.json and
-// io::EncodeOptions: Draco accepts 1..30 quantisation bits; positions below 8 bits wreck any
-// mesh worth denoising, so [8, 30]. For UVs, colours and generic attributes 0 means "stored
-// losslessly", so [0, 30]. Normals are recomputed from the denoised surface, so storing them
-// losslessly buys nothing: [1, 30] (the schema's choice). Compression level: 0..10.
-struct OutputIntSpec {
-  const char* name;
-  int io::EncodeOptions::*field;
-  int min, max;
-};
-constexpr OutputIntSpec kOutputInts[] = {
-    {"position_bits", &io::EncodeOptions::position_bits, 8, 30},
-    {"normal_bits", &io::EncodeOptions::normal_bits, 1, 30},
-    {"texcoord_bits", &io::EncodeOptions::texcoord_bits, 0, 30},
-    {"color_bits", &io::EncodeOptions::color_bits, 0, 30},
-    {"generic_bits", &io::EncodeOptions::generic_bits, 0, 30},
-    {"compression_level", &io::EncodeOptions::compression_level, 0, 10},
-};
-
-constexpr const char* kFormatChoices =
-    "\"off\", \"obj\", \"ply\", \"stl\", \"drc\", \"glb\", \"gltf\" or null (same as the input)";
-constexpr const char* kCompressionChoices = "\"as_input\", \"none\", \"draco\" or \"meshopt\"";
+// The "output" object's fields, ranges and choices: io::output_settings() (decision 69).
+// "\"off\", \"obj\", ... or null": the choices as a message lists them.
+std::string choices_text(const io::OutputSetting& s) {
+  std::string text;
+  for (std::size_t i = 0; i < s.choices.size(); ++i) {
+    const bool last = i + 1 == s.choices.size() && !s.nullable;
+    text += (i == 0 ? "" : last ? " or " : ", ") + json(s.choices[i]).dump();
+  }
+  if (s.nullable) text += " or null (same as the input)";
+  return text;
+}
 
 std::vector<std::string> top_level_names() {
   std::vector<std::string> names;
@@ -148,8 +139,8 @@ std::vector<std::string> top_level_names() {
 }
 
 std::vector<std::string> output_names() {
-  std::vector<std::string> names{"format", "compression", "draco"};
-  for (const auto& spec : kOutputInts) names.emplace_back(spec.name);
+  std::vector<std::string> names;
+  for (const auto& s : io::output_settings()) names.emplace_back(s.name);
   return names;
 }
 
@@ -168,30 +159,23 @@ void parse_output(const json& j, io::EncodeOptions& out) {
   std::optional<bool> draco;
   for (const auto& [key, value] : j.items()) {
     const std::string path = "output." + key;
-    if (key == "format") {
+    const io::OutputSetting* s = io::find_output_setting(key);
+    if (!s) unknown_field(path, output_names());
+    if (s->kind == io::SettingKind::Integer) {
+      out.*s->field = static_cast<int>(integer_in_range(value, path, s->min, s->max));
+    } else if (s->kind == io::SettingKind::Flag) {
+      draco = boolean_value(value, path);
+    } else if (key == "format") {
       if (value.is_null()) {
         out.format.reset();
         continue;
       }
-      const auto& text = string_value(value, path, kFormatChoices);
-      const auto format = io::format_from_string(text);
-      if (!format) fail(path, std::string("one of ") + kFormatChoices, value);
+      const auto format = io::format_from_string(string_value(value, path, choices_text(*s)));
+      if (!format) fail(path, "one of " + choices_text(*s), value);
       out.format = *format;
-    } else if (key == "compression") {
-      compression = io::compression_from_string(string_value(value, path, kCompressionChoices));
-      if (!compression) fail(path, std::string("one of ") + kCompressionChoices, value);
-    } else if (key == "draco") {
-      draco = boolean_value(value, path);
     } else {
-      bool found = false;
-      for (const auto& spec : kOutputInts) {
-        if (key == spec.name) {
-          out.*spec.field = static_cast<int>(integer_in_range(value, path, spec.min, spec.max));
-          found = true;
-          break;
-        }
-      }
-      if (!found) unknown_field(path, output_names());
+      compression = io::compression_from_string(string_value(value, path, choices_text(*s)));
+      if (!compression) fail(path, "one of " + choices_text(*s), value);
     }
   }
   if (draco) {
@@ -222,19 +206,9 @@ json parse_text(std::string_view text, const std::string& field) {
 
 }  // namespace
 
-void validate_output_options(const io::EncodeOptions& options) {
-  for (const auto& spec : kOutputInts) {
-    const int value = options.*spec.field;
-    if (value < spec.min || value > spec.max) {
-      const std::string path = std::string("output.") + spec.name;
-      fail(path, "an integer in " + range_text(spec.min, spec.max), json(value));
-    }
-  }
-}
-
 void validate(const JobParams& params) {
   params.denoise.validate();
-  validate_output_options(params.output);
+  io::check_output_options(params.output);
 }
 
 JobParams job_params_from_json(const nlohmann::json& j) {
@@ -306,7 +280,8 @@ nlohmann::json to_json(const JobParams& p) {
   json out = json::object();
   out["format"] = p.output.format ? json(std::string(io::to_string(*p.output.format))) : json(nullptr);
   out["compression"] = std::string(io::to_string(p.output.compression));
-  for (const auto& spec : kOutputInts) out[spec.name] = p.output.*spec.field;
+  for (const auto& s : io::output_settings())
+    if (s.kind == io::SettingKind::Integer) out[std::string(s.name)] = p.output.*s.field;
   j["output"] = std::move(out);
   return j;
 }

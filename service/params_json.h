@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/io/document.h"
+#include "core/io/output_settings.h"
 #include "core/noise.h"
 #include "core/params.h"
 
@@ -25,11 +26,7 @@ struct JobParams {
   }();  // method parameters (defaults from core, mode auto)
   // Output container and compression (glTF: as the input's by default, issue 18) and the
   // Draco settings.
-  io::EncodeOptions output = [] {
-    io::EncodeOptions o;
-    o.compression = io::Compression::AsInput;
-    return o;
-  }();
+  io::EncodeOptions output = io::request_defaults();
 };
 
 // Parses a JSON object; missing fields keep their defaults. Throws InvalidParamsError naming
@@ -47,12 +44,10 @@ nlohmann::json to_json(const JobParams& p);
 // the API accept in manual mode, with "mode": "manual").
 nlohmann::json method_params_json(const DenoiseParams& p);
 
-// For JobParams built rather than parsed: range checks of the "output" object (position_bits [8, 30],
-// normal_bits [1, 30], texcoord/color/generic_bits [0, 30] with 0 = lossless,
-// compression_level [0, 10]) and of everything (DenoiseParams::validate() plus the output
-// checks). Throw InvalidParamsError with the JSON path, e.g. "output.position_bits".
-// job_params_from_json() already calls validate(); run_job() calls it before decoding.
-void validate_output_options(const io::EncodeOptions& options);
+// For JobParams built rather than parsed: DenoiseParams::validate() and the "output" ranges of
+// io::output_settings() (io::check_output_options). Throws InvalidParamsError with the JSON
+// path, e.g. "output.position_bits". job_params_from_json() already calls it; run_job() calls
+// it before decoding.
 void validate(const JobParams& params);
 
 // Synthetic noise for experiments (meshdenoise --add-noise),

@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "core/auto/choose.h"
+#include "core/normal_filter.h"
 #include "core/orient.h"
 
 namespace mdn {
@@ -37,7 +38,16 @@ DenoiseResult denoise(const TriMesh& input, const DenoiseParams& params, const R
   if (turn.empty()) return run(input, params, options);
   TriMesh wound = input;
   for (const std::int32_t f : turn) std::swap(wound.F(f, 1), wound.F(f, 2));
-  DenoiseResult result = run(wound, params, options);
+  // Guidance normals (decision 53) follow their faces: a turned face's guidance turns with it.
+  RunOptions turned_options = options;
+  Vertices turned_guidance;
+  if (options.guidance) {
+    check_guidance(*options.guidance, input.F.rows());
+    turned_guidance = *options.guidance;
+    for (const std::int32_t f : turn) turned_guidance.row(f) *= -1;
+    turned_options.guidance = &turned_guidance;
+  }
+  DenoiseResult result = run(wound, params, turned_options);
   result.mesh.F = input.F;
   result.report.notes.push_back(std::to_string(turn.size()) + " of " + std::to_string(input.F.rows()) +
                                 " faces are wound against their neighbours; they were filtered turned to match (decision 34)");

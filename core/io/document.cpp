@@ -91,13 +91,8 @@ std::optional<Compression> compression_from_string(std::string_view name) {
 }
 
 Compression resolve_compression(const EncodeOptions& options, Compression input) {
-  if (options.compression != Compression::AsInput) {
-    if (options.compression == Compression::Meshopt)
-      throw UnsupportedError("glTF output with EXT_meshopt_compression is not written yet; use \"none\" or \"draco\"");
-    return options.compression;
-  }
-  if (input == Compression::Meshopt || input == Compression::AsInput) return Compression::None;
-  return input;
+  if (options.compression != Compression::AsInput) return options.compression;
+  return input == Compression::AsInput ? Compression::None : input;
 }
 
 }  // namespace mdn::io

@@ -69,9 +69,10 @@ struct Limits {
 
 struct EncodeOptions {
   std::optional<Format> format;  // default: the input's container
-  // glTF output compression: Draco (the library's default), None, or AsInput (the input's, as
-  // glTF-Transform keeps what it read; the service's default). Meshopt is not written yet. DRC
-  // is always Draco. What an encode wrote comes back in Encoded::compression.
+  // glTF output compression: Draco (the library's default), None, Meshopt
+  // (EXT_meshopt_compression with KHR_mesh_quantization, decision 70) or AsInput (the input's,
+  // as glTF-Transform keeps what it read; the service's default). DRC is always Draco. What an
+  // encode wrote comes back in Encoded::compression. The settings: output_settings.h.
   Compression compression = Compression::Draco;
   // Draco quantisation bits. Positions: [8, 30] (11 bits costs about 0.8 mm on a 2 m scan).
   // The other attributes: [1, 30], or 0 = stored losslessly. UVs, colours, joints and weights
@@ -96,6 +97,9 @@ struct EncodeOptions {
 struct Encoded {
   std::string bytes;
   Compression compression = Compression::None;
+  // glTF: what each surface's POSITION became ("mesh 0: POSITION written as unsigned short on
+  // a 14-bit grid ..."), when it is not plain float32 or Draco.
+  std::vector<std::string> notes = {};
 };
 
 class MeshDocument {
@@ -120,9 +124,8 @@ class MeshDocument {
 };
 
 // The glTF compression an encode writes, given the options and the input's compression:
-// `compression` (AsInput: `input`). Meshopt is not written yet: as the input's it resolves to
-// None, asked for explicitly it is an UnsupportedError (HTTP 422). The glTF writer calls it; a
-// caller that must know before encoding (a check of the encoder's memory) may too.
+// `compression` (AsInput: `input`). The glTF writer calls it; a caller that must know before
+// encoding (a check of the encoder's memory) may too.
 Compression resolve_compression(const EncodeOptions& options, Compression input);
 
 // How to decode, beyond the format. The service uses the defaults: nothing outside the bytes

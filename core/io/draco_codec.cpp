@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
 
 #include "core/errors.h"
 #include "core/io/detail.h"
@@ -273,7 +274,12 @@ void check_draco_encodable(const draco::Mesh& mesh, const EncodeOptions& options
 }
 
 std::string draco_encode(const draco::Mesh& mesh, const EncodeOptions& options, const std::optional<QuantizationBox>& box) {
-  check_encode_options(options);
+  // The request's ranges were checked where it was parsed (output_settings.h); this guards only
+  // against what Draco's quantiser cannot take at all.
+  for (const int bits : {options.normal_bits, options.texcoord_bits, options.color_bits, options.generic_bits})
+    if (bits < 0 || bits > 30) throw std::invalid_argument("draco_encode: quantisation bits outside [0, 30]");
+  if (options.position_bits < 1 || options.position_bits > 30 || options.compression_level < 0 || options.compression_level > 10)
+    throw std::invalid_argument("draco_encode: position_bits outside [1, 30] or compression_level outside [0, 10]");
   CancelPoll(options.cancel).check();  // the encoder itself runs to its end
   check_draco_encodable(mesh, options);
   // The tables of the largest setting in use (encode_check.h), against the same bound as decoding.

@@ -1,7 +1,8 @@
 // The validation step between decode and encode: what an encoder will quantise or pack, and
 // what it will cost, is checked before any encoder runs (core/io/README.md, "Encoders never
-// crash"). The service calls check_encode() after denoising and before MeshDocument::encode;
-// the encoders repeat the checks that depend on their exact input (check_draco_encodable).
+// crash"). The service calls check_encode() right after decoding, before any denoising work
+// (service/job_runner.cpp), so a job whose output cannot be written fails in milliseconds; the
+// encoders repeat the checks that depend on their exact input (check_draco_encodable).
 #pragma once
 
 #include <cstdint>
@@ -27,12 +28,8 @@ std::int64_t draco_encode_bytes(const EncodeOptions& options, std::int64_t faces
 // resolve_compression) is written by Draco's encoder.
 bool writes_draco(Format output, Compression compression);
 
-// Checks the settings alone (no mesh): every *_bits and compression_level within the range
-// its encoder takes (InvalidParamsError, HTTP 400). Safe to call before decoding.
-void check_encode_options(const EncodeOptions& options);
-
-// Checks that `doc` can be encoded with `options` (its format resolved) within `limits`:
-//  - check_encode_options;
+// Checks that `doc` can be encoded with `options` (its format resolved) within `limits`; the
+// settings' ranges were checked where the request was parsed (output_settings.h):
 //  - every surface position finite (a non-finite one would be written as text "nan" or "inf"
 //    that no reader takes back), UnsupportedError;
 //  - if the output is Draco: draco_encode_bytes over every surface's faces against

@@ -64,8 +64,10 @@ struct Attribute {
   std::vector<std::uint8_t> bytes;
   std::size_t element_size() const { return static_cast<std::size_t>(components * component_size(component_type)); }
   // Reads component k of element i as a number (KHR_mesh_quantization's dequantisation for
-  // normalized integers: max(c / (2^(n-1) - 1), -1) signed, c / (2^n - 1) unsigned).
-  double value(std::int64_t i, int k) const {
+  // normalized integers: max(c / (2^(n-1) - 1), -1) signed, c / (2^n - 1) unsigned; with
+  // `dequantize` false, the stored integer).
+  double value(std::int64_t i, int k, bool dequantize = true) const {
+    const bool normalized = this->normalized && dequantize;
     const std::uint8_t* p = bytes.data() + static_cast<std::size_t>(i) * element_size() +
                             static_cast<std::size_t>(k * component_size(component_type));
     switch (component_type) {

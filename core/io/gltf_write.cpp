@@ -25,6 +25,7 @@
 #include "core/io/detail.h"
 #include "core/io/draco_codec.h"
 #include "core/io/gltf_model.h"
+#include "core/io/gltf_write.h"
 #include "core/io/plain.h"
 #include "core/io/weld.h"
 
@@ -50,38 +51,6 @@ draco::GeometryAttribute::Type draco_semantic(const std::string& semantic) {
   if (semantic.rfind("COLOR_", 0) == 0) return draco::GeometryAttribute::COLOR;
   return draco::GeometryAttribute::GENERIC;
 }
-
-// ---- encoding helpers ----
-
-struct Output {
-  Json json;
-  std::vector<std::string> new_views;  // bytes of buffer views appended to json["bufferViews"]
-  std::int64_t old_views = 0;
-  std::vector<int> uses;               // accessor -> uses outside the denoised primitives
-  std::vector<int> claimed;            // accessor -> times claimed by a rewritten primitive
-
-  int append_view(std::string bytes, std::optional<int> target, std::optional<int> stride = std::nullopt) {
-    Json view = Json::object();
-    view["buffer"] = 0;
-    view["byteOffset"] = 0;
-    view["byteLength"] = bytes.size();
-    if (stride) view["byteStride"] = *stride;
-    if (target) view["target"] = *target;
-    json["bufferViews"].push_back(view);
-    new_views.push_back(std::move(bytes));
-    return static_cast<int>(json["bufferViews"].size()) - 1;
-  }
-  // The accessor to rewrite for a primitive: the input's own the first time, if nothing but
-  // the denoised primitives uses it (so no stale copy stays behind); otherwise a new copy.
-  int claim(int accessor, const std::vector<int>& external_uses) {
-    if (accessor >= 0 && accessor < static_cast<int>(external_uses.size()) &&
-        external_uses[static_cast<std::size_t>(accessor)] == 0 && claimed[static_cast<std::size_t>(accessor)]++ == 0)
-      return accessor;
-    Json copy = accessor >= 0 && accessor < static_cast<int>(json["accessors"].size()) ? json["accessors"][accessor] : Json::object();
-    json["accessors"].push_back(copy);
-    return static_cast<int>(json["accessors"].size()) - 1;
-  }
-};
 
 // Every index that points into "accessors": how many places use each accessor.
 std::vector<int> accessor_uses(const Json& json) {
@@ -138,6 +107,29 @@ void pad_to_4(std::string& bytes, char fill) {
   while (bytes.size() % 4) bytes += fill;
 }
 
+}  // namespace
+
+
+// A GLB container: header, JSON chunk (padded with spaces), BIN chunk if any (glTF 2.0, 4.4).
+std::string make_glb(std::string text, std::string_view bin) {
+  pad_to_4(text, ' ');
+  std::string glb;
+  const auto u32 = [&glb](std::uint32_t v) { glb.append(reinterpret_cast<const char*>(&v), 4); };
+  const std::size_t total = 12 + 8 + text.size() + (bin.empty() ? 0 : 8 + bin.size());
+  glb.append("glTF", 4);
+  u32(2);
+  u32(static_cast<std::uint32_t>(total));
+  u32(static_cast<std::uint32_t>(text.size()));
+  u32(0x4E4F534A);  // "JSON"
+  glb += text;
+  if (!bin.empty()) {
+    u32(static_cast<std::uint32_t>(bin.size()));
+    u32(0x004E4942);  // "BIN\0"
+    glb.append(bin);
+  }
+  return glb;
+}
+
 // Tightly packed attribute bytes, each element padded to a multiple of 4 bytes as glTF
 // requires of vertex attributes (returns the stride used, 0 when no padding was needed).
 int packed_vertex_bytes(const Attribute& a, std::string& out) {
@@ -181,10 +173,10 @@ void set_accessor(Json& acc, const Attribute& a, std::optional<int> view) {
   if (a.semantic == "POSITION" && a.count > 0) {
     Json lo = Json::array(), hi = Json::array();
     for (int k = 0; k < 3; ++k) {
-      double mn = a.value(0, k), mx = mn;
+      double mn = a.value(0, k, false), mx = mn;
       for (std::int64_t i = 1; i < a.count; ++i) {
-        mn = std::min(mn, a.value(i, k));
-        mx = std::max(mx, a.value(i, k));
+        mn = std::min(mn, a.value(i, k, false));
+        mx = std::max(mx, a.value(i, k, false));
       }
       lo.push_back(mn);
       hi.push_back(mx);
@@ -194,27 +186,18 @@ void set_accessor(Json& acc, const Attribute& a, std::optional<int> view) {
   }
 }
 
-}  // namespace
 
-
-// A GLB container: header, JSON chunk (padded with spaces), BIN chunk if any (glTF 2.0, 4.4).
-std::string make_glb(std::string text, std::string_view bin) {
-  pad_to_4(text, ' ');
-  std::string glb;
-  const auto u32 = [&glb](std::uint32_t v) { glb.append(reinterpret_cast<const char*>(&v), 4); };
-  const std::size_t total = 12 + 8 + text.size() + (bin.empty() ? 0 : 8 + bin.size());
-  glb.append("glTF", 4);
-  u32(2);
-  u32(static_cast<std::uint32_t>(total));
-  u32(static_cast<std::uint32_t>(text.size()));
-  u32(0x4E4F534A);  // "JSON"
-  glb += text;
-  if (!bin.empty()) {
-    u32(static_cast<std::uint32_t>(bin.size()));
-    u32(0x004E4942);  // "BIN\0"
-    glb.append(bin);
-  }
-  return glb;
+// An indices accessor of `count` SCALARs of `component_type`, claimed for the primitive.
+int indices_accessor(Output& out, Json& pj, int component_type, std::int64_t count, std::optional<int> view) {
+  Attribute indices;
+  indices.semantic = "indices";
+  indices.component_type = component_type;
+  indices.components = 1;
+  indices.count = count;
+  const int acc = out.claim(pj.contains("indices") ? pj["indices"].get<int>() : -1, out.uses);
+  set_accessor(out.json["accessors"][acc], indices, view);
+  pj["indices"] = acc;
+  return acc;
 }
 
 namespace {
@@ -316,19 +299,6 @@ void build_draco_mesh(const Primitive& prim, const std::vector<Attribute>& attri
   }
 }
 
-// An indices accessor of `count` SCALARs of `component_type`, claimed for the primitive.
-int indices_accessor(Output& out, Json& pj, int component_type, std::int64_t count, std::optional<int> view) {
-  Attribute indices;
-  indices.semantic = "indices";
-  indices.component_type = component_type;
-  indices.components = 1;
-  indices.count = count;
-  const int acc = out.claim(pj.contains("indices") ? pj["indices"].get<int>() : -1, out.uses);
-  set_accessor(out.json["accessors"][acc], indices, view);
-  pj["indices"] = acc;
-  return acc;
-}
-
 // A primitive as KHR_draco_mesh_compression: one payload, accessors without views stating the
 // decoded counts.
 void write_draco_primitive(Output& out, Json& pj, const Primitive& prim, const std::vector<Attribute>& attributes,
@@ -395,26 +365,11 @@ void write_plain_primitive(Output& out, Json& pj, const Primitive& prim, const s
   if (pj["extensions"].empty()) pj.erase("extensions");
 }
 
-// extensionsUsed / extensionsRequired: KHR_draco_mesh_compression iff a primitive uses it;
-// EXT_meshopt_compression views were decoded, so the output's views hold plain bytes.
-void set_extension_lists(Json& json) {
-  bool any_draco = false;
-  for (const auto& mesh : json.value("meshes", Json::array()))
-    for (const auto& prim : mesh.value("primitives", Json::array()))
-      if (prim.contains("extensions") && prim["extensions"].contains(kDraco)) any_draco = true;
-  for (const char* list : {"extensionsUsed", "extensionsRequired"}) {
-    Json names = json.value(list, Json::array());
-    names.erase(std::remove(names.begin(), names.end(), Json(kDraco)), names.end());
-    names.erase(std::remove(names.begin(), names.end(), Json(kMeshopt)), names.end());
-    if (any_draco) names.push_back(kDraco);
-    if (names.empty()) json.erase(list);
-    else json[list] = names;
-  }
-}
-
 // Keeps only referenced buffer views, renumbered in order, and merges every buffer into one:
-// returns its bytes (padded to 4).
-std::string pack_views(Output& out, const tinygltf::Model& model) {
+// returns its bytes (padded to 4). EXT_meshopt_compression views keep their compressed stream
+// there and point at the fallback buffer (index 1, no data, decision 70), whose length is
+// returned in `fallback`.
+std::string pack_views(Output& out, const tinygltf::Model& model, std::size_t& fallback) {
   std::vector<char> used(out.json["bufferViews"].size(), 0);
   for_each_view_ref(out.json, [&](Json& v) {
     const auto i = v.get<std::int64_t>();
@@ -434,10 +389,24 @@ std::string pack_views(Output& out, const tinygltf::Model& model) {
       bytes = out.new_views[i - static_cast<std::size_t>(out.old_views)];
     }
     pad_to_4(bin, '\0');
-    erase_extension(view, kMeshopt);
-    view["buffer"] = 0;
-    view["byteOffset"] = bin.size();
-    view["byteLength"] = bytes.size();
+    const Json* meshopt = static_cast<std::int64_t>(i) < out.old_views ? nullptr : &out.new_meshopt[i - static_cast<std::size_t>(out.old_views)];
+    if (meshopt && !meshopt->is_null()) {
+      Json ext = *meshopt;
+      ext["buffer"] = 0;
+      ext["byteOffset"] = bin.size();
+      ext["byteLength"] = bytes.size();
+      fallback = (fallback + 3) / 4 * 4;
+      view["buffer"] = 1;
+      view["byteOffset"] = fallback;
+      fallback += view["byteLength"].get<std::size_t>();
+      view["extensions"] = Json::object();
+      view["extensions"][kMeshopt] = ext;
+    } else {
+      erase_extension(view, kMeshopt);
+      view["buffer"] = 0;
+      view["byteOffset"] = bin.size();
+      view["byteLength"] = bytes.size();
+    }
     if (view["byteOffset"] == 0) view.erase("byteOffset");
     bin.append(bytes);
     views.push_back(view);
@@ -454,8 +423,9 @@ std::string pack_views(Output& out, const tinygltf::Model& model) {
   return bin;
 }
 
-// The one buffer: the input's first buffer's other fields, a data URI in a .gltf.
-void set_buffer(Json& json, const Json& input, const std::string& bin, Format target) {
+// The one buffer: the input's first buffer's other fields, a data URI in a .gltf; and the
+// meshopt fallback buffer when `fallback` > 0.
+void set_buffer(Json& json, const Json& input, const std::string& bin, Format target, std::size_t fallback) {
   Json buffer = input.contains("buffers") && !input["buffers"].empty() ? input["buffers"][0] : Json::object();
   buffer.erase("uri");
   erase_extension(buffer, kMeshopt);  // a fallback buffer's mark
@@ -463,6 +433,12 @@ void set_buffer(Json& json, const Json& input, const std::string& bin, Format ta
   if (target == Format::Gltf && !bin.empty()) buffer["uri"] = "data:application/octet-stream;base64," + base64_encode(bin);
   if (bin.empty()) json.erase("buffers");
   else json["buffers"] = Json::array({buffer});
+  if (fallback == 0 || bin.empty()) return;
+  Json placeholder = Json::object();
+  placeholder["byteLength"] = fallback;
+  placeholder["extensions"] = Json::object();
+  placeholder["extensions"][kMeshopt] = Json{{"fallback", true}};
+  json["buffers"].push_back(placeholder);
 }
 
 }  // namespace
@@ -483,29 +459,38 @@ Encoded GltfDocument::encode_json(const EncodeOptions& options) const {
   out.old_views = static_cast<std::int64_t>(out.json["bufferViews"].size());
   out.uses = outside_uses(json_, surfaces_);
   out.claimed.assign(out.uses.size(), 0);
+  std::vector<std::string> written;  // what the positions became (Encoded::notes)
+  std::vector<std::pair<int, PositionPlan>> grids;
   for (std::size_t s = 0; s < surfaces_.size(); ++s) {
     const Surface& surface = surfaces_[s];
     const TriMesh& mesh = meshes_[s];
     const Vertices normals = slot_normals(surface, mesh);
     const QuantizationBox box = position_grid(mesh);
+    const PositionPlan plan = plan_positions(json_, surface, mesh, compression, options, written);
+    if (plan.kind == PositionPlan::Kind::Grid) grids.emplace_back(surface.mesh, plan);
     std::map<std::pair<int, std::string>, int> rewritten;
     for (const auto& prim : surface.primitives) {
       Json& pj = out.json["meshes"][prim.mesh]["primitives"][prim.index];
-      const std::vector<Attribute> attributes = written_attributes(prim, surface, mesh, normals);
+      std::vector<Attribute> attributes = written_attributes(prim, surface, mesh, normals);
+      store_quantized(attributes, prim, plan, compression);
       if (prim.tangent >= 0) pj["attributes"].erase("TANGENT");
       if (compression == Compression::Draco && !prim.has_targets) {
         write_draco_primitive(out, pj, prim, attributes, options, box);
+      } else if (compression == Compression::Meshopt && !prim.has_targets) {
+        write_meshopt_primitive(out, pj, prim, attributes, options);
       } else {
         write_plain_primitive(out, pj, prim, attributes, rewritten);
       }
     }
   }
+  add_grid_nodes(out.json, grids);
+  std::size_t fallback = 0;
+  const std::string bin = pack_views(out, model_, fallback);
+  set_buffer(out.json, json_, bin, target, fallback);
   set_extension_lists(out.json);
-  const std::string bin = pack_views(out, model_);
-  set_buffer(out.json, json_, bin, target);
   std::string text = out.json.dump();
-  if (target == Format::Gltf) return {std::move(text), compression};
-  return {make_glb(std::move(text), bin), compression};
+  if (target == Format::Gltf) return {std::move(text), compression, std::move(written)};
+  return {make_glb(std::move(text), bin), compression, std::move(written)};
 }
 
 }  // namespace gltf

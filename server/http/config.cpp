@@ -422,4 +422,15 @@ std::string help_text() {
   return out.str();
 }
 
+io::Limits decode_limits(const ServerConfig& c) {
+  io::Limits limits;
+  limits.max_faces = c.max_faces;
+  limits.max_vertices = c.max_vertices;
+  limits.max_decoded_bytes = c.max_decoded_bytes;
+  limits.max_json_depth = c.max_json_depth;
+  limits.max_nodes = c.max_nodes;
+  limits.max_accessors = c.max_accessors;
+  return limits;
+}
+
 }  // namespace mdn::http

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "core/io/document.h"
+
 namespace mdn::http {
 
 enum class LogFormat { Text, Json };
@@ -107,6 +109,10 @@ struct ServerConfig {
   int effective_workers() const;
   int effective_io_threads() const;  // io_threads, or for 0: max(8, 4 x hardware_concurrency)
 };
+
+// The decoder limits of the configuration (--max-faces ... --max-accessors): what the workers and
+// POST /v1/compare decode under.
+io::Limits decode_limits(const ServerConfig& config);
 
 // A bad flag, environment variable or value; what() names it.
 class ConfigError : public std::runtime_error {

@@ -21,6 +21,7 @@
 #include "core/params.h"
 #include "server/http/transport/connection_gate.h"
 #include "server/http/embedded.h"
+#include "server/http/routes/compare_routes.h"
 #include "server/http/routes/job_routes.h"
 #include "server/http/problem.h"
 #include "server/http/routes/request_body.h"
@@ -131,6 +132,7 @@ struct HttpService::Impl {
         pool(*parts.pool),
         store(parts.store.get()),
         jobs(config, log, metrics, pool, *store),
+        compare(config, metrics),
         service_routes(config, metrics, pool, *store, jobs, [this] { return svr.gate().counts(); }) {
     id_prefix = random_hex(4);
     routes = make_routes();
@@ -153,6 +155,7 @@ struct HttpService::Impl {
         {"GET", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", [](Impl& s, Context& c) { s.jobs.get_job(c); }, false, {}},
         {"DELETE", "/v1/jobs/([^/]+)", "/v1/jobs/{id}", [](Impl& s, Context& c) { s.jobs.delete_job(c); }, false, {}},
         {"GET", "/v1/jobs/([^/]+)/result", "/v1/jobs/{id}/result", [](Impl& s, Context& c) { s.jobs.get_result(c); }, false, {}},
+        {"POST", "/v1/compare", "/v1/compare", [](Impl& s, Context& c) { s.compare.compare(c); }, true, {}},
         {"GET", "/", "/", [](Impl& s, Context& c) { s.service_routes.web_page(c); }, false, {}},
         {"GET", "/web/(.+)", "/web/{path}", [](Impl& s, Context& c) { s.service_routes.web_page(c); }, false, {}},
     };
@@ -470,6 +473,7 @@ struct HttpService::Impl {
   WorkerPool& pool;
   JobStore* store;
   JobRoutes jobs;        // the job routes (/v1/denoise, /v1/jobs...)
+  CompareRoutes compare;  // POST /v1/compare (a mesh against a reference)
   GatedServer svr;
   ServiceRoutes service_routes;  // the service's own routes (health, readiness, metrics, contract, page)
   std::vector<Route> routes;
@@ -533,7 +537,15 @@ void HttpService::begin_drain() {
   impl_->store->begin_drain();
 }
 
-bool HttpService::wait_drained(Clock::time_point deadline) { return impl_->store->wait_drained(deadline); }
+bool HttpService::wait_drained(Clock::time_point deadline) {
+  const bool drained = impl_->store->wait_drained(deadline);
+  // Results that finished during the drain and whose clients are still polling for them are
+  // served until fetched, their clients go quiet, or the grace ends: a restart loses nothing
+  // that was accepted (decision 67). A result nobody asks for does not hold the exit.
+  while (drained && Clock::now() < deadline && impl_->store->results_awaited())
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  return drained;
+}
 
 void HttpService::stop() {
   impl_->pool.begin_drain();

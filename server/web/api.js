@@ -21,8 +21,12 @@ let askToken = async () => null;  // set by the page: shows the token dialog, re
 export function onTokenNeeded(ask) { askToken = ask; }
 export function token() { return sessionStorage.getItem(TOKEN_KEY); }
 
-const unreachable = () => new ApiError({ status: 0, title: 'The server cannot be reached', detail: 'Check that meshdenoise-server is running and reachable, then try again.' });
-const tooSlow = () => new ApiError({ status: 0, title: 'The server stopped answering', detail: `No answer for ${REQUEST_LIMIT_MS / 1000} s; the page gave up waiting. Try again.` });
+const unreachable = () => Object.assign(new ApiError({ status: 0, title: 'The server cannot be reached', detail: 'Check that meshdenoise-server is running and reachable, then try again.' }), { unreachable: true });
+const tooSlow = () => Object.assign(new ApiError({ status: 0, title: 'The server stopped answering', detail: `No answer for ${REQUEST_LIMIT_MS / 1000} s; the page gave up waiting. Try again.` }), { unreachable: true });
+
+// Whether an error means no answer came at all (the server is down, restarting or cut off), as
+// opposed to an answer that refused: the page may try again later.
+export const isUnreachable = (e) => e instanceof ApiError && e.unreachable === true;
 
 // A problem from an error answer's text; an answer that is not problem+json (a proxy's page)
 // is described by its status.

@@ -5,25 +5,32 @@
 // document.body.dataset.state is what the page is doing (styling, and what its tests wait for):
 //   empty      nothing chosen yet
 //   invalid    a field is wrong: named in the action bar, marked, focused; nothing was sent
-//   loading    the file is being sent (upload progress)
+//   loading    the file is being sent (upload progress), or the page waits to send it again
+//              (the server could not be reached: it retries with backoff)
 //   running    the job is queued or running, or its result is being fetched and drawn
 //   done | failed | cancelled
 // Everything shown belongs to the current file and parameters: a new file clears the input's
-// view and information and the result; a new run clears the result; a changed parameter marks
-// a shown result as out of date (#stale).
-import { ApiError, cancelJob, cancelOnLeave, getJson, jobResult, onTokenNeeded, pollJob, submitJob, token } from './api.js';
+// view and information and the result; a new run clears the result once the server accepted
+// it (a run that cannot be sent keeps the previous result); a changed parameter marks a shown
+// result as out of date (#stale).
+import { ApiError, cancelJob, cancelOnLeave, getJson, jobResult, onTokenNeeded, token } from './api.js';
+import { definitions, fileContents, outputPanel, summaryLine, timings, whatRan } from './describe.js';
+import { StrengthComparison } from './compare.js';
+import { bytesText, count, num, percent, saveBlob, seconds } from './format.js';
 import { ParamForm } from './form.js';
-import { displacements, formatName, formatOf, loadMesh } from './meshes.js';
-import { scaleColour, Viewer } from './viewer.js';
+import { HeatMap } from './heat.js';
+import { followJob, sendJob } from './jobs.js';
+import { ReferenceComparison } from './reference.js';
+import { displacements, formatOf, loadMesh } from './meshes.js';
+import { Viewer } from './viewer.js';
 
 const $ = (id) => document.getElementById(id);
-const POLL_S = 0.5;  // long-poll window: progress is redrawn at least this often
 
 const state = {
   file: null, before: null, beforeLoad: null, job: null, result: null, resultName: '', abort: null,
   started: 0, cancelling: false, moved: null, legend: null,
 };
-let form, viewer;
+let form, viewer, heat, compare, reference;
 
 function setState(name) { document.body.dataset.state = name; }
 
@@ -48,12 +55,7 @@ function setStage(text, fraction) {
   else $('progress').value = fraction;
 }
 
-const bytesText = (n) => n >= 1 << 20 ? `${(n / (1 << 20)).toFixed(1)} MiB` : n >= 1024 ? `${(n / 1024).toFixed(0)} KiB` : `${n} B`;
-const seconds = (s) => `${s.toFixed(s < 10 ? 1 : 0)} s`;
-const num = (x) => (Math.abs(x) >= 1000 || Math.abs(x) < 0.01) && x !== 0 ? x.toExponential(2) : String(+x.toPrecision(3));
-const count = (n) => n.toLocaleString('en');
 const elapsed = () => seconds((performance.now() - state.started) / 1000);
-const percent = (f) => `${Math.floor(100 * f)} %`;
 
 // The server's stage identifiers, as people say them.
 const STAGE_NAMES = {
@@ -78,11 +80,12 @@ onTokenNeeded((wrong) => new Promise((resolve) => {
 // ---------------------------------------------------------------- what is shown
 function clearResult() {
   state.result = null;
-  state.moved = null;
-  state.legend = null;
   viewer.setMesh('after', null);
+  heat.set(null);
+  reference?.clear();
+  $('reference').hidden = true;
   $('results').hidden = true;
-  $('legend').hidden = true;
+  $('done-bar').hidden = true;
   $('stale').hidden = true;
   $('pick-info').hidden = true;
   $('results').classList.remove('out-of-date');
@@ -95,16 +98,29 @@ function clearInput() {
   $('mesh-info').hidden = true;
   $('viewer-empty').hidden = false;
   $('viewer-empty').textContent = 'The noisy input and the denoised result appear here, side by side, with one camera.';
+  state.beforeProblem = null;
+  compare?.clear();
+  $('compare').hidden = true;
+}
+
+// The invalid-field error names the first field still wrong (or goes when none is).
+function showInvalid(invalid) {
+  showError({ title: `Check ${invalid.field}`, detail: `${invalid.message}. Fix it, then press Denoise.` });
 }
 
 // A parameter changed: a result on screen no longer shows what Denoise would make.
 function paramsChanged() {
   if (!state.file) return;
   $('run').disabled = document.body.dataset.state === 'loading' || document.body.dataset.state === 'running';
-  if (document.body.dataset.state === 'invalid' && !form.anyInvalid()) {
-    showError(null);
-    setState(state.result ? 'done' : 'empty');
-    setStage('Ready: press Denoise.', 0);
+  if (document.body.dataset.state === 'invalid') {
+    const still = form.firstInvalid({ focus: false });
+    if (still) {
+      showInvalid(still);
+    } else {
+      showError(null);
+      setState(state.result ? 'done' : 'empty');
+      setStage('Ready: press Denoise.', 0);
+    }
   }
   if (state.result && state.job && form.paramsText() !== state.job.paramsText) {
     $('stale').hidden = false;
@@ -136,23 +152,37 @@ async function chooseFile(file) {
   clearInput();
   state.file = file;
   $('file-name').textContent = `${file.name} · ${bytesText(file.size)}`;
+  if (file.size === 0) {
+    // Nothing to send: said plainly, before any request.
+    state.file = null;
+    $('run').disabled = true;
+    setState('failed');
+    setStage('Not sent: the file is empty.', 0);
+    showError({ title: `${file.name} is empty`, detail: 'It has 0 bytes, so there is no mesh in it. If it is still being written or copied, wait and choose it again; otherwise choose another file.' });
+    $('viewer-empty').textContent = `${file.name} is empty: nothing to show.`;
+    return;
+  }
   $('viewer-empty').textContent = `Reading ${file.name} in the browser…`;
   // Read and drawn in the worker while the upload goes: neither waits for the other.
+  state.beforeInfo = null;
   const load = state.beforeLoad = (async () => {
     const format = await formatOf(file.name, file);
     try {
       const { geometry, info } = await loadMesh(file, format);
       if (state.beforeLoad !== load) return;  // another file was chosen meanwhile
       state.before = geometry;
+      state.beforeInfo = info;
       viewer.setMesh('before', geometry);
       viewer.frame();
       $('viewer-empty').hidden = true;
       showMeshInfo(info, file.name);
     } catch (e) {
       if (state.beforeLoad !== load) return;
-      // The server is the judge of what it reads: it runs anyway, the result is shown alone.
+      // The server is the judge of what it reads: it runs anyway, and the result is shown alone;
+      // if the server refuses the file too, its reason is in the action bar.
+      state.beforeProblem = e.message;
       $('viewer-empty').hidden = false;
-      $('viewer-empty').textContent = `The browser could not draw ${file.name}: ${e.message}. The server reads files on its own.`;
+      $('viewer-empty').textContent = `The browser could not draw ${file.name}: ${e.message}.`;
     }
   })();
   $('run').disabled = false;
@@ -170,14 +200,38 @@ function stopJob() {
   }
 }
 
+// The server cannot be reached: said in the action bar with the next try (decision 66).
+function sayRetry(what) {
+  return (attempt, wait) => {
+    const kept = state.result ? ' The previous result stays on screen.' : '';
+    showError({ title: 'The server cannot be reached', detail: `The page tries ${what} again in ${Math.round(wait / 1000)} s (try ${attempt + 2}), and keeps trying until it answers.${kept} Cancel stops it.` });
+    setStage(`The server cannot be reached · trying again in ${Math.round(wait / 1000)} s`, undefined);
+  };
+}
+
+// The job's stage in the action bar.
+function showJobStage(job) {
+  if (state.cancelling) return;
+  const p = job.progress;
+  if (job.state === 'queued') {
+    const ahead = p.jobs_ahead;
+    setStage(`${stageName('queued')}${ahead === undefined ? '' : ahead === 0 ? ' · next in line' : ` · ${ahead} ${ahead === 1 ? 'job' : 'jobs'} ahead`} · ${elapsed()}`, undefined);
+  } else if (p.stage === 'decode' && !(p.fraction > 0)) {
+    setStage(`${stageName('decode')} · ${elapsed()}`, undefined);
+  } else {
+    setStage(`${stageName(p.stage)} · ${percent(p.fraction)} · ${elapsed()}`, p.fraction);
+  }
+}
+
 async function run() {
   if (!state.file || !form) return;  // no form: the page could not start (said in the action bar)
-  const invalid = form.firstInvalid();
+  const invalid = form.firstInvalid({ focus: false });
   if (invalid) {
     stopJob();
     setState('invalid');
     setStage('Not sent: a parameter needs fixing.', 0);
-    showError({ title: `Check ${invalid.field}`, detail: `${invalid.message}. Fix it, then press Denoise.` });
+    showInvalid(invalid);
+    form.focus(invalid.field);  // after the error box: the bar has its final height
     $('run').disabled = false;
     $('cancel').disabled = true;
     return;
@@ -186,36 +240,25 @@ async function run() {
   stopJob();
   const abort = state.abort = new AbortController();
   const paramsText = form.paramsText();
+  const strength = form.strength.value;
   state.job = null;
   state.cancelling = false;
-  clearResult();
   state.started = performance.now();
   setState('loading');
   $('run').disabled = true;
   $('cancel').disabled = false;
   const file = state.file;
-  setStage(`Sending ${file.name} · 0 %`, 0);
   try {
-    let job = await submitJob(file, paramsText, {
-      signal: abort.signal,
+    setStage(`Sending ${file.name} · 0 %`, 0);
+    let job = await sendJob(file, paramsText, abort.signal, {
       onUpload: (sent, total) => setStage(`Sending ${file.name} · ${percent(sent / (total || 1))} of ${bytesText(total)}`, sent / (total || 1)),
+      onRetry: sayRetry('to send the file'), onSent: () => showError(null),
     });
-    state.job = { id: job.id, paramsText, name: file.name, running: true };
+    // Accepted: the previous result no longer belongs to what runs.
+    clearResult();
+    state.job = { id: job.id, paramsText, name: file.name, running: true, strength };
     setState('running');
-    while (job.state === 'queued' || job.state === 'running') {
-      if (!state.cancelling) {
-        const p = job.progress;
-        if (job.state === 'queued') {
-          const ahead = p.jobs_ahead;
-          setStage(`${stageName('queued')}${ahead === undefined ? '' : ahead === 0 ? ' · next in line' : ` · ${ahead} ${ahead === 1 ? 'job' : 'jobs'} ahead`} · ${elapsed()}`, undefined);
-        } else if (p.stage === 'decode' && !(p.fraction > 0)) {
-          setStage(`${stageName('decode')} · ${elapsed()}`, undefined);
-        } else {
-          setStage(`${stageName(p.stage)} · ${percent(p.fraction)} · ${elapsed()}`, p.fraction);
-        }
-      }
-      job = await pollJob(job.id, POLL_S, abort.signal);
-    }
+    job = await followJob(job, abort.signal, { onProgress: showJobStage, onRetry: sayRetry('to follow the job'), onBack: () => showError(null) });
     state.job.running = false;
     if (job.state === 'cancelled') {
       setState('cancelled');
@@ -233,21 +276,26 @@ async function run() {
       signal: abort.signal,
       onProgress: (got, total) => setStage(`Fetching the result · ${total ? `${percent(got / total)} of ${bytesText(total)}` : bytesText(got)}`, total ? got / total : undefined),
     });
-    setStage('Drawing the result…', undefined);
     await showResult(job, bytes, abort);
   } catch (e) {
     if (e?.name === 'AbortError') {
       if (state.abort === abort || state.cancelling) {  // Cancel pressed before the job existed
-        setState('cancelled');
-        setStage('Cancelled.', 0);
+        setState(state.result ? 'done' : 'cancelled');
+        setStage(state.result ? 'Not sent: cancelled. The previous result is shown.' : 'Cancelled.', state.result ? 1 : 0);
+        showError(null);
       }
       return;
     }
     if (state.abort !== abort) return;  // another run took over
     if (state.job) state.job.running = false;
+    await state.beforeLoad;  // the browser's own reading first, so that the view says what it found
+    if (state.abort !== abort) return;
     setState('failed');
     setStage(state.job ? 'The job could not be followed.' : 'Not accepted.', 0);
     showError(problemOf(e));
+    if (!state.result && state.beforeProblem) {
+      $('viewer-empty').textContent = `Nothing to show: the browser could not draw ${file.name} (${state.beforeProblem}) and the server did not accept it.`;
+    }
   } finally {
     if (state.abort === abort) {
       $('run').disabled = !state.file;
@@ -275,90 +323,81 @@ async function cancel() {
 }
 
 // ---------------------------------------------------------------- the result
-async function showResult(job, bytes, abort) {
+async function showResult(job, bytes, abort, name = null) {
   const result = job.result;
+  const drawStart = performance.now();
+  setStage('Drawing the result · reading it', 0.1);
   state.result = new Blob([bytes], { type: result.media_type });
-  state.resultName = `${state.file.name.replace(/\.[^.]*$/, '')}-denoised.${result.format}`;
+  state.resultName = name ?? `${state.file.name.replace(/\.[^.]*$/, '')}-denoised.${result.format}`;
   let after = null;
   try {
-    after = (await loadMesh(state.result, result.format)).geometry;
+    after = (await loadMesh(state.result, result.format, { info: false })).geometry;
   } catch (e) {
     showError({ title: 'The result cannot be drawn', detail: `The browser could not draw it: ${e.message}. Download it to see it elsewhere.` });
   }
+  const parsed = performance.now();
   await state.beforeLoad;  // the input drawn (or given up) first: the heat map needs it
   if (state.abort !== abort) return;  // another run took over
-  viewer.setMesh('after', after);
-  if (!state.before) viewer.frame();
-  $('viewer-empty').hidden = Boolean(state.before || after);
-
-  // The heat map: distance moved, in mean edge lengths of the input (the unit of the method's
-  // noise measures) and in model units. The scale ends at the 99th percentile (outliers aside).
-  let legend = null;
+  // The displacement (distance moved, in mean edge lengths of the input, the unit of the
+  // method's noise measures, and in model units), then the mesh and its colours in one frame.
+  let moved = null;
   if (state.before && after) {
-    const { moved, edge } = await displacements(state.before, after);
+    setStage('Drawing the result · measuring the displacement', 0.5);
+    moved = await displacements(state.before, after);
     if (state.abort !== abort) return;
-    const sorted = Float32Array.from(moved).sort();
-    const top = sorted[Math.min(sorted.length - 1, Math.floor(0.99 * sorted.length))] || sorted[sorted.length - 1] || 0;
-    viewer.setHeat(Array.from(moved, (d) => (top > 0 ? d / top : 0)));
-    state.moved = moved;
-    legend = state.legend = { edge, top, max: sorted[sorted.length - 1] ?? 0, mean: moved.reduce((a, b) => a + b, 0) / (moved.length || 1) };
   }
-  showLegend(legend, state.moved);
-
+  const measured = performance.now();
+  setStage('Drawing the result · drawing', 0.8);
+  await viewer.batch(() => {
+    viewer.setMesh('after', after);
+    if (!state.before) viewer.frame();
+    heat.set(moved);
+  });
+  $('viewer-empty').hidden = Boolean(state.before || after);
+  if (state.abort !== abort) return;
+  const drawn = performance.now();
+  // How long each part of the drawing took (ms), for the bench script and the summary.
+  Object.assign(document.body.dataset, { drawMs: String(drawn - drawStart), drawParseMs: String(parsed - drawStart),
+                                         drawMeasureMs: String(measured - parsed), drawRenderMs: String(drawn - measured) });
+  state.drawMs = performance.now() - drawStart;
   const wall = (performance.now() - state.started) / 1000;
-  $('summary').replaceChildren(...[
-    ['Time', `${seconds(wall)} in all · queue ${seconds(job.timings_s.queue_wait)} · run ${seconds(job.timings_s.run)}`],
+  $('summary').replaceChildren(...definitions([
+    ['Time', `${seconds(wall)} in all · queue ${seconds(job.timings_s.queue_wait)} · run ${seconds(job.timings_s.run)} · drawing ${seconds(state.drawMs / 1000)}`],
     ['Input', `${state.file.name} · ${bytesText(job.input_bytes)}`],
-    ['Output', `${formatName(result.format)}${result.compression === 'draco' ? ' (Draco)' : result.compression === 'meshopt' ? ' (meshopt)' : ''} · ${bytesText(result.bytes)}`],
     ['Mesh', `${count(result.vertices)} vertices · ${count(result.faces)} faces`],
-    ...(legend ? [['Moved', `mean ${num(legend.mean / legend.edge)} · max ${num(legend.max / legend.edge)} edge lengths`]] : []),
-    ...result.notes.map((n) => ['Note', n]),
-  ].flatMap(([k, v]) => [Object.assign(document.createElement('dt'), { textContent: k }), Object.assign(document.createElement('dd'), { textContent: v })]));
-  showReports(result.reports, state.job.paramsText);
-  showTimings(result.timings_ms);
+    ...(heat.data ? [['Moved', `mean ${num(heat.mean / heat.edge)} · max ${num(heat.max / heat.edge)} edge lengths`]] : []),
+  ]));
+  $('reports').replaceChildren(whatRan(result.reports, JSON.parse(state.job.paramsText), state.job.strength));
+  $('timings').replaceChildren(...timings(result.timings_ms, STAGE_NAMES));
+  const inputBytes = await state.file.arrayBuffer().catch(() => new ArrayBuffer(0));
+  if (state.abort !== abort) return;
+  $('output-panel').replaceChildren(...outputPanel(
+    { format: await formatOf(state.file.name, state.file), contents: fileContents(inputBytes, await formatOf(state.file.name, state.file)), info: state.beforeInfo },
+    { contents: fileContents(bytes, result.format) }, job));
   $('download').textContent = `Download ${state.resultName}`;
+  $('result-line').textContent = summaryLine(result, heat, wall);
+  $('done-bar').hidden = false;
   showCommand('curl');
   $('results').hidden = false;
+  $('compare').hidden = false;
+  reference.clear();
+  $('reference').hidden = false;
   setStage(`Done in ${seconds(wall)}.`, 1);
   setState('done');
   paramsChanged();
 }
 
-function showLegend(legend, moved) {
-  $('legend').hidden = !legend;
-  if (!legend) return;
-  const bar = $('legend-bar'), ctx = bar.getContext('2d');
-  for (let x = 0; x < bar.width; ++x) {
-    const [r, g, b] = scaleColour(x / (bar.width - 1));
-    ctx.fillStyle = `rgb(${Math.round(255 * r)}, ${Math.round(255 * g)}, ${Math.round(255 * b)})`;
-    ctx.fillRect(x, 0, 1, bar.height);
-  }
-  const edges = legend.edge > 0 ? legend.top / legend.edge : 0;
-  $('legend-max').textContent = `${num(edges)} edge lengths · ${num(legend.top)} model units`;
-  $('legend-min').textContent = '0';
-  $('legend-max').dataset.edgeLengths = String(edges);
-  $('legend-max').dataset.modelUnits = String(legend.top);
-  $('legend-note').textContent = `Distance from each result vertex to the nearest input vertex; mean input edge length ${num(legend.edge)} model units. The scale ends at the 99th percentile. Click the result to read one vertex.`;
-  drawHistogram(moved, legend.top);
-}
-
-// Vertices by distance moved: 32 bins over the legend's range (the last one also holds what lies
-// beyond it), each bar in the colour of its bin's middle, heights relative to the fullest bin.
-function drawHistogram(moved, top) {
-  const canvas = $('histogram'), ctx = canvas.getContext('2d');
-  const bins = new Uint32Array(32);
-  for (const d of moved) bins[Math.min(31, top > 0 ? Math.floor((d / top) * 32) : 0)]++;
-  const most = Math.max(1, ...bins);
-  ctx.clearRect(0, 0, canvas.width, canvas.height);
-  const w = canvas.width / 32;
-  bins.forEach((n, i) => {
-    const [r, g, b] = scaleColour((i + 0.5) / 32);
-    ctx.fillStyle = `rgb(${Math.round(255 * r)}, ${Math.round(255 * g)}, ${Math.round(255 * b)})`;
-    const h = n === 0 ? 0 : Math.max(1, Math.round((n / most) * canvas.height));
-    ctx.fillRect(i * w + 0.5, canvas.height - h, w - 1, h);
-  });
-  canvas.dataset.bins = Array.from(bins).join(',');
-  canvas.setAttribute('aria-label', `Histogram of the distances moved: ${count(moved.length)} vertices in 32 bins from 0 to ${num(top)} model units`);
+// A strength of the side-by-side runs becomes the page's result (view, heat map, report,
+// Download); the form's strength follows, so that Denoise would make it again.
+async function pickStrength(entry) {
+  stopJob();
+  showError(null);
+  form.setStrength(entry.key);
+  state.job = { id: entry.job.id, paramsText: entry.paramsText, name: entry.name, running: false, strength: entry.key };
+  state.started = performance.now();
+  setState('running');
+  await showResult(entry.job, entry.bytes, state.abort, entry.resultName);
+  setStage(`Showing ${entry.label}.`, 1);
 }
 
 // A click (not a drag) on the result: the nearest vertex of the face under the pointer and how
@@ -371,81 +410,17 @@ function pickAt(x, y) {
     viewer.clearPick();
     return;
   }
-  const d = state.moved?.[hit.index];
+  const d = heat.describe(hit.index);
   const position = hit.position.toArray().map(num).join(', ');
-  info.textContent = d === undefined
-    ? `Vertex ${count(hit.index)} at (${position})`
-    : `Vertex ${count(hit.index)} moved ${num(d / state.legend.edge)} edge lengths (${num(d)} model units)`;
+  info.textContent = d ? d.text : `Vertex ${count(hit.index)} at (${position})`;
   info.dataset.vertex = String(hit.index);
-  info.dataset.moved = d === undefined ? '' : String(d);
+  info.dataset.moved = d ? String(d.moved) : '';
   info.hidden = false;
-}
-
-function table(rows, head) {
-  const t = document.createElement('table');
-  if (head) t.createTHead().insertRow().append(...head.map((h) => Object.assign(document.createElement('th'), { textContent: h })));
-  const body = t.createTBody();
-  for (const r of rows) body.insertRow().append(...r.map((c) => Object.assign(document.createElement('td'), { textContent: c })));
-  return t;
-}
-
-// Per surface: what auto measured and what ran, each parameter with where its value came from
-// (given in this run's request, chosen by auto, or the default).
-function showReports(reports, paramsText) {
-  const given = Object.keys(JSON.parse(paramsText));
-  const box = $('reports');
-  box.replaceChildren();
-  reports.forEach((r, i) => {
-    const title = document.createElement('h3');
-    title.textContent = `${reports.length > 1 ? `Surface ${i + 1} · ` : ''}mode ${r.mode}${r.region_prefilter_applied ? ` · region pre-filter on ${count(r.region_vertices)} vertices` : ''}`;
-    const rows = Object.entries(r.params).filter(([k]) => k !== 'mode')
-      .map(([k, v]) => [k, typeof v === 'number' ? num(v) : String(v),
-                        given.includes(k) ? 'given' : r.mode === 'auto' || r.mode === 'search' ? 'auto' : 'default']);
-    box.append(title, table(rows, ['Parameter', 'Ran with', 'Set by']));
-    if (r.choice) {
-      const c = r.choice;
-      const rows = [['How', c.method === 'fallback' ? "outside the model's range: no filtering or the paper's row" : c.method === 'search' ? 'model, refined by search' : 'trained model'],
-                    ['Set', c.chosen], ['Estimated noise', `${num(c.noise.sigma_edges)} edge lengths`]];
-      if (c.predicted_ratio > 0) rows.push(['Predicted error', `${num(c.predicted_ratio)} x the best set's`]);
-      rows.push(['Model', c.model_version]);
-      for (const note of c.notes) rows.push(['Note', note]);
-      box.append(table(rows, ['Parameter choice', '']));
-    }
-    if (r.measures) box.append(table(Object.entries(r.measures).map(([k, v]) => [k.replaceAll('_', ' '), num(v)]), ['Measured', 'Value']));
-  });
-}
-
-// The stages in the order they run; any stage the server adds later follows them.
-const STAGE_ORDER = ['decode', 'setup', 'measure', 'select_parameters', 'initial_prefilter', 'region_prefilter', 'anisotropic_prefilter',
-                     'normal_filter', 'vertex_update', 'encode'];
-
-function showTimings(ms) {
-  const rank = (k) => (STAGE_ORDER.includes(k) ? STAGE_ORDER.indexOf(k) : STAGE_ORDER.length);
-  const stages = Object.entries(ms).filter(([k]) => k !== 'denoise').sort(([a], [b]) => rank(a) - rank(b));
-  const total = stages.reduce((a, [, v]) => a + v, 0) || 1;
-  const t = $('timings');
-  t.replaceChildren();
-  for (const [name, value] of stages) {
-    const row = t.insertRow();
-    const bar = document.createElement('span');
-    bar.className = 'bar';
-    bar.style.width = `${(100 * value / total).toFixed(1)}%`;
-    row.append(Object.assign(document.createElement('th'), { textContent: STAGE_NAMES[name] && name !== 'done' ? `${STAGE_NAMES[name]}` : name.replaceAll('_', ' ') }),
-               Object.assign(document.createElement('td'), { textContent: `${value.toFixed(1)} ms` }));
-    row.insertCell().append(bar);
-  }
 }
 
 // ---------------------------------------------------------------- download, commands
 function download() {
-  if (!state.result) return;
-  const a = document.createElement('a');
-  a.href = URL.createObjectURL(state.result);
-  a.download = state.resultName;
-  document.body.append(a);
-  a.click();
-  a.remove();
-  setTimeout(() => URL.revokeObjectURL(a.href), 60_000);
+  if (state.result) saveBlob(state.result, state.resultName);
 }
 
 const shellQuote = (s) => /^[A-Za-z0-9_./:=@%+-]+$/.test(s) ? s : `'${s.replaceAll("'", "'\\''")}'`;
@@ -482,6 +457,11 @@ async function showCommand(kind, copy = false) {
 // ---------------------------------------------------------------- wiring
 async function main() {
   viewer = new Viewer($('canvas'));
+  heat = new HeatMap(viewer);
+  reference = new ReferenceComparison({
+    input: () => state.file, heat,
+    result: () => (state.result && heat.data ? { blob: state.result, name: state.resultName, vertices: heat.data.moved.length } : null),
+  });
   const drop = $('drop');
   $('file').addEventListener('change', () => {
     const file = $('file').files[0];
@@ -540,6 +520,10 @@ async function main() {
       main: $('fields-main'), more: $('fields-more'), output: $('fields-output'),
     });
     form.onChange = paramsChanged;
+    compare = new StrengthComparison({
+      file: () => state.file, before: () => state.before, paramsText: (key) => form.strengthParamsText(key),
+      onPick: pickStrength, onRetry: sayRetry,
+    });
     document.body.dataset.form = 'ready';
   } catch (e) {
     setState('failed');

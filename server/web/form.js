@@ -173,15 +173,15 @@ export class ParamForm {
     if (message) entry.row.append(el('small', { className: 'field-error', textContent: message }));
   }
 
-  // Every field checked; the first wrong one is shown (its section opened) and focused.
-  // Returns {field, message} of that one, or null when all are valid.
-  firstInvalid() {
+  // Every field checked and marked; the first wrong one is shown (its section opened) and, unless
+  // focus is false, focused. Returns {field, message} of that one, or null when all are valid.
+  firstInvalid({ focus = true } = {}) {
     let first = null;
     for (const path of this.rows.keys()) {
       const message = this.validateRow(path);
       if (message && !first) first = { field: path, message };
     }
-    if (first) this.focus(first.field);
+    if (first && focus) this.focus(first.field);
     return first;
   }
 
@@ -195,11 +195,20 @@ export class ParamForm {
   focus(path) {
     const { row, control } = this.rows.get(path);
     for (let d = row.closest('details'); d; d = d.parentElement?.closest('details')) d.open = true;
-    // Scrolled to just below the sticky action bar (which would otherwise cover it).
+    // Scrolled to just below the sticky action bar, which would otherwise cover it (measured
+    // now: the bar grows with the error it shows), with its label and help in view.
     const bar = document.getElementById('actionbar');
-    document.documentElement.style.setProperty('--bar-height', `${bar ? bar.offsetHeight : 0}px`);
+    row.style.scrollMarginTop = `${(bar ? bar.getBoundingClientRect().height : 0) + 12}px`;
     control.focus({ preventScroll: true });
     row.scrollIntoView({ block: 'start' });
+    // The bar is sticky within the scrolling panel (wide) or the page (narrow): where its bottom
+    // still lies below the row's top, scroll the difference.
+    const covered = bar ? bar.getBoundingClientRect().bottom + 8 - row.getBoundingClientRect().top : 0;
+    if (covered > 0) {
+      const scroller = row.closest('.panel');
+      if (scroller && scroller.scrollHeight > scroller.clientHeight && getComputedStyle(scroller).display !== 'contents') scroller.scrollTop -= covered;
+      else window.scrollBy(0, -covered);
+    }
   }
 
   // The parameters as the JSON text the API takes: the strength's set, then the fields given
@@ -218,6 +227,26 @@ export class ParamForm {
     const parts = [...top].map(([k, v]) => `${JSON.stringify(k)}:${v}`);
     if (output.length) parts.push(`"output":{${output.join(',')}}`);
     return `{${parts.join(',')}}`;
+  }
+
+  // The parameters of a strength alone (its set, or {} for auto), with the output fields given:
+  // what the strengths side by side send, so that each result is in the chosen container.
+  strengthParamsText(key) {
+    const output = [];
+    for (const [path, { control }] of this.rows) {
+      const text = control.value.trim();
+      const [head, sub] = path.split('.');
+      if (text !== '' && head === 'output' && sub) output.push(`${JSON.stringify(sub)}:${text}`);
+    }
+    const parts = Object.entries(STRENGTHS[key].params).map(([k, v]) => `${JSON.stringify(k)}:${JSON.stringify(v)}`);
+    if (output.length) parts.push(`"output":{${output.join(',')}}`);
+    return `{${parts.join(',')}}`;
+  }
+
+  setStrength(key) {
+    this.strength.value = key;
+    this.refreshPlaceholders();
+    this.onChange();
   }
 
   reset() {

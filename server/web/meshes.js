@@ -97,7 +97,8 @@ async function parseHere(blob, format) {
 // A file (Blob) -> { geometry, info }. Throws an Error whose message completes "The browser could
 // not draw this file: ..." (the server is the judge of what it reads; the page then shows the
 // result alone).
-export async function loadMesh(blob, format) {
+// Without `info` (a result: its counts come from the server) the edge count is skipped.
+export async function loadMesh(blob, format, { info = true } = {}) {
   if (!FORMATS.includes(format)) throw new Error('its format was not recognised');
   let mesh;
   if (['glb', 'gltf', 'drc'].includes(format)) {
@@ -107,16 +108,17 @@ export async function loadMesh(blob, format) {
       throw new Error(`it is not a ${formatName(format)} file the browser can read`);
     }
     if (mesh.indices.length === 0) throw new Error('it holds no triangles');
-    mesh.info = await call({ op: 'info', positions: mesh.positions, indices: mesh.indices });
+    if (info) mesh.info = await call({ op: 'info', positions: mesh.positions, indices: mesh.indices });
   } else {
-    mesh = await call({ op: 'parse', blob, format });
+    mesh = await call({ op: 'parse', blob, format, info });
   }
   return { geometry: geometryOf(mesh.positions, mesh.indices), info: mesh.info };
 }
 
-// How far each vertex of `after` moved (distance to the nearest vertex of `before`, in model
-// units) and the mean edge length of `before`. Computed in the worker.
+// How far each vertex of `after` moved: {moved, signed (along the result's normal, outwards
+// positive), exact (matched by index; else by nearest position), edge (the mean edge length of
+// `before`, the heat map's unit)}, in model units. Computed in the worker.
 export function displacements(before, after) {
   return call({ op: 'moved', before: before.getAttribute('position').array, beforeIndices: before.index.array,
-                after: after.getAttribute('position').array });
+                after: after.getAttribute('position').array, afterIndices: after.index.array });
 }

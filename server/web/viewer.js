@@ -1,7 +1,10 @@
 // Before and after in one WebGL canvas with one camera: side by side (two viewports) or swipe
 // (one viewport, the result drawn right of a movable split). Lit surfaces, flat (facets show
 // noise and creases) or smooth; a wireframe overlay; the result can be coloured by how far each
-// vertex moved, unlit, so that the colours on screen are the legend's. Draws on demand only.
+// vertex moved, on the lit surface (the shape stays readable under the colours: each pixel is
+// the legend's colour times the light's brightness, white lights only). Mouse, touch and keys:
+// arrows turn the view, Shift+arrows pan, + and - zoom, 0 or Home frames the model again.
+// Draws on demand only.
 import * as THREE from './vendor/three/build/three.module.js';
 import { OrbitControls } from './vendor/three/examples/jsm/controls/OrbitControls.js';
 
@@ -11,11 +14,17 @@ const SURFACE = 0xd9dde3;
 // A perceptually ordered colour scale (viridis, 7 stops, sRGB): dark blue (did not move) to
 // yellow. The legend draws these values; the heat map renders the same ones (see setHeat).
 const SCALE = [[68, 1, 84], [68, 57, 131], [49, 104, 142], [33, 145, 140], [53, 183, 121], [144, 215, 67], [253, 231, 37]];
-export function scaleColour(t) {
-  const x = Math.min(1, Math.max(0, t)) * (SCALE.length - 1);
-  const i = Math.min(SCALE.length - 2, Math.floor(x)), f = x - i;
-  return SCALE[i].map((c, k) => (c + (SCALE[i + 1][k] - c) * f) / 255);
+// The signed scale (in or out along the normal): a diverging blue - grey - red (ColorBrewer's
+// RdBu, reversed, its white middle darkened to a light grey so that it stays visible when lit).
+const SIGNED = [[33, 102, 172], [103, 169, 207], [209, 229, 240], [214, 214, 214], [253, 219, 199], [239, 138, 98], [178, 24, 43]];
+function along(stops, t) {
+  const x = Math.min(1, Math.max(0, t)) * (stops.length - 1);
+  const i = Math.min(stops.length - 2, Math.floor(x)), f = x - i;
+  return stops[i].map((c, k) => (c + (stops[i + 1][k] - c) * f) / 255);
 }
+// t in [0, 1] of the legend -> sRGB [r, g, b] in [0, 1]; signed: 0 is the most inward, 0.5 no
+// movement, 1 the most outward.
+export function scaleColour(t, signed = false) { return along(signed ? SIGNED : SCALE, t); }
 
 export class Viewer {
   constructor(canvas) {
@@ -28,7 +37,7 @@ export class Viewer {
     this.camera = new THREE.PerspectiveCamera(35, 1, 0.01, 100);
     this.controls = new OrbitControls(this.camera, canvas);
     this.controls.enableDamping = false;
-    this.controls.listenToKeyEvents(canvas);  // arrow keys pan while the canvas has focus
+    canvas.addEventListener('keydown', (e) => this.onKey(e));
     this.controls.addEventListener('change', () => this.draw());
     this.layout = 'side';
     this.split = 0.5;
@@ -46,7 +55,9 @@ export class Viewer {
 
   makeScene() {
     const scene = new THREE.Scene();
-    scene.add(new THREE.HemisphereLight(0xffffff, 0x30363f, 1.0));
+    // White lights only: the heat map's colours are then only scaled by the light (its hue and
+    // saturation stay the legend's).
+    scene.add(new THREE.HemisphereLight(0xffffff, 0x3a3a3a, 1.0));
     const key = new THREE.DirectionalLight(0xffffff, 2.2);
     key.position.set(1, 1.5, 2);
     scene.add(key);
@@ -66,11 +77,11 @@ export class Viewer {
     this.meshes[which] = null;
     if (which === 'after') this.marker.visible = false;
     if (geometry) {
-      // Lit: Lambert, flat or smooth. Heat: unlit vertex colours (MeshBasicMaterial), so light
-      // does not change them. Both push their depth back a little for the wireframe on top.
+      // Lambert, flat or smooth; the heat map is the same lit surface with the vertex colours as
+      // its albedo. Both push their depth back a little for the wireframe on top.
       const offset = { polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1, side: THREE.DoubleSide };
       const lit = new THREE.MeshLambertMaterial({ color: SURFACE, ...offset });
-      const heat = new THREE.MeshBasicMaterial({ color: 0xffffff, vertexColors: true, ...offset });
+      const heat = new THREE.MeshLambertMaterial({ color: 0xffffff, vertexColors: true, ...offset });
       const surface = new THREE.Mesh(geometry, lit);
       const wire = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({ color: 0x10141a, wireframe: true, transparent: true, opacity: 0.45 }));
       this.meshes[which] = { surface, wire, lit, heat };
@@ -80,8 +91,9 @@ export class Viewer {
     this.draw();
   }
 
-  // values: per result vertex, in [0, 1] of the scale (null: no heat map available).
-  setHeat(values) {
+  // values: per result vertex, in [0, 1] of the scale (null: no heat map available); signed:
+  // the diverging scale.
+  setHeat(values, signed = false) {
     const mesh = this.meshes.after;
     if (!mesh) return;
     const g = mesh.surface.geometry;
@@ -90,7 +102,7 @@ export class Viewer {
       // linear and encodes its output to sRGB, so they are converted here and come out as given.
       const colours = new Float32Array(values.length * 3), c = new THREE.Color();
       for (let i = 0; i < values.length; ++i) {
-        const [r, gr, b] = scaleColour(values[i]);
+        const [r, gr, b] = scaleColour(values[i], signed);
         c.setRGB(r, gr, b, THREE.SRGBColorSpace);
         colours[3 * i] = c.r;
         colours[3 * i + 1] = c.g;
@@ -104,6 +116,19 @@ export class Viewer {
     this.draw();
   }
 
+  // Runs `change` (setMesh, setHeat, ...) with one draw at its end instead of one per call;
+  // resolves after the next animation frame, when that draw is on screen.
+  async batch(change) {
+    this.holding = true;
+    try {
+      change();
+    } finally {
+      this.holding = false;
+    }
+    this.draw();
+    await new Promise((resolve) => requestAnimationFrame(() => resolve()));
+  }
+
   setHeatVisible(on) { this.heat = on; this.applyStyle(); this.draw(); }
   setSmooth(on) { this.smooth = on; this.applyStyle(); this.draw(); }
   setWireframe(on) { this.wireframe = on; this.applyStyle(); this.draw(); }
@@ -113,8 +138,10 @@ export class Viewer {
       if (!mesh) continue;
       const g = mesh.surface.geometry;
       if (this.smooth && !g.getAttribute('normal')) g.computeVertexNormals();
-      mesh.lit.flatShading = !this.smooth;
-      mesh.lit.needsUpdate = true;
+      for (const m of [mesh.lit, mesh.heat]) {
+        m.flatShading = !this.smooth;
+        m.needsUpdate = true;
+      }
       const heat = which === 'after' && this.heat && g.getAttribute('color') !== undefined;
       mesh.surface.material = heat ? mesh.heat : mesh.lit;
       mesh.wire.visible = this.wireframe;
@@ -161,6 +188,37 @@ export class Viewer {
 
   clearPick() { this.marker.visible = false; this.draw(); }
 
+  // The keyboard, while the canvas has the focus: arrows turn the view (15 degrees a press),
+  // Shift+arrows pan, + / - (or PageUp / PageDown) zoom, 0 or Home frames the model again.
+  onKey(e) {
+    if (e.ctrlKey || e.metaKey || e.altKey) return;
+    const step = THREE.MathUtils.degToRad(15);
+    const pan = 0.08 * this.canvas.clientHeight;
+    const c = this.controls;
+    const act = {
+      ArrowLeft: () => (e.shiftKey ? c.pan(pan, 0) : c.rotateLeft(step)),
+      ArrowRight: () => (e.shiftKey ? c.pan(-pan, 0) : c.rotateLeft(-step)),
+      ArrowUp: () => (e.shiftKey ? c.pan(0, pan) : c.rotateUp(step)),
+      ArrowDown: () => (e.shiftKey ? c.pan(0, -pan) : c.rotateUp(-step)),
+      '+': () => c.dollyOut(1.2), '=': () => c.dollyOut(1.2), PageUp: () => c.dollyOut(1.2),
+      '-': () => c.dollyIn(1.2), _: () => c.dollyIn(1.2), PageDown: () => c.dollyIn(1.2),
+      0: () => this.frame(), Home: () => this.frame(),
+    }[e.key];
+    if (!act) return;  // (three's dollyOut moves the camera closer: "zoom in")
+    e.preventDefault();
+    act();
+    this.draw();
+  }
+
+  // Where the camera stands, for the page's tests and screenshots: azimuth and polar angle
+  // (degrees) around the target, distance, and the target.
+  viewState() {
+    const offset = new THREE.Vector3().subVectors(this.camera.position, this.controls.target);
+    const s = new THREE.Spherical().setFromVector3(offset);
+    return { azimuth: THREE.MathUtils.radToDeg(s.theta), polar: THREE.MathUtils.radToDeg(s.phi), distance: s.radius,
+             target: this.controls.target.toArray() };
+  }
+
   // Frames the input (or the result alone) in the camera.
   frame() {
     const mesh = this.meshes.before ?? this.meshes.after;
@@ -192,6 +250,7 @@ export class Viewer {
   }
 
   draw() {
+    if (this.holding) return;
     const width = this.canvas.clientWidth, height = this.canvas.clientHeight;
     if (width === 0 || height === 0) return;
     // The key light follows the camera, from its upper left, so that every side of the model is
@@ -201,6 +260,7 @@ export class Viewer {
     const up = new THREE.Vector3().setFromMatrixColumn(this.camera.matrixWorld, 1);
     const direction = view.addScaledVector(right, -0.7).addScaledVector(up, 0.9);
     for (const scene of Object.values(this.scenes)) scene.userData.key.position.copy(direction);
+    this.canvas.dataset.view = JSON.stringify(this.viewState());
     const r = this.renderer;
     if (this.layout === 'side') {
       const half = Math.floor(width / 2);

@@ -1,5 +1,5 @@
 // The machine's streaming memory bandwidth: the bound of the normal filter's passes at scale
-// (decision 51; docs/measurements/scan-scale-speed.md, round 7). Reads (a sum) and copies over
+// (decision 51; docs/experiments/2026-12-04-scan-scale-speed-rounds.md, round 7). Reads (a sum) and copies over
 // a working set far larger than the caches, on 1 and 2 threads; medians of 7 passes, GB/s
 // (a copy counts its reads and its writes). Asserts nothing (never part of ctest).
 //

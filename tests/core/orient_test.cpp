@@ -74,5 +74,24 @@ TEST(Orientation, DenoisingAMixedWindingGivesTheConsistentResultAndKeepsTheInput
   EXPECT_TRUE(denoise(clean, test::automatic()).mesh.V == clean.V);
 }
 
+
+// Decision 53 with decision 34: a guidance normal belongs to its face as the caller wound it, so
+// a turned face's guidance turns with it; the mixed winding then gives the consistent result.
+TEST(Orientation, GuidanceTurnsWithTheFacesItGuides) {
+  const TriMesh clean = test::sphere(4);
+  const TriMesh noisy = test::with_noise(clean, 0.3);
+  std::vector<std::int32_t> turned;
+  const TriMesh mixed = turn_every_third(noisy, turned);
+  const Vertices guidance = face_normals(clean.V, clean.F);
+  Vertices mixed_guidance = guidance;  // the clean normals as the mixed winding sees them
+  for (const std::int32_t f : turned) mixed_guidance.row(f) *= -1;
+  RunOptions consistent_run, mixed_run;
+  consistent_run.guidance = &guidance;
+  mixed_run.guidance = &mixed_guidance;
+  const DenoiseResult consistent = denoise(noisy, {}, consistent_run), got = denoise(mixed, {}, mixed_run);
+  EXPECT_TRUE(got.mesh.V == consistent.mesh.V);
+  EXPECT_FALSE(got.mesh.V == denoise(noisy, {}).mesh.V);  // the guidance did change the result
+}
+
 }  // namespace
 }  // namespace mdn

@@ -96,7 +96,6 @@ TEST_F(HttpBadRequests, EachIsAnsweredWithTheRightProblemAndTheServerStaysHealth
       {"meshopt stream that lies about its count", [&](auto& c) { return post(c, "/v1/denoise", lying_meshopt, "model/gltf-binary"); }, "", 400, "malformed-mesh", ""},
       {"truncated binary stl", [&](auto& c) { return post(c, "/v1/denoise", truncated_stl, "model/stl"); }, "", 400, "malformed-mesh", ""},
       {"ascii stl cut inside a facet", [&](auto& c) { return post(c, "/v1/denoise", cut_ascii_stl, "model/stl"); }, "", 400, "malformed-mesh", ""},
-      {"meshopt output asked for", [&](auto& c) { return post(c, p + url_encode("{\"output\":{\"format\":\"glb\",\"compression\":\"meshopt\"}}"), good, "model/x-off"); }, "", 422, "unsupported-content", ""},
       {"malformed drc", [&](auto& c) { return post(c, "/v1/denoise", "DRACO\x02\x02\x01\x01garbage", "model/x-draco"); }, "", 400, "malformed-mesh", ""},
       {"unrecognisable octet-stream", [&](auto& c) { return post(c, "/v1/denoise", std::string(64, '\x07'), "application/octet-stream"); }, "", 415, "unsupported-media-type", ""},
       {"wrong content type", [&](auto& c) { return post(c, "/v1/denoise", good, "image/png"); }, "", 415, "unsupported-media-type", ""},

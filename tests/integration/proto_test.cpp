@@ -216,6 +216,21 @@ TEST(Proto, OpenApiDocumentsExactlyTheServersRoutesAndStatuses) {
       const int no_length = raw_status(server.port(), "POST " + route + " HTTP/1.1\r\nHost: x\r\nContent-Type: model/x-off\r\n\r\n");
       seen[{"POST", route}].insert(no_length);
     }
+    // The reference comparison: a form with both files (200), one missing or not a form (400),
+    // a part over --max-body (413), a file of no mesh format (415), one the service cannot
+    // take (422), no length (411).
+    auto form = [](const std::string& reference, const std::string& name, const std::string& other) {
+      return httplib::MultipartFormDataItems{{"reference", reference, name, "application/octet-stream"},
+                                            {"mesh", other, "mesh.off", "application/octet-stream"}};
+    };
+    observe(seen, "POST", "/v1/compare", c->Post("/v1/compare", form(mesh, "ref.off", mesh)));
+    observe(seen, "POST", "/v1/compare", c->Post("/v1/compare", httplib::MultipartFormDataItems{{"mesh", mesh, "m.off", ""}}));
+    observe(seen, "POST", "/v1/compare", c->Post("/v1/compare", mesh, "model/x-off"));
+    observe(seen, "POST", "/v1/compare", c->Post("/v1/compare", form(std::string(70000, 'x'), "ref.off", mesh)));
+    observe(seen, "POST", "/v1/compare", c->Post("/v1/compare", form("\x89PNG\r\n\x1a\n0000", "ref.png", mesh)));
+    observe(seen, "POST", "/v1/compare", c->Post("/v1/compare", form(gltf_external, "ref.gltf", mesh)));
+    seen[{"POST", "/v1/compare"}].insert(raw_status(
+        server.port(), "POST /v1/compare HTTP/1.1\r\nHost: x\r\nContent-Type: multipart/form-data; boundary=b\r\n\r\n"));
     // An Idempotency-Key reused with another body.
     ASSERT_EQ(c->Post("/v1/jobs", {{"Idempotency-Key", "same"}}, mesh, "model/x-off")->status, 202);
     observe(seen, "POST", "/v1/jobs", c->Post("/v1/jobs", {{"Idempotency-Key", "same"}}, mesh + "\n", "model/x-off"));
@@ -264,6 +279,9 @@ TEST(Proto, OpenApiDocumentsExactlyTheServersRoutesAndStatuses) {
     for (const std::string route : {"/v1/denoise", "/v1/jobs"})
       seen[{"POST", route}].insert(raw_status(
           server.port(), "POST " + route + " HTTP/1.1\r\nHost: x\r\nContent-Type: model/x-off\r\nContent-Length: 100\r\n\r\nOFF\n"));
+    seen[{"POST", "/v1/compare"}].insert(raw_status(
+        server.port(), "POST /v1/compare HTTP/1.1\r\nHost: x\r\nContent-Type: multipart/form-data; boundary=b\r\n"
+                       "Content-Length: 100\r\n\r\n--b\r\nContent-Disposition: form-data; name=\"mesh\"\r\n\r\nOFF\n"));
   }
   {
     ServerProcess server({"--auth-token", "t0ken"});

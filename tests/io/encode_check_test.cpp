@@ -2,6 +2,7 @@
 // own checks: every result either decodes again or is refused with UnsupportedError (HTTP
 // 422) before anything is written; Draco never sees a value or a setting it cannot take.
 #include "core/io/encode_check.h"
+#include "core/io/output_settings.h"
 
 #include <gtest/gtest.h>
 
@@ -225,9 +226,11 @@ TEST(EncodeCheck, QuantisationBitsAreBoundedByTheMemoryLimit) {
   positions.compression = mdn::io::Compression::Draco;
   positions.position_bits = 20;
   EXPECT_NO_THROW(check_encode(*off, positions, Limits{}));
-  // Settings out of range are a parameter error.
+  // Settings out of range are a parameter error, found where the request is checked (the one
+  // table, output_settings.h); the encoder keeps a guard against what it cannot take at all.
   positions.normal_bits = 31;
-  EXPECT_THROW(check_encode(*off, positions, Limits{}), InvalidParamsError);
+  EXPECT_THROW(check_output_options(positions), InvalidParamsError);
+  EXPECT_THROW(off->encode(positions), std::invalid_argument);
 }
 
 }  // namespace

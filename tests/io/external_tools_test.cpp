@@ -5,12 +5,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 
 #include "core/io/document.h"
 #include "gltf_fixtures.h"
 #include "io_test_support.h"
+#include "meshopt_fixture.h"
 
 namespace mdn::io {
 namespace {
@@ -103,6 +105,79 @@ TEST(ExternalTools, StripsAndDracoInputsValidate) {
     const Json out = check(doc->encode(options).bytes, draco ? "redraco.glb" : "undraco.glb");
     ASSERT_TRUE(out.is_object());
     EXPECT_EQ(out["errors"], 0) << out["messages"];
+  }
+}
+
+// A unit sphere (float32, from OFF) and the meshopt fixture (quantized, meshopt-compressed).
+std::unique_ptr<MeshDocument> unit_sphere_glb() {
+  TriMesh m = test_io::sphere(24, 48);
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i) m.V.row(i) = m.V.row(i).normalized();
+  EncodeOptions glb;
+  glb.format = Format::Glb;
+  glb.compression = Compression::None;
+  return decode(decode(test_io::off_text(m.V, m.F), Format::Off)->encode(glb).bytes, Format::Glb);
+}
+
+// Issue 51: every meshopt output validates (Khronos), reads in glTF-Transform (meshoptimizer's
+// decoder) with its positions where they were, re-packs in gltfpack, and reads back here.
+TEST(ExternalTools, MeshoptOutputsValidateReadAndRepack) {
+  const fs::path gltfpack = tools_dir() / "node_modules" / ".bin" / "gltfpack";
+  ASSERT_TRUE(fs::exists(gltfpack)) << gltfpack << " is missing: run `npm install` in " << tools_dir();
+  struct Case {
+    std::string name;
+    std::string bytes;
+    double radius_tolerance;  // < 0: not a unit sphere
+  };
+  std::vector<Case> cases;
+  const auto sphere = unit_sphere_glb();
+  for (const auto& [bits, format] : {std::pair{16, Format::Glb}, {14, Format::Gltf}, {20, Format::Glb}}) {
+    EncodeOptions o;
+    o.compression = Compression::Meshopt;
+    o.format = format;
+    o.position_bits = bits;
+    // Half a step of the grid over the box (side 2), plus float32 rounding of the transform.
+    const double tolerance = bits > 16 ? 1e-6 : 2.0 / (std::ldexp(1.0, bits) - 1) + 1e-6;
+    cases.push_back({"sphere-" + std::to_string(bits) + (format == Format::Glb ? ".glb" : ".gltf"), sphere->encode(o).bytes, tolerance});
+  }
+  EncodeOptions as_input;
+  as_input.compression = Compression::AsInput;
+  cases.push_back({"fixture-as-input.glb", decode(test_io::meshopt_sphere_glb(test_io::make_sphere(), true), Format::Glb)->encode(as_input).bytes, -1});
+  EncodeOptions meshopt;
+  meshopt.compression = Compression::Meshopt;
+  meshopt.texcoord_bits = 12;
+  cases.push_back({"scene-meshopt.glb", decode(test_io::sphere_scene_glb(test_io::make_sphere()), Format::Glb)->encode(meshopt).bytes, -1});
+  for (const Case& c : cases) {
+    const Json out = check(c.bytes, c.name);
+    ASSERT_TRUE(out.is_object()) << c.name;
+    EXPECT_EQ(out["errors"], 0) << c.name << ": " << out["messages"];
+    EXPECT_EQ(out["warnings"], 0) << c.name << ": " << out["messages"];
+    const Json& used = out["extensionsUsed"];
+    EXPECT_NE(std::find(used.begin(), used.end(), "EXT_meshopt_compression"), used.end()) << c.name << ": " << used;
+    if (c.radius_tolerance > 0) {
+      // glTF-Transform's decoded corners, placed by the node that instances the mesh.
+      const Json& m = out["meshWorld"][0];
+      double worst = 0;
+      for (const auto& prim : out["meshes"][0])
+        for (const auto& corner : prim["corners"]) {
+          Eigen::Vector3d p;
+          for (int r = 0; r < 3; ++r)
+            p(r) = m[r].get<double>() * corner[0].get<double>() + m[4 + r].get<double>() * corner[1].get<double>() +
+                   m[8 + r].get<double>() * corner[2].get<double>() + m[12 + r].get<double>();
+          worst = std::max(worst, std::abs(p.norm() - 1));
+        }
+      EXPECT_LT(worst, c.radius_tolerance) << c.name;
+    }
+    // Our own reader, and gltfpack re-packing it (meshopt again), which validates too.
+    const auto back = decode(c.bytes, c.name.ends_with(".gltf") ? Format::Gltf : Format::Glb);
+    EXPECT_EQ(back->compression(), Compression::Meshopt) << c.name;
+    if (c.name.ends_with(".gltf")) continue;  // gltfpack reads .gltf with external files only
+    const fs::path in = test_io::temp_dir() / c.name, repacked = test_io::temp_dir() / ("repacked-" + c.name);
+    std::string log;
+    ASSERT_EQ(test_io::run_command("'" + gltfpack.string() + "' -c -i '" + in.string() + "' -o '" + repacked.string() + "'", &log), 0)
+        << c.name << ": " << log;
+    const Json again = check(test_io::read_file(repacked), "repacked-" + c.name);
+    ASSERT_TRUE(again.is_object()) << c.name;
+    EXPECT_EQ(again["errors"], 0) << c.name << ": " << again["messages"];
   }
 }
 

@@ -69,6 +69,21 @@ inline Vertices jitter(const Vertices& V, double sigma, unsigned seed = 7) {
   return out;
 }
 
+// An OFF file of a mesh (9 significant digits: float32 positions come back exactly).
+inline std::string off_text(const Vertices& V, const Triangles& F) {
+  std::string off = "OFF\n" + std::to_string(V.rows()) + " " + std::to_string(F.rows()) + " 0\n";
+  char line[128];
+  for (Eigen::Index i = 0; i < V.rows(); ++i) {
+    std::snprintf(line, sizeof line, "%.9g %.9g %.9g\n", V(i, 0), V(i, 1), V(i, 2));
+    off += line;
+  }
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    std::snprintf(line, sizeof line, "3 %d %d %d\n", int(F(f, 0)), int(F(f, 1)), int(F(f, 2)));
+    off += line;
+  }
+  return off;
+}
+
 inline std::filesystem::path temp_dir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
   auto dir = std::filesystem::temp_directory_path() / ("mdn_io_" + std::string(info->test_suite_name()) + "_" + info->name());

@@ -2,11 +2,15 @@
 // output's compression following the input (resolve_compression), and buffers that lie.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstring>
 #include <random>
 
 #include "core/io/document.h"
 #include "core/io/meshopt_codec.h"
+#include "io/io_test_support.h"
 #include "io/meshopt_fixture.h"
 #include "support/mutate.h"
 
@@ -105,29 +109,141 @@ TEST(Meshopt, FiltersDecodeToTheirSourceWithinTheirPrecision) {
   EXPECT_LT(exp_error, 1e-5);
 }
 
-TEST(Meshopt, OutputFollowsTheInputAndDropsTheExtension) {
-  const auto compressed = decode(test_io::meshopt_sphere_glb(fixture(), true), Format::Glb);
+// The rows of V sorted: the meshopt writer reorders vertices for the vertex cache.
+Vertices sorted_rows(const Vertices& V) {
+  std::vector<std::array<double, 3>> rows(static_cast<std::size_t>(V.rows()));
+  for (Eigen::Index i = 0; i < V.rows(); ++i) rows[static_cast<std::size_t>(i)] = {V(i, 0), V(i, 1), V(i, 2)};
+  std::sort(rows.begin(), rows.end());
+  Vertices out(V.rows(), 3);
+  for (Eigen::Index i = 0; i < V.rows(); ++i)
+    for (int k = 0; k < 3; ++k) out(i, k) = rows[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)];
+  return out;
+}
+
+// The largest distance (max norm) from a row of A to its nearest row of B.
+double farthest_from(const Vertices& A, const Vertices& B) {
+  double worst = 0;
+  for (Eigen::Index i = 0; i < A.rows(); ++i)
+    worst = std::max(worst, (B.rowwise() - A.row(i)).cwiseAbs().rowwise().maxCoeff().minCoeff());
+  return worst;
+}
+
+bool listed(const Json& json, const char* list, const char* name) {
+  const Json names = json.value(list, Json::array());
+  return std::find(names.begin(), names.end(), Json(name)) != names.end();
+}
+
+TEST(Meshopt, OutputFollowsTheInputAndKeepsItsTypes) {
+  const std::string input = test_io::meshopt_sphere_glb(fixture(), true);
+  const auto compressed = decode(input, Format::Glb);
   const auto plain = decode(test_io::meshopt_sphere_glb(fixture(), false), Format::Glb);
   EncodeOptions as_input;
   as_input.compression = Compression::AsInput;
-  // Meshopt is not written yet: as the input's, the output is uncompressed, and the same bytes
-  // as the uncompressed source's output.
-  const std::string out = compressed->encode(as_input).bytes;
-  EXPECT_EQ(out, plain->encode(as_input).bytes);
-  const Glb g = split(out);
-  EXPECT_EQ(g.json.dump().find("EXT_meshopt_compression"), std::string::npos);
-  EXPECT_EQ(g.json.dump().find("KHR_draco_mesh_compression"), std::string::npos);
-  EXPECT_EQ(g.json["buffers"].size(), 1u);
-  // Positions are written as float32.
-  EXPECT_LT((decode(out, Format::Glb)->surfaces()[0].V - compressed->surfaces()[0].V).cwiseAbs().maxCoeff(), 1e-7);
-  // Today's default (compression unset, draco = true) still writes Draco; draco = false none.
+  // Meshopt in, meshopt out (decision 70): required, with a fallback buffer without data.
+  const Encoded out = compressed->encode(as_input);
+  EXPECT_EQ(out.compression, Compression::Meshopt);
+  const Glb g = split(out.bytes);
+  for (const char* list : {"extensionsUsed", "extensionsRequired"}) {
+    EXPECT_TRUE(listed(g.json, list, "EXT_meshopt_compression")) << list;
+    EXPECT_TRUE(listed(g.json, list, "KHR_mesh_quantization")) << list;
+    EXPECT_FALSE(listed(g.json, list, "KHR_draco_mesh_compression")) << list;
+  }
+  ASSERT_EQ(g.json["buffers"].size(), 2u);
+  EXPECT_FALSE(g.json["buffers"][1].contains("uri"));
+  EXPECT_EQ(g.json["buffers"][1]["extensions"]["EXT_meshopt_compression"]["fallback"], true);
+  // Quantized in, quantized out (decision 71): POSITION in the input's type; the node's
+  // dequantisation transform is the input's, untouched.
+  const Glb in = split(input);
+  const Json& prim = g.json["meshes"][0]["primitives"][0];
+  const Json& in_prim = in.json["meshes"][0]["primitives"][0];
+  for (const char* semantic : {"POSITION", "TEXCOORD_0"}) {
+    const Json& acc = g.json["accessors"][prim["attributes"][semantic].get<int>()];
+    const Json& in_acc = in.json["accessors"][in_prim["attributes"][semantic].get<int>()];
+    EXPECT_EQ(acc["componentType"], in_acc["componentType"]) << semantic;
+    EXPECT_EQ(acc.value("normalized", false), in_acc.value("normalized", false)) << semantic;
+    EXPECT_TRUE(g.json["bufferViews"][acc["bufferView"].get<int>()]["extensions"].contains("EXT_meshopt_compression")) << semantic;
+  }
+  EXPECT_EQ(g.json["nodes"], in.json["nodes"]);
+  EXPECT_NE(std::find(out.notes.begin(), out.notes.end(),
+                      "mesh 0: POSITION written as short normalized, as the input (KHR_mesh_quantization)"),
+            out.notes.end());
+  // Nothing was denoised: the same positions come back exactly (the same integers).
+  const auto back = decode(out.bytes, Format::Glb);
+  EXPECT_EQ(back->compression(), Compression::Meshopt);
+  EXPECT_LT((sorted_rows(back->surfaces()[0].V) - sorted_rows(compressed->surfaces()[0].V)).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_EQ(back->surfaces()[0].F.rows(), compressed->surfaces()[0].F.rows());
+  // Uncompressed in, uncompressed out, positions float32 as they came.
+  const std::string none = plain->encode(as_input).bytes;
+  EXPECT_EQ(split(none).json.dump().find("EXT_meshopt_compression"), std::string::npos);
+  EXPECT_LT((decode(none, Format::Glb)->surfaces()[0].V - plain->surfaces()[0].V).cwiseAbs().maxCoeff(), 1e-7);
+  // The library's default (compression unset) still writes Draco; None writes none, and a
+  // quantized input keeps its POSITION type there too.
   EXPECT_NE(split(compressed->encode({}).bytes).json.dump().find("KHR_draco_mesh_compression"), std::string::npos);
   EncodeOptions no_draco;
-  no_draco.compression = mdn::io::Compression::None;
-  EXPECT_EQ(compressed->encode(no_draco).bytes, out);
-  EncodeOptions meshopt;
-  meshopt.compression = Compression::Meshopt;
-  EXPECT_THROW(compressed->encode(meshopt).bytes, UnsupportedError);
+  no_draco.compression = Compression::None;
+  const Glb g_none = split(compressed->encode(no_draco).bytes);
+  EXPECT_EQ(g_none.json.dump().find("EXT_meshopt_compression"), std::string::npos);
+  EXPECT_EQ(g_none.json["accessors"][g_none.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"].get<int>()]["componentType"],
+            5122);
+  EXPECT_TRUE(listed(g_none.json, "extensionsRequired", "KHR_mesh_quantization"));
+}
+
+// A float32 glTF of a jittered sphere (from OFF: our writer's minimal asset, one node).
+std::unique_ptr<MeshDocument> float_sphere() {
+  const TriMesh m = test_io::sphere(24, 48);
+  const Vertices V = test_io::jitter(m.V, 0.01);
+  const std::string off = test_io::off_text(V, m.F);
+  EncodeOptions glb;
+  glb.format = Format::Glb;
+  glb.compression = Compression::None;
+  return decode(decode(off, Format::Off)->encode(glb).bytes, Format::Glb);
+}
+
+TEST(Meshopt, FloatInputIsQuantizedOnAGridCarriedByANode) {
+  const auto plain = float_sphere();
+  for (const int bits : {14, 16}) {
+    EncodeOptions meshopt;
+    meshopt.compression = Compression::Meshopt;
+    meshopt.position_bits = bits;
+    const Encoded out = plain->encode(meshopt);
+    const Glb g = split(out.bytes);
+    const Json& pos = g.json["accessors"][g.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"].get<int>()];
+    EXPECT_EQ(pos["componentType"], 5123);
+    EXPECT_FALSE(pos.value("normalized", false));
+    EXPECT_LE(pos["max"][0].get<double>(), std::ldexp(1.0, bits) - 1);
+    // The node that held the mesh now holds a child with the mesh and the grid's transform.
+    ASSERT_EQ(g.json["nodes"].size(), 2u);
+    EXPECT_FALSE(g.json["nodes"][0].contains("mesh"));
+    EXPECT_EQ(g.json["nodes"][0]["children"], Json::array({1}));
+    EXPECT_EQ(g.json["nodes"][1]["mesh"], 0);
+    // Read back in the scene's frame (our reader's placements), every vertex is within half a
+    // grid step of the float input.
+    const auto back = decode(out.bytes, Format::Glb);
+    const auto placements = back->placements();
+    ASSERT_EQ(placements[0].size(), 1u);
+    const Eigen::Matrix4d& world = placements[0][0];
+    Vertices placed = back->surfaces()[0].V;
+    for (Eigen::Index i = 0; i < placed.rows(); ++i)
+      placed.row(i) = (world * Eigen::Vector4d(placed(i, 0), placed(i, 1), placed(i, 2), 1)).head<3>().transpose();
+    const auto in_placements = plain->placements();
+    Vertices expected = plain->surfaces()[0].V;
+    for (Eigen::Index i = 0; i < expected.rows(); ++i)
+      expected.row(i) = (in_placements[0][0] * Eigen::Vector4d(expected(i, 0), expected(i, 1), expected(i, 2), 1)).head<3>().transpose();
+    ASSERT_EQ(placed.rows(), expected.rows());
+    const double extent = (expected.colwise().maxCoeff() - expected.colwise().minCoeff()).maxCoeff();
+    const double step = extent / (std::ldexp(1.0, bits) - 1);
+    EXPECT_LT(farthest_from(placed, expected), 0.51 * step) << bits << " bits";
+    EXPECT_LT(farthest_from(expected, placed), 0.51 * step) << bits << " bits";
+  }
+  // More than 16 bits: float32 positions, still meshopt-compressed, no node added.
+  EncodeOptions wide;
+  wide.compression = Compression::Meshopt;
+  wide.position_bits = 20;
+  const Encoded out = plain->encode(wide);
+  const Glb g = split(out.bytes);
+  EXPECT_EQ(g.json["accessors"][g.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"].get<int>()]["componentType"], 5126);
+  EXPECT_EQ(g.json["nodes"].size(), 1u);
+  EXPECT_EQ(out.notes, std::vector<std::string>{"mesh 0: POSITION written as float (position_bits 20 > 16)"});
 }
 
 TEST(Compression, ResolvedInOnePlace) {
@@ -138,7 +254,7 @@ TEST(Compression, ResolvedInOnePlace) {
   o.compression = Compression::AsInput;
   EXPECT_EQ(resolve_compression(o, Compression::Draco), Compression::Draco);
   EXPECT_EQ(resolve_compression(o, Compression::None), Compression::None);
-  EXPECT_EQ(resolve_compression(o, Compression::Meshopt), Compression::None);
+  EXPECT_EQ(resolve_compression(o, Compression::Meshopt), Compression::Meshopt);
   o.compression = Compression::Draco;
   EXPECT_EQ(resolve_compression(o, Compression::None), Compression::Draco);
   o.compression = Compression::None;

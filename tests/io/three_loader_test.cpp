@@ -158,5 +158,48 @@ TEST(ThreeLoader, GlbAndGltfOutputsLoadInGltfLoaderWithDraco) {
   }
 }
 
+// Issue 51: meshopt outputs (EXT_meshopt_compression + KHR_mesh_quantization) load in three.js
+// with GLTFLoader + MeshoptDecoder, every position on the unit sphere once placed by its node.
+TEST(ThreeLoader, MeshoptOutputsLoadWithMeshoptDecoder) {
+  const fs::path tools = tools_dir();
+  ASSERT_TRUE(fs::exists(tools / "node_modules" / "three" / "examples" / "jsm" / "libs" / "meshopt_decoder.module.js"))
+      << "three.js is missing: run `npm install` in " << tools;
+  TriMesh m = test_io::sphere(24, 48);
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i) m.V.row(i) = m.V.row(i).normalized();
+  const auto doc = decode(test_io::off_text(m.V, m.F), Format::Off);
+  const fs::path dir = test_io::temp_dir();
+  std::string command = "cd '" + tools.string() + "' && node check_three.mjs '" + dir.string() + "'";
+  std::vector<std::pair<std::string, double>> outputs;  // name, tolerance on the radius
+  for (const auto& [bits, format] : {std::pair{16, Format::Glb}, {12, Format::Gltf}, {20, Format::Glb}}) {
+    EncodeOptions o;
+    o.compression = Compression::Meshopt;
+    o.format = format;
+    o.position_bits = bits;
+    const std::string name = "sphere-" + std::to_string(bits) + (format == Format::Glb ? ".glb" : ".gltf");
+    test_io::write_file(dir / name, doc->encode(o).bytes);
+    outputs.emplace_back(name, bits > 16 ? 1e-6 : 2.0 / (std::ldexp(1.0, bits) - 1) + 1e-6);
+    command += " '" + name + "'";
+  }
+  std::string output;
+  ASSERT_EQ(test_io::run_command(command, &output), 0) << "check_three.mjs failed:\n" << output;
+  const std::size_t line = output.rfind("\n{");
+  const Json result = Json::parse(output.substr(line == std::string::npos ? 0 : line + 1), nullptr, false);
+  ASSERT_TRUE(result.is_object() && result.contains("reports")) << output;
+  ASSERT_EQ(result["reports"].size(), outputs.size()) << output;
+  for (std::size_t k = 0; k < outputs.size(); ++k) {
+    const Json& r = result["reports"][k];
+    const auto& [name, tolerance] = outputs[k];
+    ASSERT_FALSE(r.contains("error")) << name << ": " << r["error"];
+    const Json& used = r["extensionsUsed"];
+    EXPECT_NE(std::find(used.begin(), used.end(), "EXT_meshopt_compression"), used.end()) << name;
+    ASSERT_EQ(r["objects"].size(), 1u) << name;
+    const Json& o = r["objects"][0];
+    EXPECT_TRUE(o["finite"].get<bool>()) << name;
+    EXPECT_EQ(o["vertices"], m.V.rows()) << name;
+    EXPECT_EQ(o["indices"], 3 * m.F.rows()) << name;
+    EXPECT_LT(o["worldRadiusError"].get<double>(), tolerance) << name;
+  }
+}
+
 }  // namespace
 }  // namespace mdn::io

@@ -80,15 +80,18 @@ TEST(GltfJob, OutputCompressionFollowsTheInput) {
   EXPECT_TRUE(uses_draco(run_with(plain, {{"output", {{"compression", "draco"}}}}).bytes));
   EXPECT_TRUE(uses_draco(run_with(plain, {{"output", {{"draco", true}}}}).bytes));
 
-  // Meshopt in: meshopt output is not written yet, so none; asked for, refused before decoding.
+  // Meshopt in, meshopt out (issue 51); asked for, a plain input is written with it too. The
+  // result says what the positions became (the input's short normalized: issue 51, item 3).
   const JobOutput from_meshopt = run_with(test_io::meshopt_sphere_glb(f, true), Json::object());
-  EXPECT_EQ(from_meshopt.compression, io::Compression::None);
-  EXPECT_EQ(from_meshopt.bytes.find("EXT_meshopt_compression"), std::string::npos);
-  JobInput asked;
-  asked.bytes = "not even a glb";
-  asked.format = io::Format::Glb;
-  asked.params = job_params_from_json({{"output", {{"compression", "meshopt"}}}});
-  EXPECT_THROW(run_job(asked, {}), io::UnsupportedError);
+  EXPECT_EQ(from_meshopt.compression, io::Compression::Meshopt);
+  EXPECT_NE(from_meshopt.bytes.find("EXT_meshopt_compression"), std::string::npos);
+  EXPECT_EQ(output_to_json(from_meshopt)["compression"], "meshopt");
+  const Json notes = output_to_json(from_meshopt)["notes"];
+  EXPECT_NE(std::find(notes.begin(), notes.end(), "mesh 0: POSITION written as short normalized, as the input (KHR_mesh_quantization)"),
+            notes.end()) << notes;
+  const JobOutput asked = run_with(plain, {{"output", {{"compression", "meshopt"}}}});
+  EXPECT_EQ(asked.compression, io::Compression::Meshopt);
+  EXPECT_NE(asked.bytes.find("EXT_meshopt_compression"), std::string::npos);
 
   // Other containers: DRC is Draco, the rest none, whatever was asked.
   EXPECT_EQ(run_with(plain, {{"output", {{"format", "drc"}, {"compression", "none"}}}}).compression, io::Compression::Draco);

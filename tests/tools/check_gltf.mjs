@@ -1,11 +1,14 @@
 // Reads a .glb / .gltf with tools we did not write and prints one JSON line:
 // {"errors": n, "warnings": n, "messages": [...], "meshes": [[{"mode", "vertices", "indices", "attributes"}]]}
-// errors / warnings: the Khronos glTF validator; meshes: glTF-Transform (Draco via draco3dgltf).
+// errors / warnings: the Khronos glTF validator; meshes: glTF-Transform (Draco via draco3dgltf,
+// EXT_meshopt_compression via meshoptimizer's decoder); meshWorld[m]: the world matrix (column-
+// major) of the first node that instances mesh m, or null (quantized positions need it).
 import { readFile } from 'node:fs/promises';
 import validator from 'gltf-validator';
 import { NodeIO } from '@gltf-transform/core';
 import { ALL_EXTENSIONS } from '@gltf-transform/extensions';
 import draco3d from 'draco3dgltf';
+import { MeshoptDecoder } from 'meshoptimizer';
 
 const path = process.argv[2];
 const bytes = new Uint8Array(await readFile(path));
@@ -14,6 +17,7 @@ const messages = report.issues.messages.filter((m) => m.severity <= 1).map((m) =
 
 const io = new NodeIO().registerExtensions(ALL_EXTENSIONS).registerDependencies({
   'draco3d.decoder': await draco3d.createDecoderModule(),
+  'meshopt.decoder': await MeshoptDecoder.ready.then(() => MeshoptDecoder),
 });
 const doc = path.endsWith('.gltf') ? await io.readJSON({ json: JSON.parse(new TextDecoder().decode(bytes)), resources: {} })
                                    : await io.readBinary(bytes);
@@ -35,5 +39,9 @@ const meshes = doc.getRoot().listMeshes().map((mesh) => mesh.listPrimitives().ma
   }
   return { mode: prim.getMode(), vertices: pos.getCount(), indices: idx ? idx.getCount() : null, attributes, corners };
 }));
-console.log(JSON.stringify({ errors: report.issues.numErrors, warnings: report.issues.numWarnings, messages, meshes,
+const meshWorld = doc.getRoot().listMeshes().map((mesh) => {
+  const node = doc.getRoot().listNodes().find((n) => n.getMesh() === mesh);
+  return node ? node.getWorldMatrix() : null;
+});
+console.log(JSON.stringify({ errors: report.issues.numErrors, warnings: report.issues.numWarnings, messages, meshes, meshWorld,
   extensionsUsed: doc.getRoot().listExtensionsUsed().map((e) => e.extensionName) }));

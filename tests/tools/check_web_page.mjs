@@ -24,7 +24,7 @@
 // step timed out (then the report so far, with "failure", is printed). Bounded: 240 s in all.
 import { readFileSync, mkdirSync, readdirSync, rmSync, statSync } from 'node:fs';
 import path from 'node:path';
-import puppeteer from 'puppeteer-core';
+import { fill, launchBrowser, upload } from './page_steps.mjs';
 
 const TIME_LIMIT_MS = 240_000;
 const STEP_MS = 60_000;
@@ -73,7 +73,10 @@ const resultPanels = (page) => page.evaluate(() => Object.fromEntries(['results'
 // Colours of a screenshot of the page, read in the page itself (a data: URL drawn to a 2D canvas),
 // against the legend's bar: for pixels inside the result's half of the canvas (3x3 neighbourhoods
 // of one colour within 6 levels, so no edge or background blend), the distance (max over R, G, B)
-// to the nearest colour of the legend. Returns the distribution and the median colour.
+// to the nearest colour of the legend as lit: the heat map colours the lit surface with white
+// lights, so a pixel is a legend colour times a brightness in linear RGB (the best brightness
+// for each legend colour is fitted). Returns the distribution, the median colour and the median
+// position on the legend (0 to 1) of the best-fitting colours.
 async function heatColours(page) {
   const png = await page.screenshot({ encoding: 'base64' });
   return page.evaluate(async (data) => {
@@ -88,13 +91,17 @@ async function heatColours(page) {
     const scale = innerWidth / img.width;  // CSS pixels per screenshot pixel
     const bar = document.getElementById('legend-bar');
     const legend = bar.getContext('2d').getImageData(0, 0, bar.width, 1).data;
+    const linear = (v) => { const c = v / 255; return c <= 0.04045 ? c / 12.92 : ((c + 0.055) / 1.055) ** 2.4; };
+    const srgb = (l) => 255 * (l <= 0.0031308 ? 12.92 * l : 1.055 * l ** (1 / 2.4) - 0.055);
+    const stops = [];
+    for (let k = 0; k < legend.length; k += 4) stops.push([linear(legend[k]), linear(legend[k + 1]), linear(legend[k + 2])]);
     const canvas = document.getElementById('canvas').getBoundingClientRect();
     const x0 = Math.ceil((canvas.left + canvas.width / 2) / scale) + 4, x1 = Math.floor(canvas.right / scale) - 4;
     const y0 = Math.ceil(canvas.top / scale) + 30, y1 = Math.floor(canvas.bottom / scale) - 4;  // below the "After" tag
     const { data: px } = ctx.getImageData(0, 0, img.width, img.height);
     const at = (x, y) => 4 * (y * img.width + x);
     const bg = [0x1d, 0x23, 0x2c];
-    const errors = [], colours = [];
+    const errors = [], colours = [], positions = [];
     for (let y = y0; y < y1; y += 3) for (let x = x0; x < x1; x += 3) {
       const i = at(x, y);
       const c = [px[i], px[i + 1], px[i + 2]];
@@ -105,62 +112,34 @@ async function heatColours(page) {
         if (Math.max(Math.abs(px[j] - c[0]), Math.abs(px[j + 1] - c[1]), Math.abs(px[j + 2] - c[2])) > 6) { flat = false; break; }
       }
       if (!flat) continue;
-      let best = 255;
-      for (let k = 0; k < legend.length; k += 4) {
-        best = Math.min(best, Math.max(Math.abs(legend[k] - c[0]), Math.abs(legend[k + 1] - c[1]), Math.abs(legend[k + 2] - c[2])));
-      }
+      const cl = c.map(linear);
+      let best = 255, where = 0;
+      stops.forEach((L, k) => {
+        const s = (cl[0] * L[0] + cl[1] * L[1] + cl[2] * L[2]) / (L[0] ** 2 + L[1] ** 2 + L[2] ** 2 || 1);
+        const e = Math.max(...L.map((l, m) => Math.abs(srgb(Math.min(1, s * l)) - c[m])));
+        if (e < best) { best = e; where = k / (stops.length - 1); }
+      });
       errors.push(best);
       colours.push(c);
+      positions.push(where);
     }
     errors.sort((a, b) => a - b);
+    positions.sort((a, b) => a - b);
     const q = (f) => errors[Math.min(errors.length - 1, Math.floor(f * errors.length))] ?? null;
     const byLuma = colours.map((c) => [c[0] + c[1] + c[2], c]).sort((a, b) => a[0] - b[0]);
     return { samples: errors.length, median: q(0.5), p95: q(0.95), max: errors[errors.length - 1] ?? null,
              median_colour: byLuma[Math.floor(byLuma.length / 2)]?.[1] ?? null,
+             median_position: positions[Math.floor(positions.length / 2)] ?? null, p95_position: positions[Math.floor(0.95 * positions.length)] ?? null,
              legend_zero: [legend[0], legend[1], legend[2]] };
   }, png);
-}
-
-// Opens the advanced parameters and fills `set` (field -> text or JSON of an option).
-async function fill(page, set) {
-  await page.$eval('#advanced', (d) => { d.open = true; });
-  for (const [field, value] of Object.entries(set ?? {})) {
-    const selector = `[data-field="${field}"] input, [data-field="${field}"] select`;
-    if (await page.$eval(selector, (c) => c.tagName) === 'SELECT') await page.select(selector, value);
-    else {
-      await page.$eval(selector, (c) => { c.value = ''; });
-      await page.type(selector, value);
-    }
-  }
 }
 
 // In the page: a job runs and its progress has passed 0.
 const jobProgressed = () => document.body.dataset.state === 'running' && Number(document.getElementById('progress').value) > 0;
 
-// Uploads a file through the file input and waits for the job's end; the state marker is reset
-// first so that the previous run's end does not count.
-async function upload(page, file) {
-  await page.$eval('body', (b) => { b.dataset.state = 'loading'; });
-  await (await page.$('#file')).uploadFile(file);
-  await page.waitForSelector('body[data-state="done"], body[data-state="failed"], body[data-state="cancelled"]');
-  return page.$eval('body', (b) => b.dataset.state);
-}
-
-const executablePath = process.env.MDN_CHROMIUM ?? '/usr/bin/chromium';
 let browser;
 try {
-  browser = await puppeteer.launch({
-    executablePath,
-    headless: true,
-    // --no-sandbox: CI containers run as root. WebGL without a GPU: SwiftShader through ANGLE.
-    // The rest keeps the browser from doing background work or reaching the network; the
-    // resolver rule makes every host name but the loopback address unresolvable.
-    args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-quic',
-           '--no-first-run', '--no-default-browser-check', '--disable-background-networking',
-           '--disable-component-update', '--disable-sync', '--disable-extensions', '--disable-dev-shm-usage',
-           '--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE 127.0.0.1'],
-    defaultViewport: { width: 1280, height: 720 },
-  });
+  browser = await launchBrowser({ width: 1280, height: 720 });
   report.browser = await browser.version();
   step('launch');
   const page = await browser.newPage();

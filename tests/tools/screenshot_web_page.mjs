@@ -3,16 +3,10 @@
 // the displacement heat map with a picked vertex, and the page at 400x800.
 //   usage: node screenshot_web_page.mjs URL MESH OUT_DIR
 import path from 'node:path';
-import puppeteer from 'puppeteer-core';
+import { launchBrowser } from './page_steps.mjs';
 
 const [url, mesh, out] = process.argv.slice(2);
-const browser = await puppeteer.launch({
-  executablePath: process.env.MDN_CHROMIUM ?? '/usr/bin/chromium',
-  headless: true,
-  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--no-first-run',
-         '--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE 127.0.0.1', '--hide-scrollbars'],
-  defaultViewport: { width: 1280, height: 800 },
-});
+const browser = await launchBrowser({ width: 1280, height: 800 }, ['--hide-scrollbars']);
 try {
   const page = await browser.newPage();
   page.setDefaultTimeout(120_000);

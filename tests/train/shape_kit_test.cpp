@@ -5,7 +5,7 @@
 #include <map>
 #include <utility>
 
-#include "../../tools/train/shape_kit.h"
+#include "train/shape_kit.h"
 #include "support/shapes.h"
 
 namespace mdn::train::kit {

@@ -106,7 +106,8 @@ void run_parallel(std::size_t n, int jobs, Body body) {
 }
 
 // Appends one row per case not yet in `out`, computed by `row` (tab-separated values).
-int fill_table(const Options& o, const std::string& header, const std::function<std::string(const Shape&, const CaseRef&)>& row) {
+// `row` gets the case's noisy/clean pair (make_noisy_case); the faces column is the case's mesh's.
+int fill_table(const Options& o, const std::string& header, const std::function<std::string(const NoisyCase&)>& row) {
   const fs::path cgal = bench::cgal_meshes(o.data);
   std::map<std::string, Shape> shapes;
   const std::vector<CaseRef> cases = all_cases(cgal, o, shapes);
@@ -129,8 +130,9 @@ int fill_table(const Options& o, const std::string& header, const std::function<
   run_parallel(todo.size(), o.jobs, [&](std::size_t i) {
     const CaseRef& c = todo[i];
     const Shape& s = shapes.at(c.shape);
+    const NoisyCase pair = make_noisy_case(s, c.noise, hash_name(s.name + "/" + c.noise));
     const std::string line = c.name() + '\t' + c.shape + '\t' + s.family + '\t' + split_of(c.shape) + '\t' + c.noise + '\t' +
-                             std::to_string(s.mesh.num_faces()) + '\t' + row(s, c);
+                             std::to_string(pair.clean.num_faces()) + '\t' + row(pair);
     std::lock_guard lock(mutex);
     file << line << '\n' << std::flush;
     const int k = ++finished;
@@ -157,8 +159,8 @@ std::string join(const std::vector<double>& v, const char* fmt) {
 int cmd_label(const Options& o) {
   std::string header = "case\tshape\tfamily\tsplit\tnoise\tfaces\tregion\tidentity";
   for (const DenoiseParams& p : label_sets()) header += '\t' + set_name(p);
-  return fill_table(o, header, [](const Shape& s, const CaseRef& c) {
-    const Prepared p = prepare(s.mesh, apply_noise(s.mesh, c.noise, hash_name(s.name + "/" + c.noise)));
+  return fill_table(o, header, [](const NoisyCase& pair) {
+    const Prepared p = prepare(pair.clean, pair.noisy);
     const RegionMode region = auto_region_mode(p);
     return std::string(region == RegionMode::On ? "1" : "0") + '\t' + join(label_case(p, region), "%.5g");
   });
@@ -167,8 +169,8 @@ int cmd_label(const Options& o) {
 int cmd_describe(const Options& o) {
   std::string header = "case\tshape\tfamily\tsplit\tnoise\tfaces";
   for (const std::string& name : descriptor_names()) header += '\t' + name;
-  return fill_table(o, header, [](const Shape& s, const CaseRef& c) {
-    const Prepared p = prepare(s.mesh, apply_noise(s.mesh, c.noise, hash_name(s.name + "/" + c.noise)));
+  return fill_table(o, header, [](const NoisyCase& pair) {
+    const Prepared p = prepare(pair.clean, pair.noisy);
     Executor ex(1);
     return join(describe_input(p.P, p.F, p.topo, ex).values, "%.6g");
   });

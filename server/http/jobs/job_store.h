@@ -77,6 +77,11 @@ class JobStore {
   // (lost when a memory store stops).
   virtual std::vector<JobSnapshot> unfinished() { return {}; }
   virtual int unfetched_results() { return 0; }
+  // After the drain's jobs ended: whether a succeeded job's result, not fetched yet, has a client
+  // that asked about it (status, long poll or result) within the last few seconds: the drain
+  // keeps serving until it is fetched, its client goes quiet, or the grace ends (decision 67).
+  // A shared store keeps results beyond this process: false.
+  virtual bool results_awaited() { return false; }
 };
 
 }  // namespace mdn::http

@@ -67,15 +67,26 @@ std::shared_ptr<Job> MemoryJobStore::find_job(const std::string& id) {
 
 std::shared_ptr<Job> MemoryJobStore::job(const std::string& id) { return find_job(id); }
 
+// A client that asks within this long of its last request still follows the job: about six
+// of the web page's polls during a drain (300 ms apart), two of a client polling every 1.5 s.
+constexpr std::chrono::seconds kStillFollowing{3};
+
+void MemoryJobStore::asked(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  asked_[id] = Clock::now();
+}
+
 std::optional<JobSnapshot> MemoryJobStore::find(const std::string& id, bool) {
   auto job = find_job(id);
   if (!job) return std::nullopt;
+  asked(id);
   return snapshot(*job);
 }
 
 std::optional<JobSnapshot> MemoryJobStore::wait_finished(const std::string& id, Clock::time_point deadline) {
   auto job = find_job(id);
   if (!job) return std::nullopt;
+  asked(id);
   // In slices, so that a drain ends the wait.
   for (auto now = Clock::now(); now < deadline && !pool_.draining(); now = Clock::now())
     if (job->wait_for(std::min<std::chrono::milliseconds>(
@@ -120,6 +131,18 @@ std::vector<JobSnapshot> MemoryJobStore::unfinished() {
   return out;
 }
 
+bool MemoryJobStore::results_awaited() {
+  const auto since = Clock::now() - kStillFollowing;
+  std::vector<std::shared_ptr<Job>> followed;  // asked about lately; checked outside the lock
+  {
+    std::lock_guard lock(mutex_);
+    for (const auto& [id, when] : asked_)
+      if (auto it = jobs_.find(id); when > since && it != jobs_.end()) followed.push_back(it->second);
+  }
+  return std::any_of(followed.begin(), followed.end(),
+                     [](const auto& job) { return job->state() == JobState::Succeeded && !job->result_fetched(); });
+}
+
 int MemoryJobStore::unfetched_results() {
   int n = 0;
   for (const auto& job : all())
@@ -135,6 +158,7 @@ JobSnapshot MemoryJobStore::snapshot(const Job& job) const {
 
 void MemoryJobStore::drop_locked(const std::string& id) {
   jobs_.erase(id);
+  asked_.erase(id);
   for (auto k = idempotency_.begin(); k != idempotency_.end();)
     k = k->second.job_id == id ? idempotency_.erase(k) : std::next(k);
 }

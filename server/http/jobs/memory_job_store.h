@@ -45,6 +45,7 @@ class MemoryJobStore final : public JobStore {
   std::string_view kind() const override { return "memory"; }
   std::vector<JobSnapshot> unfinished() override;
   int unfetched_results() override;
+  bool results_awaited() override;
 
   // The job object itself (tests); null when unknown or expired.
   std::shared_ptr<Job> job(const std::string& id);
@@ -66,6 +67,9 @@ class MemoryJobStore final : public JobStore {
   std::map<std::string, std::shared_ptr<Job>> jobs_;  // every kept job by id
   struct IdempotencyEntry { std::string fingerprint, job_id; };
   std::map<std::string, IdempotencyEntry> idempotency_;
+  // When a client last asked about each job (find, wait_finished): who still follows a result.
+  std::map<std::string, Clock::time_point> asked_;
+  void asked(const std::string& id);
 };
 
 }  // namespace mdn::http

@@ -162,6 +162,45 @@ void BodyReader::check_declared_length(Context& ctx) {
 }
 
 // Body, container and parameters of a job, from a raw body or a multipart form.
+std::map<std::string, BodyReader::FormFile> BodyReader::read_form(Context& ctx, const std::vector<std::string>& names) {
+  check_declared_length(ctx);
+  std::map<std::string, FormFile> form;
+  FormFile* current = nullptr;
+  bool over = false, unexpected = false;
+  std::string unexpected_name;
+  std::int64_t total = 0;
+  auto last_byte = std::chrono::steady_clock::now();
+  const bool ok = (*ctx.reader)(
+      [&](const FormPart& part) {
+        last_byte = std::chrono::steady_clock::now();
+        if (std::find(names.begin(), names.end(), part.name) == names.end()) return unexpected = true, unexpected_name = part.name, false;
+        if (form.count(part.name)) return unexpected = true, unexpected_name = part.name + " (twice)", false;
+        current = &form[part.name];
+        current->content_type = part.content_type;
+        current->filename = part.filename;
+        return true;
+      },
+      [&](const char* data, std::size_t n) {
+        last_byte = std::chrono::steady_clock::now();
+        total += std::int64_t(n);
+        if (total > max_body_bytes_) return over = true, false;
+        if (current) current->bytes.append(data, n);
+        return true;
+      });
+  metrics_.add_bytes_in(total);
+  if (over) throw_too_large(ctx);
+  ctx.body_consumed = ok && !unexpected;
+  if (!ok && !unexpected) check_stall(ctx, last_byte);
+  if (unexpected) {
+    std::string expected;
+    for (std::size_t i = 0; i < names.size(); ++i)
+      expected += (i == 0 ? "" : i + 1 == names.size() ? " and " : ", ") + ("'" + names[i] + "'");
+    throw HttpError(make_problem(ProblemType::BadForm, "unexpected form field '" + unexpected_name + "'; expected " + expected));
+  }
+  if (!ok) throw HttpError(make_problem(ProblemType::BadForm, "the multipart body could not be parsed"));
+  return form;
+}
+
 service::JobInput BodyReader::read_job_input(Context& ctx) {
   const Request& req = ctx.req;
   std::optional<std::string> params_text;
@@ -176,49 +215,12 @@ service::JobInput BodyReader::read_job_input(Context& ctx) {
 
   service::JobInput input;
   if (req.is_multipart_form_data()) {
-    check_declared_length(ctx);
-    std::string current, mesh, params_part, mesh_type, mesh_name;
-    bool has_mesh = false, has_params = false, over = false, unexpected = false;
-    std::string unexpected_name;
-    std::int64_t total = 0;
-    auto last_byte = std::chrono::steady_clock::now();
-    const bool ok = (*ctx.reader)(
-        [&](const FormPart& part) {
-          last_byte = std::chrono::steady_clock::now();
-          current = part.name;
-          if (current == "mesh") {
-            if (has_mesh) return unexpected = true, unexpected_name = "mesh (twice)", false;
-            has_mesh = true;
-            mesh_type = part.content_type;
-            mesh_name = part.filename;
-          } else if (current == "params") {
-            if (has_params) return unexpected = true, unexpected_name = "params (twice)", false;
-            has_params = true;
-          } else {
-            unexpected = true;
-            unexpected_name = current;
-            return false;
-          }
-          return true;
-        },
-        [&](const char* data, std::size_t n) {
-          last_byte = std::chrono::steady_clock::now();
-          total += std::int64_t(n);
-          if (total > max_body_bytes_) return over = true, false;
-          (current == "mesh" ? mesh : params_part).append(data, n);
-          return true;
-        });
-    metrics_.add_bytes_in(total);
-    if (over) throw_too_large(ctx);
-    ctx.body_consumed = ok && !unexpected;
-    if (!ok && !unexpected) check_stall(ctx, last_byte);
-    if (unexpected)
-      throw HttpError(make_problem(ProblemType::BadForm, "unexpected form field '" + unexpected_name + "'; expected 'mesh' and 'params'"));
-    if (!ok) throw HttpError(make_problem(ProblemType::BadForm, "the multipart body could not be parsed"));
-    if (!has_mesh) throw HttpError(make_problem(ProblemType::BadForm, "the form has no 'mesh' field"));
-    if (has_params) set_params(std::move(params_part), "form field");
-    input.format = resolve_format(mesh_type, mesh, mesh_name);
-    input.bytes = std::move(mesh);
+    auto form = read_form(ctx, {"mesh", "params"});
+    if (!form.count("mesh")) throw HttpError(make_problem(ProblemType::BadForm, "the form has no 'mesh' field"));
+    if (form.count("params")) set_params(std::move(form["params"].bytes), "form field");
+    FormFile& mesh = form["mesh"];
+    input.format = resolve_format(mesh.content_type, mesh.bytes, mesh.filename);
+    input.bytes = std::move(mesh.bytes);
   } else {
     std::string content_type = req.get_header_value("Content-Type");
     if (base_media_type(content_type) == "application/x-www-form-urlencoded")

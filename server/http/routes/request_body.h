@@ -1,4 +1,5 @@
-// Request bodies of the job routes (POST /v1/denoise, POST /v1/jobs): the mesh's media type,
+// Request bodies of the job routes (POST /v1/denoise, POST /v1/jobs) and of the reference
+// comparison (POST /v1/compare): the mesh's media type,
 // the body read with our own byte count (cpp-httplib 0.11.4 bounds Content-Length bodies only,
 // not chunked uploads), multipart forms, and the parameters from ?params=, X-Denoise-Params or
 // the form's params field.
@@ -6,8 +7,10 @@
 
 #include <chrono>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "core/io/document.h"
 #include "service/job_runner.h"
@@ -36,6 +39,14 @@ class BodyReader {
   // Body, container and parameters of a job, from a raw body or a multipart form. Throws
   // HttpError (400, 408, 411, 413, 415) and what job_params_from_text throws.
   service::JobInput read_job_input(Context& ctx);
+  // One file of a multipart form.
+  struct FormFile {
+    std::string bytes, content_type, filename;
+  };
+  // A multipart form whose fields are among `names`, each at most once, within --max-body bytes
+  // (POST /v1/jobs' mesh and params, POST /v1/compare's reference and mesh). Throws HttpError
+  // (400 bad form, 408, 411, 413).
+  std::map<std::string, FormFile> read_form(Context& ctx, const std::vector<std::string>& names);
 
  private:
   std::string read_body(Context& ctx, const ContentReader& reader);

@@ -24,7 +24,9 @@ constexpr std::size_t kReadChunk = 16384;
 // The most a parked connection buffers: a head longer than this is refused (request_framing.h).
 constexpr std::size_t kMaxHeadBytes = framing::kMaxHeadBytes + 1;
 
-inline Clock::duration seconds(double s) { return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s)); }
+inline Clock::duration seconds(double s) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
 
 // One client connection. Owned by the gate while parked, by one lane thread while served.
 struct Conn {

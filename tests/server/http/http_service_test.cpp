@@ -1,4 +1,4 @@
-// The HTTP service's handlers over parts a test builds itself (service_parts.h): a fake job
+// The HTTP service's handlers over parts a test builds itself (ServiceParts, http_server.h): a fake job
 // store stands in for Redis, so "the store is unreachable" needs no Redis server to stop.
 #include "server/http/http_server.h"
 #include "server/service_parts.h"

@@ -1,6 +1,6 @@
 // The job codec: a job's Redis hash <-> JobSnapshot, and the stored forms of its error (a
 // problem as JSON) and of its output summary (service/job_json.h). Pure functions of their
-// arguments (but now_ms, the wall clock), no Redis needed: tests/server/http/redis_job_codec_test.cpp.
+// arguments (but now_ms, the wall clock), no Redis needed: tests/server/http/jobs/redis/job_codec_test.cpp.
 //
 // Hash fields read: state, stage, fraction, cancel, input_bytes, attempts, created_ms,
 // started_ms, finished_ms, error, output, output_bytes (store.h lists every key and field).
