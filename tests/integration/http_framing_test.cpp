@@ -228,6 +228,7 @@ TEST(HttpFraming, ABodyBelowTheMinimumRateIsRefusedAfterItsGrace) {
     }
   }
   const double took = seconds_since(start);
+  if (!response.empty()) response += read_until_close(fd, 2);  // the rest of the answer
   close(fd);
   std::printf("[ figures  ] a body at 2 bytes/s: answered %d after %.2f s\n", status_of(response), took);
   EXPECT_EQ(status_of(response), 408) << response;
