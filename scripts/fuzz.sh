@@ -48,6 +48,8 @@ for h in "${harnesses[@]}"; do
   mkdir -p "$corpus"
   inputs=("$corpus" "$build/seeds/$h")
   [ -d "$committed" ] && inputs+=("$committed")
+  # Reproducers of past findings, each kept whatever the minimisation keeps.
+  [ -d "$root/tests/fuzz/regressions/$h" ] && inputs+=("$root/tests/fuzz/regressions/$h")
   log="$build/logs/$h.log"
   # -rss_limit_mb / -malloc_limit_mb: the harnesses decode with 64 MB of decoded bytes allowed;
   # a run past 1 GB means a limit was not enforced. -timeout: one input may take 10 s at most.
