@@ -58,9 +58,9 @@ for h in "${harnesses[@]}"; do
        -max_len=262144 -print_final_stats=1 -artifact_prefix="$build/findings/$h-" >"$log" 2>&1; then
     echo "fuzz_$h: $(grep -E '^#[0-9]+.*(DONE|cov:)' "$log" | tail -1)"
     if [ "$mode" = long ]; then
-      # The committed corpus: the smallest set of inputs that keeps every feature found.
+      # The committed corpus: a small set of inputs that keeps every feature found (set cover).
       rm -rf "$build/minimised/$h" && mkdir -p "$build/minimised/$h"
-      "$build/tests/fuzz/fuzz_$h" -merge=1 "$build/minimised/$h" "${inputs[@]}" -timeout=10 -rss_limit_mb=1024 \
+      "$build/tests/fuzz/fuzz_$h" -set_cover_merge=1 "$build/minimised/$h" "${inputs[@]}" -timeout=10 -rss_limit_mb=1024 \
         -malloc_limit_mb=1024 -max_len=262144 >"$build/logs/$h-merge.log" 2>&1
       rm -rf "$committed" && mkdir -p "$committed" && cp "$build/minimised/$h"/* "$committed"/ 2>/dev/null || true
       echo "fuzz_$h: corpus $(ls "$committed" | wc -l) files, $(du -sk "$committed" | cut -f1) KiB in tests/fuzz/corpus/$h"
