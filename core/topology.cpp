@@ -49,6 +49,7 @@ std::vector<HalfEdge> sorted_half_edges(const Triangles& F, std::int32_t num_ver
     for (auto v = static_cast<std::size_t>(begin); v < static_cast<std::size_t>(end); ++v) {
       HalfEdge* first = sorted.data() + start[v];
       HalfEdge* last = sorted.data() + start[v + 1];
+      if (last - first < 2) continue;  // nothing to order (and first + 1 past an empty array is undefined)
       if (last - first > 16) {
         std::sort(first, last, less);
         continue;

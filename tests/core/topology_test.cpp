@@ -10,6 +10,18 @@
 namespace mdn {
 namespace {
 
+// Found by tests/fuzz/fuzz_job (issue 49, item 9): faces that repeat one index three times have
+// no half-edge, so the sort's buckets are all empty and the insertion sort stepped past a null
+// array (undefined behaviour; the asan preset's UBSan stops there). Such faces give no edge.
+TEST(Topology, FacesWithOneRepeatedIndexGiveNoEdge) {
+  Triangles F(3, 3);
+  F << 0, 0, 0, 1, 1, 1, 2, 2, 2;
+  const Topology t = Topology::build(F, 3);
+  EXPECT_EQ(t.num_interior_edges(), 0);
+  EXPECT_EQ(t.boundary_edges.rows(), 0);
+  EXPECT_EQ(t.nonmanifold_edges.rows(), 0);
+}
+
 TEST(Topology, ClosedCubeHasOnlyInteriorEdges) {
   const TriMesh m = test::cube(3);
   const Topology t = Topology::build(m.F, static_cast<std::int32_t>(m.V.rows()));

@@ -41,7 +41,7 @@ io::Limits fuzz_limits() {
   return limits;
 }
 
-constexpr io::Format kFormats[] = {io::Format::Off, io::Format::Obj, io::Format::Ply, io::Format::Drc,
+constexpr io::Format kFormats[] = {io::Format::Off, io::Format::Obj,  io::Format::Ply, io::Format::Drc,
                                    io::Format::Glb, io::Format::Gltf, io::Format::Stl};
 
 }  // namespace
@@ -84,7 +84,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   for (const TriMesh& m : again->surfaces()) {
     if (!m.V.allFinite()) finding("re-decode", "a surface has a non-finite coordinate");
-    if (m.F.size() > 0 && (m.F.minCoeff() < 0 || m.F.maxCoeff() >= m.V.rows())) finding("re-decode", "a face index is out of range");
+    if (m.F.size() > 0 && (m.F.minCoeff() < 0 || m.F.maxCoeff() >= m.V.rows()))
+      finding("re-decode", "a face index is out of range");
   }
   return 0;
 }

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -95,5 +96,38 @@ int main(int argc, char** argv) {
         R"({"mode":"manual","alpha":0.2,"sigma_theta":40,"n_aniso":6,"sigma_gamma":30,"n_normal":50,"n_vertex":40,"region_mode":"auto","output":{"format":"glb","draco":true,"position_bits":14,"normal_bits":10}})",
         R"({"region_mode":"off","output":{"format":"ply","draco":false,"compression_level":3}})"})
     write(out / "params", text);
+  // The job path (fuzz_job): the container's byte, the parameters, '\n', the mesh. Every format
+  // with the default and the paper's parameters, Draco at each end of its levels, and the mesh
+  // whose coincident vertices crashed Draco's encoder at levels 9-10 (issue 49, item 0).
+  const char* job_params[] = {"{}", R"({"mode":"manual","n_normal":5,"n_vertex":5})",
+                              R"({"mode":"none","output":{"compression":"draco","compression_level":10}})",
+                              R"({"mode":"manual","output":{"format":"drc","compression_level":0,"position_bits":8}})"};
+  const std::string off = test::off_text(test::sphere(0));
+  for (std::size_t f = 0; f < 7; ++f) {
+    const io::Format formats[] = {io::Format::Off, io::Format::Obj, io::Format::Ply, io::Format::Drc,
+                                  io::Format::Glb, io::Format::Gltf, io::Format::Stl};
+    const std::string mesh = formats[f] == io::Format::Off ? off : encode(off, formats[f], formats[f] == io::Format::Drc);
+    for (std::size_t p = 0; p < std::size(job_params); p += f % 2 ? 2 : 1)
+      write(out / "job", std::string(1, static_cast<char>(f)) + job_params[p] + "\n" + mesh);
+  }
+  write(out / "job", std::string(1, 4) + R"({"mode":"none","output":{"compression":"draco","compression_level":9}})" +
+                         "\nOFF\n3 1 0\n1 1 1\n1 1 1\n1 1 1\n3 0 1 2\n");
+  // The HTTP request reader (fuzz_http_framing): the piece size's byte, then what a connection
+  // sends: plain and pipelined requests, a Content-Length body, chunked bodies with extensions
+  // and trailers, and the shapes of issue 49's attacks (a line that never ends, "0x" and "+"
+  // chunk sizes, Transfer-Encoding: gzip, chunked).
+  for (const char* http :
+       {"\x07GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n",
+        "\x01GET /healthz HTTP/1.1\r\nHost: x\r\n\r\nGET /readyz?x=1 HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n",
+        "\x10\r\nPOST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Length: 5\r\n\r\nOFF\n0GET / HTTP/1.0\r\n\r\n",
+        "\x03POST /v1/denoise HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n4;name=value\r\nOFF\n\r\n"
+        "1c\r\n0123456789abcdef0123456789ab\r\n0\r\nX-Trailer: 1\r\n\r\n",
+        "\x05POST /v1/denoise HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n0x1c\r\n",
+        "\x05POST /v1/denoise HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n+1c\r\n",
+        "\x05POST /v1/denoise HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: gzip, chunked\r\n\r\n0\r\n\r\n",
+        "\x40GET /aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa",
+        "\x02GET / HTTP/1.1\r\nX-Long: aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa",
+        "\x02OPTIONS * HTTP/1.1\r\nHost: x\r\n folded\r\n\r\n"})
+    write(out / "http_framing", http);
   return 0;
 }

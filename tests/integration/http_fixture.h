@@ -4,6 +4,7 @@
 // comparisons and builds noisy test meshes as OFF text.
 #pragma once
 
+#include <arpa/inet.h>
 #include <fcntl.h>
 #include <netinet/in.h>
 #include <sys/prctl.h>
@@ -206,15 +207,32 @@ inline std::string url_encode(const std::string& text) {
   return out;
 }
 
-// A TCP socket connected to 127.0.0.1:port, or -1.
-inline int connect_loopback(int port) {
+// A TCP socket connected to 127.0.0.1:port, or -1; from the loopback address `source` (another
+// client, "127.0.0.2") when one is given.
+inline int connect_loopback(int port, const char* source = nullptr) {
   const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  if (source) {
+    sockaddr_in from{};
+    from.sin_family = AF_INET;
+    inet_pton(AF_INET, source, &from.sin_addr);
+    if (bind(fd, reinterpret_cast<sockaddr*>(&from), sizeof from) != 0) return close(fd), -1;
+  }
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
   addr.sin_port = htons(std::uint16_t(port));
   addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   if (connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) return close(fd), -1;
   return fd;
+}
+
+inline int connect_from(const char* source, int port) { return connect_loopback(port, source); }
+
+// VmRSS or VmHWM of a process, in MiB (0 if unreadable).
+inline double status_mib(pid_t pid, const std::string& field) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind(field + ":", 0) == 0) return std::atof(line.c_str() + field.size() + 1) / 1024.0;
+  return 0;
 }
 
 // Everything the peer sends on fd until it closes; gives up on a read that waits longer than

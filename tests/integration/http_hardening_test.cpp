@@ -322,20 +322,6 @@ TEST(HttpConnections, FiftySlowlorisConnectionsDoNotTakeTheServiceDown) {
   EXPECT_NE(metrics.find("mdn_http_connections_closed_total{reason=\"head_timeout\"} 50\n"), std::string::npos) << metrics;
 }
 
-// A TCP connection to 127.0.0.1:port from another loopback address (another client), or -1.
-int connect_from(const char* source, int port) {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in from{};
-  from.sin_family = AF_INET;
-  inet_pton(AF_INET, source, &from.sin_addr);
-  if (bind(fd, reinterpret_cast<sockaddr*>(&from), sizeof from) != 0) return close(fd), -1;
-  sockaddr_in to{};
-  to.sin_family = AF_INET;
-  to.sin_port = htons(std::uint16_t(port));
-  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  if (connect(fd, reinterpret_cast<sockaddr*>(&to), sizeof to) != 0) return close(fd), -1;
-  return fd;
-}
 
 TEST(HttpConnections, OneClientsSlowBodiesLeaveThreadsForOthers) {
   ServerProcess server({"--io-threads", "4", "--body-timeout", "30"});

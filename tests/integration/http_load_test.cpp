@@ -260,13 +260,6 @@ TEST(HttpLoad, AFullJobStoreRefusesNewJobsAndEvictsNone) {
   EXPECT_EQ(again->status, 202) << again->body;
 }
 
-// VmRSS or VmHWM of a process, in MiB (0 if unreadable).
-double status_mib(pid_t pid, const std::string& field) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
-  for (std::string line; std::getline(in, line);)
-    if (line.rfind(field + ":", 0) == 0) return std::atof(line.c_str() + field.size() + 1) / 1024.0;
-  return 0;
-}
 
 // Issue 17: after an overload, accepted jobs returned 404 before their lifetime. Eight seconds
 // of four clients posting as fast as they can (far beyond one worker's capacity): every job

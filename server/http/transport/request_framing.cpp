@@ -100,10 +100,15 @@ HeadState inspect_head(std::string_view buffered) {
       }
       continue;
     }
+    // cpp-httplib 0.11.4 (built without CPPHTTPLIB_ALLOW_LF_AS_LINE_TERMINATOR) skips a header
+    // line that ends in a bare LF, an empty one included: so does the gate, so that both agree
+    // on where the head ends and which headers it holds.
+    if (partial.empty() || partial.back() != '\r') continue;
     if (line.empty()) break;  // the end of the head
     const std::size_t colon = line.find(':');
     if (colon == std::string_view::npos || colon == 0) {
-      // cpp-httplib refuses these too (400); obs-fold (a line starting with a blank) among them.
+      // A field line without a name, obs-fold (a line starting with a blank) among them: RFC
+      // 9112 5.2 lets a server refuse it (400), and it never means what cpp-httplib would make of it.
       state.refusal = refuse(ProblemType::BadRequest, "a header line is not NAME: value");
       return state;
     }

@@ -29,7 +29,7 @@ class RecentResults {
     std::size_t bytes = std::size_t{64} << 20;  // all results together
     std::size_t places = 4096;                  // entries, counting those erased since (bounds the order)
   };
-  RecentResults() = default;
+  RecentResults() : RecentResults(Limits{}) {}  // clang: a defaulted one is deleted (const limits_ with no initializer)
   explicit RecentResults(Limits limits) : limits_(limits) {}
 
   // Keeps `bytes` for job `id` (replacing an earlier entry), dropping the oldest beyond the limits.
