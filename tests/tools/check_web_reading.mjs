@@ -176,7 +176,13 @@ try {
     v.empty = { state: await upload(page, plan.empty), title: await page.$eval('#error-title', (e) => e.textContent),
                 detail: await page.$eval('#error-detail', (e) => e.textContent), error: await inView(page, '#error'),
                 sent: requests.filter((r) => r.method === 'POST').length - jobsBefore };
-    v.broken = { state: await upload(page, plan.broken), title: await page.$eval('#error-title', (e) => e.textContent),
+    const brokenState = await upload(page, plan.broken);
+    // The server's refusal can come before the browser's own reading of the file has ended.
+    await page.waitForFunction(() => {
+      const e = document.querySelector('#viewer-empty');
+      return e.hidden || !e.textContent.startsWith('Reading ');
+    }, { timeout: 15000 }).catch(() => {});
+    v.broken = { state: brokenState, title: await page.$eval('#error-title', (e) => e.textContent),
                  canvas_text: await page.$eval('#viewer-empty', (e) => (e.hidden ? '' : e.textContent)) };
   }
   step('sizes');
