@@ -20,15 +20,15 @@
 #include "core/io/document.h"
 #include "core/io/encode_check.h"
 #include "core/io/output_settings.h"
+#include "fuzz_support.h"
 
 namespace {
 
 using namespace mdn;
 
-[[noreturn]] void finding(const char* what, const char* detail) {
-  std::fprintf(stderr, "FINDING: %s: %s\n", what, detail);
-  std::abort();
-}
+using fuzz::check_surfaces;
+using fuzz::finding;
+using fuzz::kFormats;
 
 io::Limits fuzz_limits() {
   io::Limits limits;
@@ -36,14 +36,6 @@ io::Limits fuzz_limits() {
   limits.max_vertices = 20'000;
   limits.max_decoded_bytes = std::int64_t{64} << 20;
   return limits;
-}
-
-void check_surfaces(io::MeshDocument& doc, const char* stage) {
-  for (const TriMesh& m : doc.surfaces()) {
-    if (m.V.cols() != 3 || m.F.cols() != 3) finding(stage, "a surface is not #V x 3 / #F x 3");
-    if (!m.V.allFinite()) finding(stage, "a surface has a non-finite coordinate");
-    if (m.F.size() > 0 && (m.F.minCoeff() < 0 || m.F.maxCoeff() >= m.V.rows())) finding(stage, "a face index is out of range");
-  }
 }
 
 // Runs f; the errors the service maps to 4xx are expected, anything else is a finding.
@@ -62,9 +54,6 @@ bool client_error_or_ok(F&& f, const char* stage) {
   }
   return false;
 }
-
-constexpr io::Format kFormats[] = {io::Format::Off, io::Format::Obj, io::Format::Ply, io::Format::Drc,
-                                   io::Format::Glb, io::Format::Gltf, io::Format::Stl};
 
 // Output settings from the input's last 8 bytes (0 where the input is shorter): every *_bits
 // over its range and a little past it (refused as a parameter error), compression level and

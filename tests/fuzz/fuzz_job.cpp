@@ -21,15 +21,15 @@
 #include "core/io/document.h"
 #include "service/job_runner.h"
 #include "service/params_json.h"
+#include "fuzz_support.h"
 
 namespace {
 
 using namespace mdn;
 
-[[noreturn]] void finding(const char* what, const char* detail) {
-  std::fprintf(stderr, "FINDING: %s: %s\n", what, detail);
-  std::abort();
-}
+using fuzz::check_surfaces;
+using fuzz::finding;
+using fuzz::kFormats;
 
 // Small enough that "mode": "search" on a mesh at the limit stays well inside -timeout under
 // the sanitizers.
@@ -40,9 +40,6 @@ io::Limits fuzz_limits() {
   limits.max_decoded_bytes = std::int64_t{32} << 20;
   return limits;
 }
-
-constexpr io::Format kFormats[] = {io::Format::Off, io::Format::Obj,  io::Format::Ply, io::Format::Drc,
-                                   io::Format::Glb, io::Format::Gltf, io::Format::Stl};
 
 }  // namespace
 
@@ -82,10 +79,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   } catch (const std::exception& e) {
     finding("the job's output does not decode", e.what());
   }
-  for (const TriMesh& m : again->surfaces()) {
-    if (!m.V.allFinite()) finding("re-decode", "a surface has a non-finite coordinate");
-    if (m.F.size() > 0 && (m.F.minCoeff() < 0 || m.F.maxCoeff() >= m.V.rows()))
-      finding("re-decode", "a face index is out of range");
-  }
+  check_surfaces(*again, "re-decode");
   return 0;
 }
