@@ -120,22 +120,20 @@ void BodyReader::check_stall(Context& ctx, std::chrono::steady_clock::time_point
     close_after_response(ctx.res);
     throw HttpError(make_problem(ProblemType::RequestTimeout, "the request body arrived slower than the server's minimum rate"));
   }
-  if (why == BodyReadTimeout::BodyDeadline) {
-    close_after_response(ctx.res);  // the rest of the body may still come: never read it
+  // A 408 naming the limit that ran out; the rest of the body may still come: never read it.
+  auto throw_timeout = [&](const char* what, double limit_s, const char* extension) {
+    close_after_response(ctx.res);
     char seconds[32];
-    std::snprintf(seconds, sizeof seconds, "%g", body_timeout_s_);
-    Problem p = make_problem(ProblemType::RequestTimeout, std::string("the request body did not arrive within ") + seconds + " s");
-    p.extensions["body_timeout_s"] = body_timeout_s_;
+    std::snprintf(seconds, sizeof seconds, "%g", limit_s);
+    Problem p = make_problem(ProblemType::RequestTimeout, std::string(what) + seconds + " s");
+    p.extensions[extension] = limit_s;
     throw HttpError(std::move(p));
-  }
+  };
+  if (why == BodyReadTimeout::BodyDeadline)
+    throw_timeout("the request body did not arrive within ", body_timeout_s_, "body_timeout_s");
   const double idle_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_byte).count();
   if (why != BodyReadTimeout::Stall && idle_s < 0.9 * stall_timeout_s_) return;
-  close_after_response(ctx.res);  // the rest of the body may still come: never read it
-  char seconds[32];
-  std::snprintf(seconds, sizeof seconds, "%g", stall_timeout_s_);
-  Problem p = make_problem(ProblemType::RequestTimeout, std::string("the request body sent nothing for ") + seconds + " s");
-  p.extensions["body_stall_timeout_s"] = stall_timeout_s_;
-  throw HttpError(std::move(p));
+  throw_timeout("the request body sent nothing for ", stall_timeout_s_, "body_stall_timeout_s");
 }
 
 void BodyReader::throw_too_large(Context& ctx) {
