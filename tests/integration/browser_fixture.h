@@ -37,14 +37,7 @@ inline nlohmann::json run_browser_check(const std::string& script, const nlohman
 
 // A noisy cube (creases and flat faces show what the method keeps and what it removes): n by n
 // quads a side, noise of 0.25 mean edge lengths.
-inline std::string noisy_cube_off(int n, std::uint64_t seed) {
-  TriMesh mesh = cube(n);
-  NoiseSpec spec;
-  spec.sigma = 0.25;
-  spec.seed = seed;
-  mesh.V = add_noise(mesh, spec);
-  return off_text(mesh);
-}
+inline std::string noisy_cube_off(int n, std::uint64_t seed) { return noisy_off(cube(n), 0.25, seed); }
 
 // Skips nothing: a missing tool is a failure that says how to install it.
 inline void check_browser_tools() {

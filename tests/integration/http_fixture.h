@@ -73,15 +73,17 @@ inline void write_file(const fs::path& path, const std::string& bytes) {
   out << bytes;
 }
 
-// A noisy sphere (seeded): `levels` subdivisions of an icosahedron (20 * 4^levels faces).
-inline std::string noisy_sphere_off(int levels, std::uint64_t seed = 1) {
-  TriMesh mesh = sphere(levels);
+// `mesh` with seeded noise of `sigma` mean edge lengths (along the normal), as OFF text.
+inline std::string noisy_off(TriMesh mesh, double sigma, std::uint64_t seed) {
   NoiseSpec spec;
-  spec.sigma = 0.2;
+  spec.sigma = sigma;
   spec.seed = seed;
   mesh.V = add_noise(mesh, spec);
   return off_text(mesh);
 }
+
+// A noisy sphere (seeded): `levels` subdivisions of an icosahedron (20 * 4^levels faces).
+inline std::string noisy_sphere_off(int levels, std::uint64_t seed = 1) { return noisy_off(sphere(levels), 0.2, seed); }
 
 inline std::string temp_dir(const std::string& name) {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
