@@ -340,6 +340,26 @@ TEST(RangeScan, TheSameSeedGivesByteIdenticalScans) {
   }
 }
 
+// Structured light's correlated draws are computed over the object's pixels only (decision 84),
+// yet a pixel's value is its own: a second board far to the side, which widens the computed
+// region, leaves the first board's reported depths the same bits.
+TEST(RangeScan, CorrelatedNoiseOfAPixelDoesNotDependOnTheRestOfTheImage) {
+  // The second board is above and to the left: the region's first row and column both move.
+  const TriMesh first = square(Vec3(0.15, 0, 1.0), Vec3::UnitX(), Vec3::UnitY(), 0.2);
+  const TriMesh both = join(first, square(Vec3(-0.3, -0.1, 1.0), Vec3::UnitX(), Vec3::UnitY(), 0.2));
+  const RangeImage a = capture(first, kinect_v1(), {23, 0}), b = capture(both, kinect_v1(), {23, 0});
+  int compared = 0;
+  for (std::size_t i = 0; i < a.depth.size(); ++i) {
+    const int c = static_cast<int>(i) % a.cols, r = static_cast<int>(i) / a.cols;
+    if (std::isnan(a.clean_depth[i]) || a.point(c, r, a.clean_depth[i]).x() < 0.07) continue;  // the first board, inside
+    ASSERT_EQ(std::isnan(a.depth[i]), std::isnan(b.depth[i])) << "pixel " << i;  // lost at its edge in both, or in neither
+    if (std::isnan(a.depth[i])) continue;
+    ASSERT_EQ(0, std::memcmp(&a.depth[i], &b.depth[i], sizeof(double))) << "pixel " << i;
+    ++compared;
+  }
+  EXPECT_GT(compared, 3000);
+}
+
 }  // namespace
 }  // namespace mdn::train
 
