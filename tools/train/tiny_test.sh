@@ -31,9 +31,11 @@ digests="$root/tools/train/tiny_digests.txt"
   echo "# tools/train/tiny_test.sh's run: the C++ build, the model card's toolchain line, and the SHA-256 of"
   echo "# the tables and of the model without its \"built\" line. Refresh after an intended change:"
   echo "#   bash tools/train/tiny_test.sh build/release /tmp/tiny --refresh"
-  # The tables are the C++ build's: its compiler and build type (CMake's record of them).
-  echo "compiler $(sed -n 's/^set(CMAKE_CXX_COMPILER_\(ID\|VERSION\) "\(.*\)")$/\2/p' "$build"/CMakeFiles/*/CMakeCXXCompiler.cmake \
-    | tr '\n' ' ')$(sed -n 's/^CMAKE_BUILD_TYPE:STRING=//p' "$build/CMakeCache.txt")"
+  # The tables are the C++ build's: its compiler and build type (CMake's record of them; the
+  # last one listed, should the build directory hold several CMake versions' records).
+  cxx="$(ls "$build"/CMakeFiles/*/CMakeCXXCompiler.cmake | tail -n 1)"
+  echo "compiler $(sed -n 's/^set(CMAKE_CXX_COMPILER_\(ID\|VERSION\) "\(.*\)")$/\2/p' "$cxx" | tr '\n' ' ')$(
+    sed -n 's/^CMAKE_BUILD_TYPE:STRING=//p' "$build/CMakeCache.txt")"
   echo "toolchain $(grep -m1 '^//   python ' "$model" | cut -c6-)"
   echo "labels.tsv $(sha256sum < "$work/labels.tsv" | cut -d' ' -f1)"
   echo "descriptors.tsv $(sha256sum < "$work/descriptors.tsv" | cut -d' ' -f1)"
