@@ -6,6 +6,16 @@
 #include "server/http/secure_random.h"
 
 namespace mdn::http {
+namespace {
+
+// A downloaded result or a cancelled job gives its slot up (decision 62): it no longer counts
+// against its client's share either.
+bool holds_slot(const Job& job) {
+  const JobState state = job.state();
+  return !((state == JobState::Succeeded && job.result_fetched()) || state == JobState::Cancelled);
+}
+
+}  // namespace
 
 MemoryJobStore::MemoryJobStore(WorkerPool& pool, MemoryJobStoreOptions options)
     : pool_(pool), options_(options) {}
@@ -24,7 +34,7 @@ std::vector<std::shared_ptr<Job>> MemoryJobStore::all() {
 }
 
 JobStore::Submitted MemoryJobStore::submit(service::JobInput input, const std::optional<std::string>& idempotency_key,
-                                           const std::string& fingerprint) {
+                                           const std::string& fingerprint, Owner owner) {
   std::lock_guard lock(mutex_);
   sweep_locked();
   if (idempotency_key) {
@@ -38,6 +48,9 @@ JobStore::Submitted MemoryJobStore::submit(service::JobInput input, const std::o
     }
   }
   pool_.check_admission();  // draining, queue full: before the store's own limit, as always
+  // The client's share before the store's: a client over its share is told so (429) even when
+  // the store is full because of it (decision 78).
+  if (!owner.client.empty()) check_client_share_locked(owner.client);
   // An accepted job stays retrievable for its whole result lifetime: when every stored-job
   // slot is taken, new jobs are refused rather than old ones evicted early; except that a
   // result already downloaded, or a job cancelled, gives its slot up first (decision 62).
@@ -52,8 +65,10 @@ JobStore::Submitted MemoryJobStore::submit(service::JobInput input, const std::o
   std::string id;
   do id = new_job_id();
   while (jobs_.count(id) != 0);
-  auto job = pool_.submit(id, std::move(input), {.asynchronous = true, .admit = true});
+  auto job = pool_.submit(id, std::move(input),
+                          {.asynchronous = true, .admit = true, .queued_bytes = std::move(owner.queued_bytes)});
   jobs_.emplace(id, job);
+  if (!owner.client.empty()) clients_.emplace(id, std::move(owner.client));
   if (idempotency_key) idempotency_[*idempotency_key] = {fingerprint, id};
   return {snapshot(*job), false};
 }
@@ -158,6 +173,7 @@ JobSnapshot MemoryJobStore::snapshot(const Job& job) const {
 
 void MemoryJobStore::drop_locked(const std::string& id) {
   jobs_.erase(id);
+  clients_.erase(id);
   asked_.erase(id);
   for (auto k = idempotency_.begin(); k != idempotency_.end();)
     k = k->second.job_id == id ? idempotency_.erase(k) : std::next(k);
@@ -167,8 +183,7 @@ void MemoryJobStore::evict_done_locked() {
   const std::string* oldest = nullptr;
   std::optional<Clock::time_point> oldest_at;
   for (const auto& [id, job] : jobs_) {
-    const JobState state = job->state();
-    if (!((state == JobState::Succeeded && job->result_fetched()) || state == JobState::Cancelled)) continue;
+    if (holds_slot(*job)) continue;
     const auto finished = job->finished_at();
     if (finished && (!oldest_at || *finished < *oldest_at)) {
       oldest = &id;
@@ -184,6 +199,32 @@ void MemoryJobStore::sweep_locked() {
   for (const auto& [id, job] : jobs_)
     if (auto finished = job->finished_at(); finished && *finished + options_.result_ttl <= now) expired.push_back(id);
   for (const auto& id : expired) drop_locked(id);
+}
+
+void MemoryJobStore::check_client_share_locked(const std::string& client) const {
+  int held = 0;
+  std::optional<Clock::time_point> oldest_finished;
+  for (const auto& [id, owner] : clients_) {
+    if (owner != client) continue;
+    const Job& job = *jobs_.at(id);
+    if (!holds_slot(job)) continue;
+    ++held;
+    if (auto finished = job.finished_at(); finished && (!oldest_finished || *finished < *oldest_finished))
+      oldest_finished = finished;
+  }
+  if (held < options_.max_stored_per_client) return;
+  Problem p = make_problem(ProblemType::OverClientShare,
+                           "this client keeps " + std::to_string(held) + " jobs, its share of the job store (" +
+                               std::to_string(options_.max_stored_per_client) +
+                               ", --client-max-stored-jobs); download or delete finished ones, or retry later");
+  p.extensions["limit_jobs"] = options_.max_stored_per_client;
+  // A slot of this client frees when it downloads a result (now) or its oldest finished job's
+  // lifetime ends; with none finished, when its queued jobs run.
+  const double left = oldest_finished
+                           ? std::chrono::duration<double>(*oldest_finished + options_.result_ttl - Clock::now()).count()
+                           : double(pool_.retry_after_s());
+  p.retry_after_s = int(std::clamp(std::ceil(left), 1.0, 60.0));
+  throw HttpError(std::move(p));
 }
 
 int MemoryJobStore::store_retry_after_s_locked() const {
