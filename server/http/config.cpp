@@ -110,7 +110,8 @@ std::vector<Setting> listen_and_jobs_settings() {
          return std::to_string(c.max_queued_bytes) + " (" + std::to_string(c.effective_max_queued_bytes()) + " here)";
        }},
       {"client-max-queued-bytes", "MDN_CLIENT_MAX_QUEUED_BYTES",
-       "the same for one client; beyond, its new jobs get 429 while others are served; 0 = a quarter of --max-queued-bytes",
+       "the same for one client; beyond, its new jobs get 429 while others are served; 0 = --max-body, at most a quarter "
+       "of --max-queued-bytes",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.client_max_queued_bytes = parse_int(n, v, 0, std::int64_t{1} << 50); },
        [](const ServerConfig& c) {
          return std::to_string(c.client_max_queued_bytes) + " (" + std::to_string(c.effective_client_max_queued_bytes()) + " here)";
@@ -416,7 +417,9 @@ std::int64_t ServerConfig::effective_max_queued_bytes() const {
 }
 
 std::int64_t ServerConfig::effective_client_max_queued_bytes() const {
-  return client_max_queued_bytes > 0 ? client_max_queued_bytes : std::max<std::int64_t>(1, effective_max_queued_bytes() / 4);
+  // By default one client may queue as much as one largest body (decision 79).
+  if (client_max_queued_bytes > 0) return client_max_queued_bytes;
+  return std::max<std::int64_t>(1, std::min(max_body_bytes, effective_max_queued_bytes() / 4));
 }
 
 int ServerConfig::effective_io_threads() const {

@@ -57,7 +57,7 @@ struct ServerConfig {
   // without keys. 0: the default that effective_*() computes.
   int client_max_stored_jobs = 0;  // --client-max-stored-jobs; jobs one client keeps (0: a quarter of --max-stored-jobs)
   std::int64_t max_queued_bytes = 0;  // --max-queued-bytes; bodies of jobs not started, all clients (0: a quarter of the memory)
-  std::int64_t client_max_queued_bytes = 0;  // --client-max-queued-bytes; the same, one client (0: a quarter of --max-queued-bytes)
+  std::int64_t client_max_queued_bytes = 0;  // --client-max-queued-bytes; the same, one client (0: --max-body, at most a quarter of --max-queued-bytes)
 
   // --- Job store (asynchronous jobs; see docker/README.md "Job store") ---
   // --queue / MDN_QUEUE: "memory" (this process only, the default: nullopt) or

@@ -202,6 +202,7 @@ void MemoryJobStore::sweep_locked() {
 }
 
 void MemoryJobStore::check_client_share_locked(const std::string& client) const {
+  if (int(clients_.size()) < options_.max_stored_per_client) return;  // no client can hold its share
   int held = 0;
   std::optional<Clock::time_point> oldest_finished;
   for (const auto& [id, owner] : clients_) {

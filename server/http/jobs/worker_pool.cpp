@@ -351,7 +351,9 @@ void WorkerPool::finish_locked(Job& job, JobState state, std::optional<Problem> 
   job.finished_ = Clock::now();
   job.error_ = std::move(error);
   job.output_ = std::move(output);
-  job.input_ = {};
+  // Moved out to be destroyed: assigning {} to a std::string keeps its buffer (libstdc++ copies
+  // an empty short string into it), so a cancelled job held its whole body until it expired.
+  { service::JobInput freed = std::move(job.input_); }
   job.queued_bytes_.release();
   if (state == JobState::Succeeded) {
     job.stage_ = "done";
