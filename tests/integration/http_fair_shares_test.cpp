@@ -59,7 +59,7 @@ void expect_over_share(const httplib::Result& r) {
 
 // Finding 4: one key's never-fetched jobs filled the store (1,024 in under a second) and every
 // other client got 503 store-full for the whole result lifetime.
-TEST(HttpFairShares, OneClientSubmittingUntilRefusedGets429WhileAnotherIsServed) {
+TEST(HttpClientShares, OneClientSubmittingUntilRefusedGets429WhileAnotherIsServed) {
   Clients keys(2);
   ServerProcess s({"--api-keys", keys.file(), "--max-stored-jobs", "64", "--workers", "1"});
   ASSERT_TRUE(s.started()) << s.log();
@@ -93,7 +93,7 @@ TEST(HttpFairShares, OneClientSubmittingUntilRefusedGets429WhileAnotherIsServed)
 
 // Finding 4's second half: a fetched result kept its slot until its lifetime ended, which capped
 // throughput at --max-stored-jobs per --result-ttl. Downloaded and cancelled jobs give it up.
-TEST(HttpFairShares, DownloadedAndCancelledJobsFreeTheirSlots) {
+TEST(HttpClientShares, DownloadedAndCancelledJobsFreeTheirSlots) {
   ServerProcess s({"--max-stored-jobs", "4", "--client-max-stored-jobs", "4", "--workers", "1"});
   ASSERT_TRUE(s.started()) << s.log();
   auto c = s.client();
@@ -131,7 +131,7 @@ TEST(HttpFairShares, DownloadedAndCancelledJobsFreeTheirSlots) {
 // Finding 5: 25 queued bodies of 40 MB took the server to 1.46 GB. Each client may queue its
 // share of bytes (429 beyond), all clients together --max-queued-bytes (503 queue-full beyond);
 // a body declared over a share is refused before it is read.
-TEST(HttpFairShares, QueuedBytesOverAShareAreRefusedAndMemoryStaysBounded) {
+TEST(HttpClientShares, QueuedBytesOverAShareAreRefusedAndMemoryStaysBounded) {
   Clients keys(4);
   ServerProcess s({"--api-keys", keys.file(), "--workers", "1", "--max-queued-bytes", "25M",
                    "--client-max-queued-bytes", "12M"});
@@ -170,7 +170,7 @@ TEST(HttpFairShares, QueuedBytesOverAShareAreRefusedAndMemoryStaysBounded) {
 }
 
 // Finding 5's second half: 735 MB stayed resident after every queued body was cancelled.
-TEST(HttpFairShares, MemoryOfCancelledBodiesReturns) {
+TEST(HttpClientShares, MemoryOfCancelledBodiesReturns) {
   ServerProcess s({"--workers", "1"});
   ASSERT_TRUE(s.started()) << s.log();
   auto c = s.client();
