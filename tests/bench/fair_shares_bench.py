@@ -6,11 +6,14 @@ asserts nothing (never part of ctest).
               of 40 MB submitted to POST /v1/jobs (each a comment-only OFF file, refused only
               once a worker decodes it); the server's resident memory (VmRSS) before, once all
               are submitted (and its peak, VmHWM), and 3 s after every job was cancelled.
+  lockout:    finding 4's attack: with two API keys, one submits tiny jobs it never fetches until
+              it is refused (or 1,100 are accepted); then the other submits 20 (fetching each):
+              how many of the other's were accepted, and what the first was answered.
   throughput: tiny asynchronous jobs, submitted, long-polled and downloaded by 4 clients in a
               loop for --seconds; jobs a second.
 
 Usage: fair_shares_bench.py [--server build/release/server/meshdenoise-server] [--seconds 20]
-                            [--what memory,throughput] [-- extra server flags...]
+                            [--what memory,lockout,throughput] [-- extra server flags...]
 Run it once with the binary of each commit to compare (the flags after -- go to the server).
 """
 import argparse
@@ -85,6 +88,42 @@ def memory(binary, tmp, flags):
         procs.stop_all()
 
 
+def lockout(binary, tmp, flags):
+    keys = os.path.join(tmp, "keys")
+    with open(keys, "w") as f:
+        f.write("greedy:key-greedy-aaaaaaaaaaaa\nother:key-other-bbbbbbbbbbbbb\n")
+    procs = Processes()
+    try:
+        port, _ = start_server(procs, binary, tmp, "lockout", ["--api-keys", keys] + flags)
+        tiny = noisy_icosphere_off(1, 0.2, 1)
+
+        def post(key):
+            return request(port, "POST", "/v1/jobs", tiny, {"Content-Type": "model/x-off", "Authorization": "Bearer " + key})
+
+        greedy, refusal = 0, None
+        start = time.monotonic()
+        while greedy < 1100:
+            r = post("key-greedy-aaaaaaaaaaaa")
+            if r.status != 202:
+                refusal = "%d %s (Retry-After %s)" % (r.status, r.json().get("type", "").split(":")[-1], r.header("Retry-After"))
+                break
+            greedy += 1
+        took = time.monotonic() - start
+        other = 0
+        for _ in range(20):
+            r = post("key-other-bbbbbbbbbbbbb")
+            if r.status == 202:
+                job = r.json()["id"]
+                auth = {"Authorization": "Bearer key-other-bbbbbbbbbbbbb"}
+                request(port, "GET", "/v1/jobs/%s?wait=30" % job, headers=auth)
+                if request(port, "GET", "/v1/jobs/%s/result" % job, headers=auth).status == 200:
+                    other += 1
+        print("lockout: the greedy key had %d jobs accepted in %.1f s, then %s; the other key: %d of 20 accepted "
+              "and downloaded" % (greedy, took, refusal, other))
+    finally:
+        procs.stop_all()
+
+
 def throughput(binary, tmp, flags, seconds):
     procs = Processes()
     try:
@@ -136,11 +175,13 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--server", default=os.path.join(ROOT, "build", "release", "server", "meshdenoise-server"))
     ap.add_argument("--seconds", type=float, default=20)
-    ap.add_argument("--what", default="memory,throughput")
+    ap.add_argument("--what", default="memory,lockout,throughput")
     args = ap.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         if "memory" in args.what:
             memory(args.server, tmp, extra)
+        if "lockout" in args.what:
+            lockout(args.server, tmp, extra)
         if "throughput" in args.what:
             throughput(args.server, tmp, extra, args.seconds)
 

@@ -12,7 +12,6 @@
 #include <string>
 
 #include "server/http/jobs/job_store.h"
-#include "server/http/jobs/queued_bytes.h"
 #include "server/http/jobs/worker_pool.h"
 #include "server/http/routes/api_keys.h"
 #include "server/http/config.h"
