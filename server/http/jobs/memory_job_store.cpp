@@ -68,7 +68,10 @@ JobStore::Submitted MemoryJobStore::submit(service::JobInput input, const std::o
   auto job = pool_.submit(id, std::move(input),
                           {.asynchronous = true, .admit = true, .queued_bytes = std::move(owner.queued_bytes)});
   jobs_.emplace(id, job);
-  if (!owner.client.empty()) clients_.emplace(id, std::move(owner.client));
+  if (!owner.client.empty()) {
+    client_jobs_[owner.client].insert(id);
+    clients_.emplace(id, std::move(owner.client));
+  }
   if (idempotency_key) idempotency_[*idempotency_key] = {fingerprint, id};
   return {snapshot(*job), false};
 }
@@ -111,7 +114,21 @@ std::optional<JobSnapshot> MemoryJobStore::wait_finished(const std::string& id, 
 }
 
 void MemoryJobStore::result_fetched(const std::string& id) {
-  if (auto job = find_job(id)) job->mark_result_fetched();
+  auto job = find_job(id);
+  if (!job) return;
+  job->mark_result_fetched();
+  std::lock_guard lock(mutex_);
+  leave_share_locked(id);
+}
+
+void MemoryJobStore::leave_share_locked(const std::string& id) {
+  const auto it = clients_.find(id);
+  if (it == clients_.end()) return;
+  if (auto jobs = client_jobs_.find(it->second); jobs != client_jobs_.end()) {
+    jobs->second.erase(id);
+    if (jobs->second.empty()) client_jobs_.erase(jobs);
+  }
+  clients_.erase(it);
 }
 
 JobStore::CancelResult MemoryJobStore::cancel(const std::string& id) {
@@ -122,7 +139,10 @@ JobStore::CancelResult MemoryJobStore::cancel(const std::string& id) {
   if (it == jobs_.end()) return r;
   std::shared_ptr<Job> job = it->second;
   switch (pool_.cancel(job, cancelled_before_start())) {
-    case WorkerPool::Cancelled::Queued: r.outcome = CancelOutcome::CancelledQueued; break;
+    case WorkerPool::Cancelled::Queued:
+      r.outcome = CancelOutcome::CancelledQueued;
+      leave_share_locked(id);
+      break;
     case WorkerPool::Cancelled::Requested: r.outcome = CancelOutcome::CancelRequested; break;
     case WorkerPool::Cancelled::AlreadyFinished:
       drop_locked(id);
@@ -172,8 +192,8 @@ JobSnapshot MemoryJobStore::snapshot(const Job& job) const {
 }
 
 void MemoryJobStore::drop_locked(const std::string& id) {
+  leave_share_locked(id);
   jobs_.erase(id);
-  clients_.erase(id);
   asked_.erase(id);
   for (auto k = idempotency_.begin(); k != idempotency_.end();)
     k = k->second.job_id == id ? idempotency_.erase(k) : std::next(k);
@@ -202,13 +222,13 @@ void MemoryJobStore::sweep_locked() {
 }
 
 void MemoryJobStore::check_client_share_locked(const std::string& client) const {
-  if (int(clients_.size()) < options_.max_stored_per_client) return;  // no client can hold its share
+  const auto own = client_jobs_.find(client);
+  if (own == client_jobs_.end() || int(own->second.size()) < options_.max_stored_per_client) return;
   int held = 0;
   std::optional<Clock::time_point> oldest_finished;
-  for (const auto& [id, owner] : clients_) {
-    if (owner != client) continue;
+  for (const std::string& id : own->second) {
     const Job& job = *jobs_.at(id);
-    if (!holds_slot(job)) continue;
+    if (!holds_slot(job)) continue;  // cancelled while running
     ++held;
     if (auto finished = job.finished_at(); finished && (!oldest_finished || *finished < *oldest_finished))
       oldest_finished = finished;

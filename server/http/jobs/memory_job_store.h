@@ -12,6 +12,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -70,7 +71,12 @@ class MemoryJobStore final : public JobStore {
   const MemoryJobStoreOptions options_;
   mutable std::mutex mutex_;
   std::map<std::string, std::shared_ptr<Job>> jobs_;  // every kept job by id
-  std::map<std::string, std::string> clients_;        // job id -> its Owner::client, if any
+  // Each client's jobs that may still hold a slot (decision 78): a job leaves its client's set
+  // once it can no longer hold one (downloaded, cancelled before it ran, removed), so checking
+  // a share reads that client's few jobs, not the whole table.
+  std::map<std::string, std::string> clients_;               // job id -> its Owner::client
+  std::map<std::string, std::set<std::string>> client_jobs_;  // Owner::client -> job ids
+  void leave_share_locked(const std::string& id);            // mutex_ held
   struct IdempotencyEntry { std::string fingerprint, job_id; };
   std::map<std::string, IdempotencyEntry> idempotency_;
   // When a client last asked about each job (find, wait_finished): who still follows a result.
