@@ -39,9 +39,10 @@ class Clients {
 // A body the server accepts as OFF (only a worker's decoding refuses it) of about `bytes`.
 std::string off_of_size(std::size_t bytes) { return "OFF\n#" + std::string(bytes, 'x') + "\n"; }
 
-// Keeps the only worker busy for seconds (cancelled at the end of the test by the server's exit).
+// Keeps the only worker busy for about half a minute on an idle machine (level 6 took 6.5 s;
+// the server's exit ends it), so that what is submitted next stays queued.
 std::string start_long_job(httplib::Client& c) {
-  auto r = c.Post("/v1/jobs", {{"X-Denoise-Params", kHeavyParams}}, noisy_sphere_off(6, 3), "model/x-off");
+  auto r = c.Post("/v1/jobs", {{"X-Denoise-Params", kHeavyParams}}, noisy_sphere_off(7, 3), "model/x-off");
   EXPECT_TRUE(r);
   if (!r) return {};
   EXPECT_EQ(r->status, 202) << r->body;
@@ -142,6 +143,10 @@ TEST(HttpClientShares, QueuedBytesOverAShareAreRefusedAndMemoryStaysBounded) {
   auto a = first->Post("/v1/jobs", body, "model/x-off");
   ASSERT_TRUE(a);
   ASSERT_EQ(a->status, 202) << a->body;
+  auto metrics = s.client()->Get("/metrics");
+  ASSERT_TRUE(metrics);
+  EXPECT_EQ(metric_value(metrics->body, "mdn_queued_request_bytes"), double(body.size()));
+  EXPECT_EQ(metric_value(metrics->body, "mdn_max_queued_request_bytes"), double(25 << 20));
   const double rss_one = status_mib(s.pid(), "VmRSS");
   // The same client again: 16 MB would pass its 12 MB share. Twenty times: none is kept.
   for (int i = 0; i < 20; ++i) {
@@ -176,7 +181,7 @@ TEST(HttpClientShares, MemoryOfCancelledBodiesReturns) {
   auto c = s.client();
   const std::string long_job = start_long_job(*c);
   ASSERT_FALSE(long_job.empty());
-  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // decoded: its memory settles
+  std::this_thread::sleep_for(std::chrono::milliseconds(2500));  // decoded: its memory settles
   const double before = status_mib(s.pid(), "VmRSS");
   const std::string body = off_of_size(24 << 20);
   std::vector<std::string> ids;

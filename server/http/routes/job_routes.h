@@ -34,6 +34,7 @@ class JobRoutes {
   void delete_job(Context& ctx);
 
   int waiting() const { return waiting_; }  // long polls waiting now
+  const QueuedBytes& queued_bytes() const { return queued_bytes_; }
   const ClientKeys& client_keys() const { return keys_; }
 
  private:
