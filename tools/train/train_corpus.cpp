@@ -7,11 +7,20 @@
 //       identity; appends, and skips the cases OUT already holds (resumable).
 //   train_corpus describe [--data DIR] [--jobs N] [--limit N] [--shapes A,B] OUT.tsv
 //       every case's run-time descriptors (core/auto/descriptors.h); resumable the same way.
+//   train_corpus faces    [--data DIR] [--jobs N] [--cases N] [--rows N] OUT
+//       the per-face prior's rows (issue 48; decisions 87-88): N cases (default 800) drawn by a
+//       hash of their names, three in four from training-split shapes and the rest from
+//       holdout-split shapes, each giving at most --rows faces (default 600), a quarter per
+//       clean face class (flat, curved, crease, corner). Writes OUT.train.f32 and
+//       OUT.holdout.f32 (float32 rows of kFaceRowWidth: the features, the clean normal in the
+//       face's frame, the noisy-to-clean angle in radians, the class) and OUT.cases.tsv. The
+//       same bytes for any --jobs.
 //
 // DIR: CGAL's demo data (scripts/fetch-cgal-data.sh; default $MDN_CGAL_DATA or
 // third_party_data/cgal). --limit N keeps the first N cases of each split's shapes in turn
 // (CI's tiny run).
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -28,6 +37,7 @@
 
 #include "../../tests/bench/cgal_data.h"
 #include "core/auto/descriptors.h"
+#include "core/auto/face_features.h"
 #include "core/auto/measures.h"
 #include "core/metrics.h"
 #include "core/normal_filter.h"
@@ -50,6 +60,8 @@ struct Options {
   fs::path data = bench::default_cgal_data();
   int jobs = 2;
   int limit = 0;
+  int cases = 800;  // faces: cases drawn
+  int rows = 600;   // faces: rows per case at most
   std::set<std::string> shapes;
   std::vector<std::string> positional;
 };
@@ -176,6 +188,89 @@ int cmd_describe(const Options& o) {
   });
 }
 
+// One case's rows of `train_corpus faces` (decision 88): up to `cap` faces, a quarter per
+// clean class in a fixed order (a hash of the case and the face), degenerate faces left out.
+constexpr int kFaceRowWidth = kFaceFeatures + 5;
+std::vector<float> face_rows(const NoisyCase& pair, const std::string& name, int cap) {
+  Executor ex(1);
+  const Topology topo = Topology::build(pair.clean.F, static_cast<std::int32_t>(pair.clean.num_vertices()));
+  const FaceFeatures ff = face_features(pair.noisy, pair.clean.F, topo, ex);
+  const std::vector<FaceClass> cls = face_classes(pair.clean.V, pair.clean.F, topo, ex);
+  const Vertices clean = face_normals(pair.clean.V, pair.clean.F);
+  std::array<std::vector<std::pair<std::uint64_t, std::int64_t>>, kFaceClasses> by_class;
+  const std::uint64_t seed = hash_name(name);
+  for (std::int64_t f = 0; f < pair.clean.num_faces(); ++f) {
+    if (clean.row(f).squaredNorm() == 0 || ff.noisy.row(f).squaredNorm() == 0) continue;
+    const std::uint64_t key = (seed ^ (static_cast<std::uint64_t>(f) * 0x9E3779B97F4A7C15ull)) * 0xBF58476D1CE4E5B9ull;
+    by_class[static_cast<std::size_t>(cls[static_cast<std::size_t>(f)])].push_back({key, f});
+  }
+  std::vector<float> out;
+  for (int c = 0; c < kFaceClasses; ++c) {
+    auto& faces = by_class[static_cast<std::size_t>(c)];
+    std::sort(faces.begin(), faces.end());
+    const std::size_t take = std::min<std::size_t>(faces.size(), static_cast<std::size_t>(cap / kFaceClasses));
+    for (std::size_t k = 0; k < take; ++k) {
+      const std::int64_t f = faces[k].second;
+      for (int j = 0; j < kFaceFeatures; ++j) out.push_back(static_cast<float>(ff.X(f, j)));
+      const Vec3 target = to_frame(ff, f, clean.row(f).transpose());
+      for (int j = 0; j < 3; ++j) out.push_back(static_cast<float>(target(j)));
+      const Vec3 n0 = ff.noisy.row(f).transpose(), nc = clean.row(f).transpose();
+      out.push_back(static_cast<float>(std::atan2(n0.cross(nc).norm(), n0.dot(nc))));
+      out.push_back(static_cast<float>(c));
+    }
+  }
+  return out;
+}
+
+int cmd_faces(const Options& o, int wanted, int cap) {
+  const fs::path cgal = bench::cgal_meshes(o.data);
+  Options all = o;
+  all.limit = 0;
+  std::map<std::string, Shape> shapes;
+  std::vector<CaseRef> cases = all_cases(cgal, all, shapes);
+  std::sort(cases.begin(), cases.end(),
+            [](const CaseRef& a, const CaseRef& b) { return hash_name(a.name()) < hash_name(b.name()); });
+  std::vector<CaseRef> chosen;
+  for (const std::string split : {"train", "holdout"}) {
+    const int want = split == "train" ? wanted - wanted / 4 : wanted / 4;
+    int n = 0;
+    for (const CaseRef& c : cases)
+      if (n < want && split_of(c.shape) == split) {
+        chosen.push_back(c);
+        ++n;
+      }
+  }
+  std::vector<std::vector<float>> rows(chosen.size());
+  std::atomic<int> finished{0};
+  const auto t0 = std::chrono::steady_clock::now();
+  run_parallel(chosen.size(), o.jobs, [&](std::size_t i) {
+    const CaseRef& c = chosen[i];
+    const Shape& s = shapes.at(c.shape);
+    rows[i] = face_rows(make_noisy_case(s, c.noise, hash_name(s.name + "/" + c.noise)), c.name(), cap);
+    const int k = ++finished;
+    if (k % 50 == 0) {
+      std::printf("%d / %zu (%.0f s)\n", k, chosen.size(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      std::fflush(stdout);
+    }
+  });
+  const std::string prefix = o.positional.at(0);
+  std::ofstream train(prefix + ".train.f32", std::ios::binary), holdout(prefix + ".holdout.f32", std::ios::binary),
+      index(prefix + ".cases.tsv");
+  index << "case\tshape\tsplit\tnoise\trows\n";
+  std::array<std::size_t, 2> total{0, 0};
+  for (std::size_t i = 0; i < chosen.size(); ++i) {
+    const bool is_train = split_of(chosen[i].shape) == "train";
+    std::ofstream& file = is_train ? train : holdout;
+    file.write(reinterpret_cast<const char*>(rows[i].data()), static_cast<std::streamsize>(rows[i].size() * sizeof(float)));
+    const std::size_t n = rows[i].size() / kFaceRowWidth;
+    total[is_train ? 0 : 1] += n;
+    index << chosen[i].name() << '\t' << chosen[i].shape << '\t' << split_of(chosen[i].shape) << '\t' << chosen[i].noise << '\t' << n
+          << '\n';
+  }
+  std::printf("%zu cases: %zu training rows, %zu holdout rows of %d floats\n", chosen.size(), total[0], total[1], kFaceRowWidth);
+  return 0;
+}
+
 int cmd_shapes(const Options& o) {
   const fs::path cgal = bench::cgal_meshes(o.data);
   int cases = 0;
@@ -196,7 +291,7 @@ int cmd_shapes(const Options& o) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: train_corpus shapes|label|describe [--data DIR] [--jobs N] [--limit N] [--shapes A,B] [OUT.tsv]\n");
+    std::fprintf(stderr, "usage: train_corpus shapes|label|describe|faces [--data DIR] [--jobs N] [--limit N] [--shapes A,B] [--cases N] [--rows N] [OUT]\n");
     return 2;
   }
   const std::string verb = argv[1];
@@ -210,6 +305,8 @@ int main(int argc, char** argv) {
     if (a == "--data") o.data = value();
     else if (a == "--jobs") o.jobs = std::stoi(value());
     else if (a == "--limit") o.limit = std::stoi(value());
+    else if (a == "--cases") o.cases = std::stoi(value());
+    else if (a == "--rows") o.rows = std::stoi(value());
     else if (a == "--shapes") {
       std::stringstream ss(value());
       for (std::string s; std::getline(ss, s, ',');) o.shapes.insert(s);
@@ -217,9 +314,10 @@ int main(int argc, char** argv) {
   }
   try {
     if (verb == "shapes") return cmd_shapes(o);
-    if (o.positional.size() != 1) throw std::invalid_argument(verb + " needs OUT.tsv");
+    if (o.positional.size() != 1) throw std::invalid_argument(verb + " needs OUT");
     if (verb == "label") return cmd_label(o);
     if (verb == "describe") return cmd_describe(o);
+    if (verb == "faces") return cmd_faces(o, o.cases, o.rows);
     throw std::invalid_argument("unknown verb " + verb);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "train_corpus: %s\n", e.what());
