@@ -66,6 +66,7 @@
 
 #include "bench_stats.h"
 #include "cgal_data.h"
+#include "oracle_guidance.h"
 #include "core/auto/measures.h"
 #include "core/auto/recorrupted.h"
 #include "core/auto/surface_sample.h"
@@ -637,23 +638,6 @@ int clean_command(const fs::path& data, int jobs, const std::string& only) {
 // angle of a given mean: a stand-in for a per-face regressor of that accuracy). The stop rule:
 // less than 15% off the pick's MSAE at the median.
 
-// N's rows turned about random tangent axes: the tangent-plane offset is a 2D Gaussian, so the
-// angle is Rayleigh distributed with mean mean_deg. Zero rows stay zero. Seeded.
-Vertices perturbed_normals(const Vertices& N, double mean_deg, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> gauss(0.0, mean_deg * M_PI / 180 / std::sqrt(M_PI / 2));
-  Vertices out = N;
-  for (Eigen::Index f = 0; f < N.rows(); ++f) {
-    const Vec3 n = N.row(f).transpose();
-    const double gx = gauss(rng), gy = gauss(rng);
-    if (n.squaredNorm() == 0) continue;
-    const Vec3 t1 = n.cross(std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).normalized(), t2 = n.cross(t1);
-    const Vec3 d = gx * t1 + gy * t2;
-    if (const double theta = d.norm(); theta > 0) out.row(f) = (std::cos(theta) * n + std::sin(theta) / theta * d).transpose();
-  }
-  return out;
-}
-
 // The share of the clean mesh's interior edges with a dihedral angle above 45 degrees: the
 // cases are told "sharp" (CAD-like, at least 1%) from "smooth" by it.
 double sharp_edge_share(const TriMesh& m) {
@@ -715,7 +699,7 @@ int guided_command(const fs::path& data, int jobs, const std::string& which, con
     const DenoiseParams pick = r.report.params;
     const Vertices truth = face_normals(c.truth.V, c.truth.F);
     const std::uint64_t seed = case_seed(c.mesh, c.config);
-    const Vertices g6 = perturbed_normals(truth, 6, seed ^ 6), g10 = perturbed_normals(truth, 10, seed ^ 10);
+    const Vertices g6 = bench::perturbed_normals(truth, 6, seed ^ 6), g10 = bench::perturbed_normals(truth, 10, seed ^ 10);
     const auto run = [&](const DenoiseParams& q, const Vertices* guidance) {
       RunOptions options;
       options.guidance = guidance;

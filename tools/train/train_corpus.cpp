@@ -15,6 +15,12 @@
 //       OUT.holdout.f32 (float32 rows of kFaceRowWidth: the features, the clean normal in the
 //       face's frame, the noisy-to-clean angle in radians, the class) and OUT.cases.tsv. The
 //       same bytes for any --jobs.
+//   train_corpus guided   [--data DIR] [--jobs N] [--cases N] [--max-faces N]
+//       issue 48's paired check of the per-face prior on holdout-split shapes, where its rule
+//       is chosen (never on tune_bench's validation set): N holdout cases (default 80) of at most
+//       --max-faces (default 20,000), auto's pick held fixed, unguided, guided by the oracle
+//       (clean normals turned by 6 degrees) and by the prior, for the pick, the pick with
+//       sigma_gamma 20, 30 and 45 degrees and the paper's Table 1 row; median ratios per group.
 //
 // DIR: CGAL's demo data (scripts/fetch-cgal-data.sh; default $MDN_CGAL_DATA or
 // third_party_data/cgal). --limit N keeps the first N cases of each split's shapes in turn
@@ -27,6 +33,7 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <set>
@@ -36,6 +43,9 @@
 #include <vector>
 
 #include "../../tests/bench/cgal_data.h"
+#include "../../tests/bench/oracle_guidance.h"
+#include "core/auto/face_prior.h"
+#include "core/auto/choice.h"
 #include "core/auto/descriptors.h"
 #include "core/auto/face_features.h"
 #include "core/auto/measures.h"
@@ -60,8 +70,9 @@ struct Options {
   fs::path data = bench::default_cgal_data();
   int jobs = 2;
   int limit = 0;
-  int cases = 800;  // faces: cases drawn
+  int cases = 0;    // faces, guided: cases drawn (0: 800 and 80)
   int rows = 600;   // faces: rows per case at most
+  std::int64_t max_faces = 20000;  // guided: larger cases left out
   std::set<std::string> shapes;
   std::vector<std::string> positional;
 };
@@ -271,6 +282,95 @@ int cmd_faces(const Options& o, int wanted, int cap) {
   return 0;
 }
 
+double median_of(std::vector<double> v) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+int cmd_guided(const Options& o, int wanted, std::int64_t max_faces) {
+  const fs::path cgal = bench::cgal_meshes(o.data);
+  Options all = o;
+  all.limit = 0;
+  std::map<std::string, Shape> shapes;
+  std::vector<CaseRef> cases = all_cases(cgal, all, shapes);
+  std::sort(cases.begin(), cases.end(),
+            [](const CaseRef& a, const CaseRef& b) { return hash_name(a.name()) < hash_name(b.name()); });
+  std::vector<CaseRef> chosen;
+  for (const CaseRef& c : cases)
+    if (static_cast<int>(chosen.size()) < wanted && split_of(c.shape) == "holdout" && c.noise != "clean" &&
+        shapes.at(c.shape).mesh.num_faces() <= max_faces)
+      chosen.push_back(c);
+  enum Run { P, G6, GL, S20GL, S30, S30G6, S30GL, S45GL, PP, PG6, PGL, kRuns };
+  const std::vector<std::string> names{"g6/p", "gL/p", "s20gL/p", "s30/p", "s30g6/p", "s30gL/p", "s45gL/p", "pg6/pp", "pgL/pp",
+                                       "best3L/p"};
+  struct Out {
+    std::array<double, kRuns> msae;
+    std::string pick;
+    double sigma_gamma = 0, reading = 0;
+  };
+  std::vector<Out> out(chosen.size());
+  run_parallel(chosen.size(), o.jobs, [&](std::size_t i) {
+    const CaseRef& c = chosen[i];
+    const Shape& s = shapes.at(c.shape);
+    const NoisyCase pair = make_noisy_case(s, c.noise, hash_name(s.name + "/" + c.noise));
+    const TriMesh noisy{pair.noisy, pair.clean.F};
+    DenoiseParams automatic;
+    automatic.mode = ParamMode::Auto;
+    const DenoiseResult r = denoise(noisy, automatic);
+    const DenoiseParams pick = r.report.params;
+    Executor one(1);
+    const Topology topo = Topology::build(noisy.F, static_cast<std::int32_t>(noisy.V.rows()));
+    const FacePrior prior = face_prior(noisy.V, noisy.F, topo, one);
+    const Vertices g6 = bench::perturbed_normals(face_normals(pair.clean.V, pair.clean.F), 6, hash_name(c.name()) ^ 6);
+    const auto run = [&](const DenoiseParams& q, const Vertices* guidance) {
+      RunOptions options;
+      options.guidance = guidance;
+      return msae(denoise(noisy, q, options).mesh, pair.clean);
+    };
+    const auto with_gamma = [&](double g) {
+      DenoiseParams q = pick;
+      q.sigma_gamma = g;
+      return q;
+    };
+    const Vertices* L = &prior.guidance;
+    out[i] = {{run(pick, nullptr), run(pick, &g6), run(pick, L), run(with_gamma(20), L), run(with_gamma(30), nullptr),
+               run(with_gamma(30), &g6), run(with_gamma(30), L), run(with_gamma(45), L), run(DenoiseParams{}, nullptr),
+               run(DenoiseParams{}, &g6), run(DenoiseParams{}, L)},
+              r.report.choice->chosen, pick.sigma_gamma, prior.summary.median_deg};
+  });
+  std::map<std::string, std::vector<std::vector<double>>> groups;
+  std::printf("%-40s %7s %-24s %6s", "case", "faces", "pick", "read");
+  for (const std::string& n : names) std::printf(" %8s", n.c_str());
+  std::printf("\n");
+  for (std::size_t i = 0; i < chosen.size(); ++i) {
+    const auto& m = out[i].msae;
+    const std::vector<double> ratios{m[G6] / m[P],  m[GL] / m[P],  m[S20GL] / m[P], m[S30] / m[P],   m[S30G6] / m[P],
+                                     m[S30GL] / m[P], m[S45GL] / m[P], m[PG6] / m[PP], m[PGL] / m[PP],
+                                     std::min({m[GL], m[S30GL], m[PGL]}) / m[P]};
+    const std::string kind = chosen[i].noise.substr(0, chosen[i].noise.find(':'));
+    const std::string by_pick = out[i].pick == "identity" ? "identity" : out[i].sigma_gamma >= 90 ? "sigma_gamma 90" : "sigma_gamma <= 45";
+    for (const std::string& g : {std::string("all"), "kind:" + kind, "pick:" + by_pick}) {
+      auto& cols = groups[g];
+      cols.resize(ratios.size());
+      for (std::size_t k = 0; k < ratios.size(); ++k) cols[k].push_back(ratios[k]);
+    }
+    std::printf("%-40s %7lld %-24s %6.2f", chosen[i].name().c_str(), static_cast<long long>(shapes.at(chosen[i].shape).mesh.num_faces()),
+                out[i].pick.c_str(), out[i].reading);
+    for (const double x : ratios) std::printf(" %8.3f", x);
+    std::printf("\n");
+  }
+  std::printf("\nMedian ratio per group (the same runs, paired per case; worst in brackets):\n%-26s %5s", "group", "cases");
+  for (const std::string& n : names) std::printf(" %15s", n.c_str());
+  std::printf("\n");
+  for (const auto& [name, cols] : groups) {
+    std::printf("%-26s %5zu", name.c_str(), cols[0].size());
+    for (const auto& col : cols) std::printf("   %5.3f (%5.2f)", median_of(col), *std::max_element(col.begin(), col.end()));
+    std::printf("\n");
+  }
+  return 0;
+}
+
 int cmd_shapes(const Options& o) {
   const fs::path cgal = bench::cgal_meshes(o.data);
   int cases = 0;
@@ -291,7 +391,7 @@ int cmd_shapes(const Options& o) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: train_corpus shapes|label|describe|faces [--data DIR] [--jobs N] [--limit N] [--shapes A,B] [--cases N] [--rows N] [OUT]\n");
+    std::fprintf(stderr, "usage: train_corpus shapes|label|describe|faces|guided [--data DIR] [--jobs N] [--limit N] [--shapes A,B] [--cases N] [--rows N] [OUT]\n");
     return 2;
   }
   const std::string verb = argv[1];
@@ -307,6 +407,7 @@ int main(int argc, char** argv) {
     else if (a == "--limit") o.limit = std::stoi(value());
     else if (a == "--cases") o.cases = std::stoi(value());
     else if (a == "--rows") o.rows = std::stoi(value());
+    else if (a == "--max-faces") o.max_faces = std::stoll(value());
     else if (a == "--shapes") {
       std::stringstream ss(value());
       for (std::string s; std::getline(ss, s, ',');) o.shapes.insert(s);
@@ -314,10 +415,11 @@ int main(int argc, char** argv) {
   }
   try {
     if (verb == "shapes") return cmd_shapes(o);
+    if (verb == "guided") return cmd_guided(o, o.cases > 0 ? o.cases : 80, o.max_faces);
     if (o.positional.size() != 1) throw std::invalid_argument(verb + " needs OUT");
     if (verb == "label") return cmd_label(o);
     if (verb == "describe") return cmd_describe(o);
-    if (verb == "faces") return cmd_faces(o, o.cases, o.rows);
+    if (verb == "faces") return cmd_faces(o, o.cases > 0 ? o.cases : 800, o.rows);
     throw std::invalid_argument("unknown verb " + verb);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "train_corpus: %s\n", e.what());
