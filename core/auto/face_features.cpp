@@ -45,7 +45,7 @@ const std::vector<const char*>& face_feature_names() {
       "bilat_x",   "bilat_y",   "bilat_z",   "edge0_x",   "edge0_y",    "edge0_z",    "edge1_x",    "edge1_y",   "edge1_z",
       "edge2_x",   "edge2_y",   "edge2_z",   "tensor_l1", "tensor_l2",  "tensor_l3",  "tensor_e2x", "tensor_e2y", "tensor_e2z",
       "tensor1_l1", "tensor1_l2", "tensor1_l3", "mean1_max_angle", "log_vdist", "log_spike", "log_area_ratio", "ring_size",
-      "ring_max_angle"};
+      "ring_max_angle", "patch_x", "patch_y", "patch_z", "patch_inconsistency", "own_inconsistency"};
   return names;
 }
 
@@ -89,6 +89,17 @@ FaceFeatures face_features(const Vertices& P, const Triangles& F, const Topology
   pass(M2, M3);
   pass(M3, M4);
   out.smoothed = M2;
+  // Decision 87: each face's ring inconsistency, the largest 1 - cos between its once-filtered
+  // normal and its ring's (small inside a smooth patch, large where the ring straddles a crease).
+  std::vector<double> inconsistency(static_cast<std::size_t>(nf));
+  executor.parallel_for(nf, kGrain, [&](std::int64_t b, std::int64_t e) {
+    for (std::int64_t f = b; f < e; ++f) {
+      double worst = 0;
+      for (std::int32_t k = topo.ff_offsets[static_cast<std::size_t>(f)]; k < topo.ff_offsets[static_cast<std::size_t>(f) + 1]; ++k)
+        worst = std::max(worst, 1 - M1.row(f).dot(M1.row(topo.ff_faces[static_cast<std::size_t>(k)])));
+      inconsistency[static_cast<std::size_t>(f)] = worst;
+    }
+  });
   // Per vertex: decision 46's distance to the ring's plane over the ring's radius, and decision
   // 50's spike reading (that over the largest of its ring's).
   std::vector<double> vdist = ring_plane_distances(P, F, topo, {}, executor, true);
@@ -149,13 +160,13 @@ FaceFeatures face_features(const Vertices& P, const Triangles& F, const Topology
       // once-filtered normal (decision 87).
       const std::int32_t r0 = topo.ff_offsets[fi], r1 = topo.ff_offsets[fi + 1];
       double sigma_c = 0, ring_cos = 1, mean_area = A(f);
-      double m1_max = 0;
+      double m1_min_cos = 1;
       for (std::int32_t k = r0; k < r1; ++k) {
         const std::int32_t g = topo.ff_faces[static_cast<std::size_t>(k)];
         sigma_c += (C.row(g) - C.row(f)).norm();
         ring_cos = std::min(ring_cos, N0.row(g).dot(z));
         mean_area += A(g);
-        m1_max = std::max(m1_max, angle(M1.row(f).transpose(), M1.row(g).transpose()));
+        m1_min_cos = std::min(m1_min_cos, M1.row(f).dot(M1.row(g)));
       }
       const int ring = r1 - r0;
       sigma_c = ring > 0 ? sigma_c / ring : 1;
@@ -166,7 +177,7 @@ FaceFeatures face_features(const Vertices& P, const Triangles& F, const Topology
         const std::int32_t g = topo.ff_faces[static_cast<std::size_t>(k)];
         const double d = (C.row(g) - C.row(f)).norm() / std::max(sigma_c, 1e-300);
         const double t = (1 - N0.row(g).dot(m1)) / range_scale;
-        bsum += A(g) * std::exp(-0.5 * d * d) * std::exp(-t * t) * N0.row(g).transpose();
+        bsum += A(g) * std::exp(-(0.5 * d * d + t * t)) * N0.row(g).transpose();
       }
       const Vec3 bn = bsum.norm() > 0 ? Vec3(bsum.normalized()) : n0;
       row.segment<3>(9) = local(bn).transpose();
@@ -183,7 +194,7 @@ FaceFeatures face_features(const Vertices& P, const Triangles& F, const Topology
       row.segment<3>(24) = local(middle).transpose();
       tensor_reading(topo, M1, A, f, values, middle);
       row.segment<3>(27) = values.transpose();
-      row(30) = m1_max;
+      row(30) = std::acos(std::clamp(m1_min_cos, -1.0, 1.0));
       double vd = 0, sp = 0;
       for (int c = 0; c < 3; ++c) {
         vd = std::max(vd, vdist[static_cast<std::size_t>(F(f, c))]);
@@ -194,6 +205,17 @@ FaceFeatures face_features(const Vertices& P, const Triangles& F, const Topology
       row(33) = mean_area > 0 && A(f) > 0 ? std::log(A(f) / mean_area) : -10;
       row(34) = ring / 12.0;
       row(35) = std::acos(std::clamp(ring_cos, -1.0, 1.0));
+      // The most consistent patch around f (after guided normal filtering's patch choice): the
+      // face of f's ring, f included, whose ring is the least inconsistent; its once-filtered
+      // normal and inconsistency, and f's own.
+      std::int64_t best = f;
+      for (std::int32_t k = r0; k < r1; ++k) {
+        const std::int32_t g = topo.ff_faces[static_cast<std::size_t>(k)];
+        if (inconsistency[static_cast<std::size_t>(g)] < inconsistency[static_cast<std::size_t>(best)]) best = g;
+      }
+      row.segment<3>(36) = local(M1.row(best).transpose()).transpose();
+      row(39) = inconsistency[static_cast<std::size_t>(best)];
+      row(40) = inconsistency[fi];
       out.flat[fi] = ring_cos >= flat_cos && n0.dot(z) >= flat_cos;
     }
   });

@@ -17,7 +17,7 @@ namespace mdn {
 class Executor;
 
 // The number of features per face, and their names (decision 87).
-constexpr int kFaceFeatures = 36;
+constexpr int kFaceFeatures = 41;
 const std::vector<const char*>& face_feature_names();
 
 // Area-weighted mean of the normals N of the faces sharing a vertex with f, f included, unit

@@ -16,9 +16,9 @@ for part in train.f32 holdout.f32 cases.tsv; do
 done
 [ "$(wc -l < "$work/one.cases.tsv")" -eq 9 ] || fail "one.cases.tsv should hold 8 cases and a header"
 [ "$(awk -F'\t' 'NR > 1 && $3 == "holdout"' "$work/one.cases.tsv" | wc -l)" -eq 2 ] || fail "a quarter of the cases are holdout"
-# 41 float32 per row, at most 200 rows per case.
+# 46 float32 per row, at most 200 rows per case.
 size=$(stat -c %s "$work/one.train.f32")
-[ $((size % (41 * 4))) -eq 0 ] && [ "$size" -gt 0 ] && [ "$size" -le $((6 * 200 * 41 * 4)) ] || fail "train.f32 has $size bytes"
+[ $((size % (46 * 4))) -eq 0 ] && [ "$size" -gt 0 ] && [ "$size" -le $((6 * 200 * 46 * 4)) ] || fail "train.f32 has $size bytes"
 /usr/bin/python3 "$root/tools/train/face_train.py" "$work/one" "$work/a.inc" --tiny > /dev/null
 /usr/bin/python3 "$root/tools/train/face_train.py" "$work/one" "$work/b.inc" --tiny > /dev/null
 cmp -s "$work/a.inc" "$work/b.inc" || fail "face_train.py --tiny wrote different bytes twice"
@@ -29,7 +29,7 @@ done
 for array in kMean kScale kW0 kB0 kW1 kB1 kW2 kB2 kProbeInputs kProbeOutputs; do
   grep -q "constexpr double $array\[" "$work/a.inc" || fail "$array missing"
 done
-grep -q 'kInputs = 36;' "$work/a.inc" || fail "not 36 inputs"
+grep -q 'kInputs = 41;' "$work/a.inc" || fail "not 41 inputs"
 sha=$(sha256sum "$work/one.train.f32" | cut -d' ' -f1)
 grep -q "kTrainSha256 = \"$sha\"" "$work/a.inc" || fail "the training table's digest is not recorded"
 echo "face prior pipeline: OK"

@@ -5,7 +5,7 @@
                   [--report R.json]
 
 ROWS:    the prefix `train_corpus faces` wrote: ROWS.train.f32, ROWS.holdout.f32 (float32 rows:
-         the 36 features of core/auto/face_features.h, the clean normal in the face's frame,
+         the 41 features of core/auto/face_features.h, the clean normal in the face's frame,
          the noisy-to-clean angle in radians, the clean face class) and ROWS.cases.tsv.
 OUT.inc: C++ data for core/auto/face_prior.cpp: the feature scaling, the network's weights,
          the provenance (commit, row counts, SHA-256 of the tables, torch version), the holdout
@@ -31,7 +31,7 @@ import sys
 import numpy as np
 import torch
 
-FEATURES = 36
+FEATURES = 41
 WIDTH = FEATURES + 5
 CLASSES = ["flat", "curved", "crease", "corner"]
 

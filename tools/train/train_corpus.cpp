@@ -301,9 +301,12 @@ int cmd_guided(const Options& o, int wanted, std::int64_t max_faces) {
     if (static_cast<int>(chosen.size()) < wanted && split_of(c.shape) == "holdout" && c.noise != "clean" &&
         shapes.at(c.shape).mesh.num_faces() <= max_faces)
       chosen.push_back(c);
-  enum Run { P, G6, GL, S20GL, S30, S30G6, S30GL, S45GL, PP, PG6, PGL, kRuns };
-  const std::vector<std::string> names{"g6/p", "gL/p", "s20gL/p", "s30/p", "s30g6/p", "s30gL/p", "s45gL/p", "pg6/pp", "pgL/pp",
-                                       "best3L/p"};
+  // s30gF, s30gS: a diagnosis of where the prior falls short of the oracle: the oracle's guidance
+  // at the clean surface's crease and corner faces and the prior's elsewhere (F), and the other
+  // way round (S).
+  enum Run { P, G6, GL, S20GL, S30, S30G6, S30GL, S45GL, PP, PG6, PGL, S30GF, S30GS, kRuns };
+  const std::vector<std::string> names{"g6/p",   "gL/p",   "s20gL/p", "s30/p",  "s30g6/p", "s30gL/p",
+                                       "s45gL/p", "pg6/pp", "pgL/pp",  "best3L/p", "s30gF/p", "s30gS/p"};
   struct Out {
     std::array<double, kRuns> msae;
     std::string pick;
@@ -334,9 +337,17 @@ int cmd_guided(const Options& o, int wanted, std::int64_t max_faces) {
       return q;
     };
     const Vertices* L = &prior.guidance;
+    const std::vector<FaceClass> cls = face_classes(pair.clean.V, pair.clean.F, topo, one);
+    Vertices at_features = prior.guidance, elsewhere = g6;
+    for (Eigen::Index f = 0; f < noisy.F.rows(); ++f)
+      if (cls[static_cast<std::size_t>(f)] == FaceClass::Crease || cls[static_cast<std::size_t>(f)] == FaceClass::Corner) {
+        at_features.row(f) = g6.row(f);
+        elsewhere.row(f) = prior.guidance.row(f);
+      }
     out[i] = {{run(pick, nullptr), run(pick, &g6), run(pick, L), run(with_gamma(20), L), run(with_gamma(30), nullptr),
                run(with_gamma(30), &g6), run(with_gamma(30), L), run(with_gamma(45), L), run(DenoiseParams{}, nullptr),
-               run(DenoiseParams{}, &g6), run(DenoiseParams{}, L)},
+               run(DenoiseParams{}, &g6), run(DenoiseParams{}, L), run(with_gamma(30), &at_features),
+               run(with_gamma(30), &elsewhere)},
               r.report.choice->chosen, pick.sigma_gamma, prior.summary.median_deg};
   });
   std::map<std::string, std::vector<std::vector<double>>> groups;
@@ -347,7 +358,7 @@ int cmd_guided(const Options& o, int wanted, std::int64_t max_faces) {
     const auto& m = out[i].msae;
     const std::vector<double> ratios{m[G6] / m[P],  m[GL] / m[P],  m[S20GL] / m[P], m[S30] / m[P],   m[S30G6] / m[P],
                                      m[S30GL] / m[P], m[S45GL] / m[P], m[PG6] / m[PP], m[PGL] / m[PP],
-                                     std::min({m[GL], m[S30GL], m[PGL]}) / m[P]};
+                                     std::min({m[GL], m[S30GL], m[PGL]}) / m[P], m[S30GF] / m[P], m[S30GS] / m[P]};
     const std::string kind = chosen[i].noise.substr(0, chosen[i].noise.find(':'));
     const std::string by_pick = out[i].pick == "identity" ? "identity" : out[i].sigma_gamma >= 90 ? "sigma_gamma 90" : "sigma_gamma <= 45";
     for (const std::string& g : {std::string("all"), "kind:" + kind, "pick:" + by_pick}) {
