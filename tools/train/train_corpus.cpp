@@ -20,7 +20,8 @@
 //       is chosen (never on tune_bench's validation set): N holdout cases (default 80) of at most
 //       --max-faces (default 20,000), auto's pick held fixed, unguided, guided by the oracle
 //       (clean normals turned by 6 degrees) and by the prior, for the pick, the pick with
-//       sigma_gamma 20, 30 and 45 degrees and the paper's Table 1 row; median ratios per group.
+//       sigma_gamma 20, 30 and 45 degrees and the paper's Table 1 row (and the diagnoses below);
+//       median ratios per group.
 //
 // DIR: CGAL's demo data (scripts/fetch-cgal-data.sh; default $MDN_CGAL_DATA or
 // third_party_data/cgal). --limit N keeps the first N cases of each split's shapes in turn
@@ -304,9 +305,12 @@ int cmd_guided(const Options& o, int wanted, std::int64_t max_faces) {
   // s30gF, s30gS: a diagnosis of where the prior falls short of the oracle: the oracle's guidance
   // at the clean surface's crease and corner faces and the prior's elsewhere (F), and the other
   // way round (S).
-  enum Run { P, G6, GL, S20GL, S30, S30G6, S30GL, S45GL, PP, PG6, PGL, S30GF, S30GS, kRuns };
-  const std::vector<std::string> names{"g6/p",   "gL/p",   "s20gL/p", "s30/p",  "s30g6/p", "s30gL/p",
-                                       "s45gL/p", "pg6/pp", "pgL/pp",  "best3L/p", "s30gF/p", "s30gS/p"};
+  // gP, s30gP, pgP: guided by the most consistent patch's normal (decision 87's reading, no
+  // network: guided normal filtering's patch choice over one ring).
+  enum Run { P, G6, GL, S20GL, S30, S30G6, S30GL, S45GL, PP, PG6, PGL, S30GF, S30GS, GP, S30GP, PGP, kRuns };
+  const std::vector<std::string> names{"g6/p",   "gL/p",     "s20gL/p", "s30/p",   "s30g6/p", "s30gL/p", "s45gL/p",
+                                       "pg6/pp", "pgL/pp",   "best3L/p", "s30gF/p", "s30gS/p", "gP/p",    "s30gP/p",
+                                       "pgP/pp"};
   struct Out {
     std::array<double, kRuns> msae;
     std::string pick;
@@ -338,6 +342,14 @@ int cmd_guided(const Options& o, int wanted, std::int64_t max_faces) {
     };
     const Vertices* L = &prior.guidance;
     const std::vector<FaceClass> cls = face_classes(pair.clean.V, pair.clean.F, topo, one);
+    Vertices patch(noisy.F.rows(), 3);
+    {
+      const FaceFeatures ff = face_features(noisy.V, noisy.F, topo, one);
+      for (Eigen::Index f = 0; f < noisy.F.rows(); ++f) {
+        const Vec3 local = ff.X.row(f).segment<3>(36).transpose();
+        patch.row(f) = (local.norm() > 0 ? from_frame(ff, f, local.normalized()) : Vec3(ff.noisy.row(f).transpose())).transpose();
+      }
+    }
     Vertices at_features = prior.guidance, elsewhere = g6;
     for (Eigen::Index f = 0; f < noisy.F.rows(); ++f)
       if (cls[static_cast<std::size_t>(f)] == FaceClass::Crease || cls[static_cast<std::size_t>(f)] == FaceClass::Corner) {
@@ -347,7 +359,7 @@ int cmd_guided(const Options& o, int wanted, std::int64_t max_faces) {
     out[i] = {{run(pick, nullptr), run(pick, &g6), run(pick, L), run(with_gamma(20), L), run(with_gamma(30), nullptr),
                run(with_gamma(30), &g6), run(with_gamma(30), L), run(with_gamma(45), L), run(DenoiseParams{}, nullptr),
                run(DenoiseParams{}, &g6), run(DenoiseParams{}, L), run(with_gamma(30), &at_features),
-               run(with_gamma(30), &elsewhere)},
+               run(with_gamma(30), &elsewhere), run(pick, &patch), run(with_gamma(30), &patch), run(DenoiseParams{}, &patch)},
               r.report.choice->chosen, pick.sigma_gamma, prior.summary.median_deg};
   });
   std::map<std::string, std::vector<std::vector<double>>> groups;
@@ -358,7 +370,8 @@ int cmd_guided(const Options& o, int wanted, std::int64_t max_faces) {
     const auto& m = out[i].msae;
     const std::vector<double> ratios{m[G6] / m[P],  m[GL] / m[P],  m[S20GL] / m[P], m[S30] / m[P],   m[S30G6] / m[P],
                                      m[S30GL] / m[P], m[S45GL] / m[P], m[PG6] / m[PP], m[PGL] / m[PP],
-                                     std::min({m[GL], m[S30GL], m[PGL]}) / m[P], m[S30GF] / m[P], m[S30GS] / m[P]};
+                                     std::min({m[GL], m[S30GL], m[PGL]}) / m[P], m[S30GF] / m[P], m[S30GS] / m[P],
+                                     m[GP] / m[P], m[S30GP] / m[P], m[PGP] / m[PP]};
     const std::string kind = chosen[i].noise.substr(0, chosen[i].noise.find(':'));
     const std::string by_pick = out[i].pick == "identity" ? "identity" : out[i].sigma_gamma >= 90 ? "sigma_gamma 90" : "sigma_gamma <= 45";
     for (const std::string& g : {std::string("all"), "kind:" + kind, "pick:" + by_pick}) {
