@@ -20,8 +20,8 @@
 //       is chosen (never on tune_bench's validation set): N holdout cases (default 80) of at most
 //       --max-faces (default 20,000), auto's pick held fixed, unguided, guided by the oracle
 //       (clean normals turned by 6 degrees) and by the prior, for the pick, the pick with
-//       sigma_gamma 20, 30 and 45 degrees and the paper's Table 1 row (and the diagnoses below);
-//       median ratios per group.
+//       sigma_gamma 20, 30 and 45 degrees and the paper's Table 1 row (and the diagnostic guidances
+//       cmd_guided names); median ratios per group.
 //
 // DIR: CGAL's demo data (scripts/fetch-cgal-data.sh; default $MDN_CGAL_DATA or
 // third_party_data/cgal). --limit N keeps the first N cases of each split's shapes in turn
