@@ -40,7 +40,7 @@ const std::string& face_prior_version();
 // their noise reading). Scale-free and rotation-free; bit for bit the same for any thread count.
 FacePrior face_prior(const Vertices& P, const Triangles& F, const Topology& topo, Executor& executor);
 
-// The network on standardised-or-not feature rows, for the probes: #rows by 36 features in,
+// The network on raw feature rows (it standardises them), for the probes: #rows by kFaceFeatures in,
 // #rows by 4 out (the clean normal in the face's frame, unnormalised; the noise angle in radians).
 Eigen::MatrixXd face_network(const Eigen::MatrixXd& features);
 
