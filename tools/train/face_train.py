@@ -53,10 +53,11 @@ class Net(torch.nn.Module):
         return self.l2(torch.relu(self.l1(torch.relu(self.l0(x)))))
 
 
-def angles(out, target):
+def angles(out, target, power=1.0):
     n = torch.nn.functional.normalize(out[:, :3], dim=1)
     c = (n * target).sum(dim=1).clamp(-1, 1)
-    return torch.sqrt(2 * (1 - c) + 1e-12)  # the chord: about the angle, robust to outliers
+    chord = torch.sqrt(2 * (1 - c) + 1e-12)  # the chord: about the angle, robust to outliers
+    return chord if power == 1.0 else (chord + 0.02) ** power  # 0.02: about a degree, a bounded gradient at 0
 
 
 def angle_deg(out, target):
@@ -98,6 +99,8 @@ def main():
     ap.add_argument("--patience", type=int, default=6)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--tiny", action="store_true")
+    ap.add_argument("--loss-power", type=float, default=1.0,
+                    help="the loss is chord^p: 1 (default) about the angle; below 1 seeks a mode (one side of a crease)")
     ap.add_argument("--report")
     a = ap.parse_args()
     torch.manual_seed(a.seed)
@@ -127,7 +130,7 @@ def main():
         for i in range(0, len(perm), 1024):
             idx = perm[i:i + 1024]
             out = net(Xt[idx])
-            loss = angles(out, Yt[idx, :3]).mean() + (out[:, 3] - Yt[idx, 3]).abs().mean()
+            loss = angles(out, Yt[idx, :3], a.loss_power).mean() + (out[:, 3] - Yt[idx, 3]).abs().mean()
             opt.zero_grad()
             loss.backward()
             opt.step()
