@@ -6,6 +6,7 @@
 // as the regressor's rows. The same code runs in both, so training and run time read alike.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -42,6 +43,34 @@ constexpr double kFlatDegrees = 1.0;
 // Reads every face of (P, F). Deterministic: each face's readings depend on the mesh alone,
 // the executor only splits the faces into blocks.
 FaceFeatures face_features(const Vertices& P, const Triangles& F, const Topology& topo, Executor& executor);
+
+// The whole-surface passes of face_features (ring means, per-vertex readings, edge neighbours),
+// once; then any face's readings on demand, so that the prior reads them block by block without
+// a #F by kFaceFeatures table. Borrows P, F and topo for its lifetime. read() and flat() are
+// const and may run on many threads at once.
+class FaceReader {
+ public:
+  FaceReader(const Vertices& P, const Triangles& F, const Topology& topo, Executor& executor);
+  // Face f's kFaceFeatures readings into row[0 .. kFaceFeatures) and its frame (rows x, y, z,
+  // world axes) into frame: face_features' row f, bit for bit.
+  void read(std::int64_t f, double* row, Eigen::Matrix3d& frame) const;
+  bool flat(std::int64_t f) const;  // FaceFeatures::flat of f
+  const Vertices& noisy() const { return N0_; }
+  const Vertices& smoothed() const { return M2_; }
+
+ private:
+  Vec3 axis(std::int64_t f) const;  // the frame's z
+  const Vertices& P_;
+  const Triangles& F_;
+  const Topology& topo_;
+  Vertices N0_, M1_, M2_, M4_, C_;
+  Eigen::VectorXd A_;
+  std::vector<double> vdist_, spike_, inconsistency_;
+  std::vector<std::array<std::int32_t, 3>> across_;
+};
+
+// v (frame axes) in world axes, for a frame whose rows are x, y, z: from_frame's arithmetic.
+Vec3 frame_to_world(const Eigen::Matrix3d& frame, const Vec3& v);
 
 // v (world axes) in face f's frame, and back.
 Vec3 to_frame(const FaceFeatures& ff, std::int64_t f, const Vec3& v);

@@ -74,18 +74,25 @@ const std::vector<FaceProbe>& face_prior_probes() {
 
 FacePrior face_prior(const Vertices& P, const Triangles& F, const Topology& topo, Executor& executor) {
   const auto t0 = std::chrono::steady_clock::now();
-  const FaceFeatures ff = face_features(P, F, topo, executor);
+  // The surface's passes once; each block of 256 non-flat faces then reads its faces and runs
+  // the network on them, so no #F by kFaceFeatures table is built (it cost more page faults
+  // than arithmetic).
+  const FaceReader reader(P, F, topo, executor);
   const std::int64_t nf = F.rows();
   FacePrior out;
   out.guidance.resize(nf, 3);
   out.noise_deg.resize(nf);
+  std::vector<std::uint8_t> flat(static_cast<std::size_t>(nf));
+  executor.parallel_for(nf, 2048, [&](std::int64_t b, std::int64_t e) {
+    for (std::int64_t f = b; f < e; ++f) flat[static_cast<std::size_t>(f)] = reader.flat(f);
+  });
   std::vector<std::int32_t> faces;  // where the network runs, in face order
   for (std::int64_t f = 0; f < nf; ++f) {
-    const Vec3 n0 = ff.noisy.row(f).transpose(), s = ff.smoothed.row(f).transpose();
+    const Vec3 n0 = reader.noisy().row(f).transpose(), s = reader.smoothed().row(f).transpose();
     if (n0.squaredNorm() == 0) {  // degenerate: no normal to guide by
       out.guidance.row(f).setZero();
       out.noise_deg(f) = 0;
-    } else if (ff.flat[static_cast<std::size_t>(f)]) {
+    } else if (flat[static_cast<std::size_t>(f)]) {
       out.guidance.row(f) = s.transpose();
       out.noise_deg(f) = std::atan2(n0.cross(s).norm(), n0.dot(s)) * 180 / M_PI;
     } else {
@@ -96,16 +103,21 @@ FacePrior face_prior(const Vertices& P, const Triangles& F, const Topology& topo
   const Network& net = Network::shipped();
   const std::int64_t blocks = (out.evaluated + kBlock - 1) / kBlock;
   executor.parallel_for(blocks, 1, [&](std::int64_t b, std::int64_t e) {
+    Eigen::MatrixXd X(kFaceFeatures, kBlock);
+    std::vector<Eigen::Matrix3d> frames(static_cast<std::size_t>(kBlock));
     for (std::int64_t block = b; block < e; ++block) {
       const std::int64_t first = block * kBlock, n = std::min(kBlock, out.evaluated - first);
-      Eigen::MatrixXd X(kFaceFeatures, n);
-      for (std::int64_t k = 0; k < n; ++k) X.col(k) = ff.X.row(faces[static_cast<std::size_t>(first + k)]).transpose();
+      if (n != X.cols()) X.resize(kFaceFeatures, n);
+      for (std::int64_t k = 0; k < n; ++k)
+        reader.read(faces[static_cast<std::size_t>(first + k)], X.col(k).data(), frames[static_cast<std::size_t>(k)]);
       const Eigen::MatrixXd Y = net(X);
       for (std::int64_t k = 0; k < n; ++k) {
         const std::int64_t f = faces[static_cast<std::size_t>(first + k)];
         Vec3 local = Y.col(k).head<3>();
         const double norm = local.norm();
-        out.guidance.row(f) = (norm > 0 ? from_frame(ff, f, local / norm) : Vec3(ff.smoothed.row(f).transpose())).transpose();
+        out.guidance.row(f) =
+            (norm > 0 ? frame_to_world(frames[static_cast<std::size_t>(k)], local / norm) : Vec3(reader.smoothed().row(f).transpose()))
+                .transpose();
         out.noise_deg(f) = std::max(0.0, Y(3, k)) * 180 / M_PI;
       }
     }

@@ -49,6 +49,31 @@ TEST(FacePrior, IsBitIdenticalForOneAndTwoThreads) {
   EXPECT_TRUE(one.noise_deg == two.noise_deg);
 }
 
+// The prior reads its faces block by block (FaceReader); the result is the network on
+// face_features' table, rows of non-flat faces, mapped back by from_frame (to 1e-12: the
+// network on one row takes Eigen's matrix-vector product, the prior's blocks the matrix one).
+TEST(FacePrior, EqualsTheNetworkOnTheFeatureTable) {
+  const TriMesh noisy = test::with_noise(test::fold(12, 100), 0.2);
+  const Topology topo = Topology::build(noisy.F, static_cast<std::int32_t>(noisy.V.rows()));
+  Executor ex(2);
+  const FacePrior p = face_prior(noisy.V, noisy.F, topo, ex);
+  const FaceFeatures ff = face_features(noisy.V, noisy.F, topo, ex);
+  std::int64_t evaluated = 0;
+  for (Eigen::Index f = 0; f < noisy.F.rows(); ++f) {
+    if (ff.flat[static_cast<std::size_t>(f)]) {
+      EXPECT_TRUE(p.guidance.row(f) == ff.smoothed.row(f)) << f;
+      continue;
+    }
+    ++evaluated;
+    const Eigen::MatrixXd y = face_network(Eigen::MatrixXd(ff.X.row(f)));
+    const Vec3 local = y.row(0).head<3>().transpose();
+    const Vec3 expected = from_frame(ff, f, local / local.norm());
+    EXPECT_NEAR((p.guidance.row(f).transpose() - expected).cwiseAbs().maxCoeff(), 0.0, 1e-12) << f;
+  }
+  EXPECT_EQ(p.evaluated, evaluated);
+  EXPECT_GT(evaluated, 0);
+}
+
 // The prior's normals are closer to the clean ones than the noisy normals, on the cube's faces
 // along its edges and corners as well as on its flat sides; its noise reading tells noise from none.
 TEST(FacePrior, PredictsCleanerNormalsThanTheNoisyOnesAndReadsTheNoise) {
