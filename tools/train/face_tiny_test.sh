@@ -22,7 +22,7 @@ size=$(stat -c %s "$work/one.train.f32")
 /usr/bin/python3 "$root/tools/train/face_train.py" "$work/one" "$work/a.inc" --tiny > /dev/null
 /usr/bin/python3 "$root/tools/train/face_train.py" "$work/one" "$work/b.inc" --tiny > /dev/null
 cmp -s "$work/a.inc" "$work/b.inc" || fail "face_train.py --tiny wrote different bytes twice"
-for name in kVersion kCommit kTorch kTrainSha256 kHoldoutSha256 kTrainRows kHoldoutRows kInputs kHidden; do
+for name in kVersion kCommit kTorch kBlas kTrainSha256 kHoldoutSha256 kTrainRows kHoldoutRows kInputs kHidden; do
   grep -q "constexpr .* $name = " "$work/a.inc" || fail "$name missing"
   grep -q "constexpr .* $name = " "$root/core/auto/face_model_data.inc" || fail "$name missing from the shipped file"
 done

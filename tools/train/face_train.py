@@ -18,7 +18,8 @@ Loss: the angle to the clean normal (sqrt(2 (1 - cos)), robust: about the angle 
 the absolute error of the predicted noise angle. Adam, batches of 1024, the rows of the
 "train" shapes only; the epoch kept is the one with the lowest median angle error on the
 "holdout" shapes (early stopping after --patience epochs without gain). CPU, one thread,
-seeded, deterministic algorithms: the same rows give the same bytes. --tiny: 4,000 rows and
+seeded, deterministic algorithms, oneDNN off, the BLAS run.sh pins (decision 85): the same rows
+give the same bytes. --tiny: 4,000 rows and
 3 epochs (CI's check that the trainer runs and repeats itself).
 """
 import argparse
@@ -84,6 +85,13 @@ def figures(net, X, rows):
     return float(np.median(err)), per
 
 
+def blas_library():
+    """The BLAS this process loaded (run.sh pins the reference one, decision 85)."""
+    with open("/proc/self/maps") as f:
+        paths = {line.split()[-1] for line in f if "blas" in line.split()[-1]}
+    return ",".join(sorted(paths)) or "unknown"
+
+
 def c_array(name, values, per_line=8):
     vals = ["%.9g" % float(v) for v in np.asarray(values, dtype=np.float32).ravel()]
     lines = [", ".join(vals[i:i + per_line]) for i in range(0, len(vals), per_line)]
@@ -106,6 +114,7 @@ def main():
     torch.manual_seed(a.seed)
     torch.use_deterministic_algorithms(True)
     torch.set_num_threads(1)
+    torch.backends.mkldnn.enabled = False  # oneDNN picks its kernels by CPU; the BLAS path does not
     train, train_sha = load(a.rows + ".train.f32")
     hold, hold_sha = load(a.rows + ".holdout.f32")
     if a.tiny:
@@ -174,6 +183,7 @@ def main():
     text += 'constexpr const char* kVersion = "%s";\n' % version
     text += 'constexpr const char* kCommit = "%s";\n' % commit
     text += 'constexpr const char* kTorch = "%s";\n' % torch.__version__
+    text += 'constexpr const char* kBlas = "%s";\n' % blas_library()
     text += 'constexpr const char* kTrainSha256 = "%s";\n' % train_sha
     text += 'constexpr const char* kHoldoutSha256 = "%s";\n' % hold_sha
     text += "constexpr long kTrainRows = %d;\nconstexpr long kHoldoutRows = %d;\n" % (len(train), len(hold))
@@ -187,7 +197,7 @@ def main():
     text += "}  // namespace face_model_data\n"
     with open(a.out, "w") as f:
         f.write(text)
-    report = {"version": version, "commit": commit, "torch": torch.__version__, "train_rows": len(train),
+    report = {"version": version, "commit": commit, "torch": torch.__version__, "blas": blas_library(), "train_rows": len(train),
               "holdout_rows": len(hold), "hidden": a.hidden, "epoch": best_epoch, "holdout_median_deg": med,
               "holdout": per, "train_median_deg": tmed, "train": tper}
     if a.report:
