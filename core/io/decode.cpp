@@ -55,6 +55,12 @@ std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, cons
   return decode(bytes, format, options.limits);
 }
 
+std::unique_ptr<MeshDocument> decode_owned(std::string&& bytes, Format format, const DecodeOptions& options) {
+  std::string owned = std::move(bytes);
+  bytes.clear();
+  return decode(owned, format, options);
+}
+
 std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, const Limits& limits) {
   switch (format) {
     case Format::Off: return detail::decode_off(bytes, limits);
