@@ -58,6 +58,8 @@ std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, cons
 std::unique_ptr<MeshDocument> decode_owned(std::string&& bytes, Format format, const DecodeOptions& options) {
   std::string owned = std::move(bytes);
   bytes.clear();
+  if (format == Format::Gltf)  // its data URIs are decoded first, then the body is freed (decision 82)
+    return detail::decode_gltf(owned, format, options.limits, options.resource_dir ? &*options.resource_dir : nullptr, &owned);
   return decode(owned, format, options);
 }
 

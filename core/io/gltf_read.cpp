@@ -167,7 +167,7 @@ using namespace gltf;
 
 
 static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes, Format format, const Limits& limits,
-                                                          const std::string* resource_dir);
+                                                          const std::string* resource_dir, std::string* release);
 
 namespace {
 
@@ -273,9 +273,18 @@ void check_extensions(const Json& json) {
 // EXT_meshopt_compression's placeholder buffers have no data (no uri, not the GLB chunk), which
 // tinygltf refuses: it is given a one-byte buffer instead; the views that name one are decoded
 // from their extension's buffer later, any other view on it reaches past its end.
+// `embedded`: the buffers already decoded from their data URIs (decode_lifted; empty elements
+// for the others): tinygltf is given a one-byte data URI for each, and its buffer then adopts
+// the decoded bytes (moved, not copied; decision 82).
 tinygltf::Model load_model(const Json& json, std::string_view bytes, std::string_view text, Format format,
-                           bool changed) {
+                           bool changed, std::vector<std::vector<unsigned char>>& embedded) {
   Json for_loader = json;
+  for (std::size_t b = 0; b < embedded.size(); ++b)
+    if (!embedded[b].empty()) {
+      for_loader["buffers"][b]["byteLength"] = 1;
+      for_loader["buffers"][b]["uri"] = "data:application/octet-stream;base64,AA==";
+      changed = true;
+    }
   if (for_loader.contains("meshes") && for_loader["meshes"].is_array())
     for (auto& mesh : for_loader["meshes"])
       if (mesh.is_object() && mesh.contains("primitives") && mesh["primitives"].is_array())
@@ -291,7 +300,12 @@ tinygltf::Model load_model(const Json& json, std::string_view bytes, std::string
       changed = true;
     }
   if (!changed) return load_tinygltf(bytes, format == Format::Glb);
-  if (format == Format::Gltf) return load_tinygltf(for_loader.dump(), false);
+  if (format == Format::Gltf) {
+    tinygltf::Model model = load_tinygltf(for_loader.dump(), false);
+    for (std::size_t b = 0; b < embedded.size() && b < model.buffers.size(); ++b)
+      if (!embedded[b].empty()) model.buffers[b].data = std::move(embedded[b]);
+    return model;
+  }
   std::string container = make_glb(for_loader.dump(), {});
   // make_glb wrote the header and the JSON chunk; the input's BIN chunk follows as is.
   const std::size_t rest = 20 + text.size();
@@ -472,28 +486,37 @@ void read_surfaces(Reader& reader, GltfDocument& doc, const Limits& limits) {
 }  // namespace
 
 std::unique_ptr<MeshDocument> decode_gltf(std::string_view bytes, Format format, const Limits& limits,
-                                          const std::string* resource_dir) {
+                                          const std::string* resource_dir, std::string* release) {
   try {
-    return decode_gltf_checked(bytes, format, limits, resource_dir);
+    return decode_gltf_checked(bytes, format, limits, resource_dir, release);
   } catch (const Json::exception& e) {  // a shape check_shape does not cover: still the input's fault
     throw FormatError(std::string("glTF: unexpected JSON content (") + e.what() + ")");
   }
 }
 
 static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes, Format format, const Limits& limits,
-                                                          const std::string* resource_dir) {
+                                                          const std::string* resource_dir, std::string* release) {
   auto doc = std::make_unique<GltfDocument>();
   doc->format_ = format;
-  const std::string_view text = format == Format::Glb ? glb_json(bytes) : bytes;
+  // A .gltf's data URIs: the JSON parsers see placeholders, each buffer is decoded once from the
+  // body, which the caller may then free (decision 82).
+  const LiftedJson lifted = format == Format::Gltf ? lift_data_uris(bytes) : LiftedJson{};
+  const std::string_view text = format == Format::Glb ? glb_json(bytes) : lifted.literals.empty() ? bytes : lifted.text;
   std::int64_t scene_bytes = 0;
   doc->json_ = parse_bounded(text, limits, scene_bytes);
+  std::vector<std::vector<unsigned char>> embedded = decode_lifted(doc->json_, bytes, lifted, limits, scene_bytes);
+  if (release && !lifted.literals.empty()) {  // tinygltf reads the JSON's dump (load_model), not the body
+    std::string().swap(*release);
+    bytes = {};
+  }
   // Before tinygltf sees the asset: without a resource folder nothing external is ever opened.
   std::int64_t external_bytes = 0;
   int external = 0;
   for (const char* key : {"buffers", "images"})
     external += resolve_external(doc->json_, key, resource_dir, limits, external_bytes);
   check_extensions(doc->json_);
-  doc->model_ = load_model(doc->json_, bytes, text, format, external > 0);
+  doc->model_ = load_model(doc->json_, bytes, text, format, external > 0 || !lifted.literals.empty(), embedded);
+  if (release) std::string().swap(*release);
   check_meshes_match_json(doc->json_, doc->model_);
   Reader reader(doc->model_, limits);
   reader.charge(scene_bytes, "glTF");
