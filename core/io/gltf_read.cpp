@@ -88,7 +88,8 @@ void read_draco_primitive(Reader& reader, const Json& ext, const tinygltf::Primi
 }
 
 // Converts strips and fans to lists (glTF 2.0 spec, 3.7.2.1 "Topology types").
-std::vector<std::uint32_t> to_triangle_list(const std::vector<std::uint32_t>& idx, int mode, const std::string& what) {
+// A TRIANGLES list is returned as it came (moved, not copied).
+std::vector<std::uint32_t> to_triangle_list(std::vector<std::uint32_t> idx, int mode, const std::string& what) {
   std::vector<std::uint32_t> out;
   if (mode == TINYGLTF_MODE_TRIANGLES) {
     if (idx.size() % 3 != 0) throw FormatError(what + ": a TRIANGLES primitive's index count is not a multiple of 3");
@@ -363,7 +364,7 @@ void read_plain_primitive(Reader& reader, const tinygltf::Primitive& prim, int m
     idx.resize(static_cast<std::size_t>(out.points));
     for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<std::uint32_t>(i);
   }
-  out.triangles = to_triangle_list(idx, mode, what);
+  out.triangles = to_triangle_list(std::move(idx), mode, what);
 }
 
 // Primitive p of mesh m (Draco or plain), its POSITION / NORMAL / TANGENT located and checked.
@@ -394,15 +395,14 @@ Primitive read_primitive(Reader& reader, GltfDocument& doc, std::size_t m, std::
   return out;
 }
 
-// A primitive's positions appended to the surface's points (finite, or a FormatError).
-void append_points(Reader& reader, const Primitive& prim, std::vector<Vec3>& all_points) {
+// A primitive's positions are finite, or a FormatError.
+void check_points(Reader& reader, const Primitive& prim) {
   const std::string what = "mesh " + std::to_string(prim.mesh) + " primitive " + std::to_string(prim.index);
   const Attribute& position = prim.attributes[static_cast<std::size_t>(prim.position)];
   for (std::int64_t i = 0; i < prim.points; ++i) {
     reader.cancel().poll();
-    const Vec3 v(position.value(i, 0), position.value(i, 1), position.value(i, 2));
-    if (!v.allFinite()) throw FormatError(what + ": non-finite POSITION");
-    all_points.push_back(v);
+    if (!Vec3(position.value(i, 0), position.value(i, 1), position.value(i, 2)).allFinite())
+      throw FormatError(what + ": non-finite POSITION");
   }
 }
 
@@ -425,12 +425,21 @@ void assign_normal_slots(Surface& surface, const std::vector<std::int32_t>& weld
   surface.normal_slots = static_cast<std::int64_t>(slots.size());
 }
 
-// The surface's mesh: every primitive's points welded by position, their triangles on the
-// welded vertices; the surface keeps the point -> vertex map and its normal slots.
-TriMesh weld_surface(Surface& surface, const std::vector<Vec3>& all_points, const Limits& limits) {
-  Vertices P(static_cast<Eigen::Index>(all_points.size()), 3);
-  for (std::size_t i = 0; i < all_points.size(); ++i) P.row(static_cast<Eigen::Index>(i)) = all_points[i].transpose();
-  Weld weld = weld_positions(P, 1e-6, limits.cancel);
+// The surface's mesh: every primitive's points (`points` in all) welded by position, their
+// triangles on the welded vertices; the surface keeps the point -> vertex map and its normal
+// slots. The points are gathered once, straight from the primitives, and freed before the faces
+// are allocated (decision 82: the decode's peak memory).
+TriMesh weld_surface(Surface& surface, std::int64_t points, const Limits& limits) {
+  Weld weld;
+  {
+    Vertices P(points, 3);
+    for (const auto& prim : surface.primitives) {
+      const Attribute& position = prim.attributes[static_cast<std::size_t>(prim.position)];
+      for (std::int64_t i = 0; i < prim.points; ++i)
+        P.row(prim.point_offset + i) << position.value(i, 0), position.value(i, 1), position.value(i, 2);
+    }
+    weld = weld_positions(P, 1e-6, limits.cancel);
+  }
   TriMesh tri;
   tri.V = std::move(weld.V);
   std::int64_t faces = 0;
@@ -441,7 +450,7 @@ TriMesh weld_surface(Surface& surface, const std::vector<Vec3>& all_points, cons
     for (std::size_t c = 0; c < prim.triangles.size(); c += 3, ++f)
       for (int k = 0; k < 3; ++k)
         tri.F(f, k) = weld.map[static_cast<std::size_t>(prim.point_offset) + prim.triangles[c + static_cast<std::size_t>(k)]];
-  assign_normal_slots(surface, weld.map, all_points.size());
+  assign_normal_slots(surface, weld.map, static_cast<std::size_t>(points));
   surface.point_to_weld = std::move(weld.map);
   surface.welded = tri.V.rows();
   return tri;
@@ -455,7 +464,7 @@ void read_surfaces(Reader& reader, GltfDocument& doc, const Limits& limits) {
   for (std::size_t m = 0; m < model.meshes.size(); ++m) {
     Surface surface;
     surface.mesh = static_cast<int>(m);
-    std::vector<Vec3> all_points;
+    std::int64_t points = 0;
     for (std::size_t p = 0; p < model.meshes[m].primitives.size(); ++p) {
       const int mode = model.meshes[m].primitives[p].mode < 0 ? TINYGLTF_MODE_TRIANGLES : model.meshes[m].primitives[p].mode;
       if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN)
@@ -467,12 +476,13 @@ void read_surfaces(Reader& reader, GltfDocument& doc, const Limits& limits) {
       total_faces += static_cast<std::int64_t>(out.triangles.size() / 3);
       check_count(total_points, limits.max_vertices, "vertices");
       check_count(total_faces, limits.max_faces, "faces");
-      out.point_offset = static_cast<std::int64_t>(all_points.size());
-      append_points(reader, out, all_points);
+      out.point_offset = points;
+      points += out.points;
+      check_points(reader, out);
       surface.primitives.push_back(std::move(out));
     }
     if (surface.primitives.empty()) continue;
-    doc.meshes_.push_back(weld_surface(surface, all_points, limits));
+    doc.meshes_.push_back(weld_surface(surface, points, limits));
     doc.surfaces_.push_back(std::move(surface));
   }
   if (doc.surfaces_.empty()) throw FormatError("glTF: the asset has no triangle primitives to denoise");
