@@ -254,10 +254,12 @@ std::string_view glb_json(std::string_view bytes);
 // Parses the JSON with its nesting depth and size bounded (Limits), checks the shape of what
 // the decoder reads, and charges `bytes` with what the parsed scene will hold.
 Json parse_bounded(std::string_view text, const Limits& limits, std::int64_t& bytes);
-// A .gltf's external buffers or images (`key`) read from `resource_dir` and embedded as data
-// URIs; without a folder any external URI is an UnsupportedError. Returns how many were read.
+// A .gltf's external buffers or images (`key`) read from `resource_dir` and embedded (images as
+// data URIs; buffers, given `buffers`, as their bytes in element i, their uri cut to a data URI's
+// header, the file's size checked against byteLength); without a folder any external URI is an
+// UnsupportedError. Returns how many were read.
 int resolve_external(Json& json, const char* key, const std::string* resource_dir, const Limits& limits,
-                     std::int64_t& read_bytes);
+                     std::int64_t& read_bytes, std::vector<std::vector<unsigned char>>* buffers = nullptr);
 // Whether a required extension is one this adapter reads or carries over (glTF 2.0, 3.12).
 bool understood_extension(std::string_view name);
 

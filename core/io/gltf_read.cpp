@@ -274,8 +274,8 @@ void check_extensions(const Json& json) {
 // EXT_meshopt_compression's placeholder buffers have no data (no uri, not the GLB chunk), which
 // tinygltf refuses: it is given a one-byte buffer instead; the views that name one are decoded
 // from their extension's buffer later, any other view on it reaches past its end.
-// `embedded`: the buffers already decoded from their data URIs (decode_lifted; empty elements
-// for the others): tinygltf is given a one-byte data URI for each, and its buffer then adopts
+// `embedded`: the buffers already decoded from their data URIs (decode_lifted) or read from
+// their files (resolve_external), empty elements for the others: tinygltf is given a one-byte data URI for each, and its buffer then adopts
 // the decoded bytes (moved, not copied; decision 82).
 tinygltf::Model load_model(const Json& json, std::string_view bytes, std::string_view text, Format format,
                            bool changed, std::vector<std::vector<unsigned char>>& embedded) {
@@ -301,19 +301,21 @@ tinygltf::Model load_model(const Json& json, std::string_view bytes, std::string
       changed = true;
     }
   if (!changed) return load_tinygltf(bytes, format == Format::Glb);
+  tinygltf::Model model;
   if (format == Format::Gltf) {
-    tinygltf::Model model = load_tinygltf(for_loader.dump(), false);
-    for (std::size_t b = 0; b < embedded.size() && b < model.buffers.size(); ++b)
-      if (!embedded[b].empty()) model.buffers[b].data = std::move(embedded[b]);
-    return model;
+    model = load_tinygltf(for_loader.dump(), false);
+  } else {
+    std::string container = make_glb(for_loader.dump(), {});
+    // make_glb wrote the header and the JSON chunk; the input's BIN chunk follows as is.
+    const std::size_t rest = 20 + text.size();
+    container += bytes.substr(rest);
+    const auto total = static_cast<std::uint32_t>(container.size());
+    std::memcpy(container.data() + 8, &total, 4);
+    model = load_tinygltf(container, true);
   }
-  std::string container = make_glb(for_loader.dump(), {});
-  // make_glb wrote the header and the JSON chunk; the input's BIN chunk follows as is.
-  const std::size_t rest = 20 + text.size();
-  container += bytes.substr(rest);
-  const auto total = static_cast<std::uint32_t>(container.size());
-  std::memcpy(container.data() + 8, &total, 4);
-  return load_tinygltf(container, true);
+  for (std::size_t b = 0; b < embedded.size() && b < model.buffers.size(); ++b)
+    if (!embedded[b].empty()) model.buffers[b].data = std::move(embedded[b]);
+  return model;
 }
 
 // tinygltf 2.7 skips a primitive it cannot parse (no "attributes", say) instead of failing, so
@@ -523,7 +525,7 @@ static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes,
   std::int64_t external_bytes = 0;
   int external = 0;
   for (const char* key : {"buffers", "images"})
-    external += resolve_external(doc->json_, key, resource_dir, limits, external_bytes);
+    external += resolve_external(doc->json_, key, resource_dir, limits, external_bytes, key == std::string("buffers") ? &embedded : nullptr);
   check_extensions(doc->json_);
   doc->model_ = load_model(doc->json_, bytes, text, format, external > 0 || !lifted.literals.empty(), embedded);
   if (release) std::string().swap(*release);

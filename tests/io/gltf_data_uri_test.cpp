@@ -7,6 +7,7 @@
 
 #include "core/io/document.h"
 #include "gltf_fixtures.h"
+#include "io_test_support.h"
 
 namespace mdn::io {
 namespace {
@@ -165,6 +166,28 @@ TEST(GltfDataUri, DecodedBytesCountAgainstTheLimit) {
   EXPECT_THROW(decode(assets().gltf, Format::Gltf, limits), LimitError);
   limits.max_decoded_bytes = bytes + (std::int64_t{1} << 20);
   EXPECT_NO_THROW(decode(assets().gltf, Format::Gltf, limits));
+}
+
+// The command-line tool's .gltf with its buffer in a file beside it: the file's bytes go to the
+// model as a data URI's do; its size must be the byteLength.
+TEST(GltfDataUri, ExternalBufferFilesAreReadAsTheyAre) {
+  const std::string& glb = assets().glb;
+  std::uint32_t json_length;
+  std::memcpy(&json_length, glb.data() + 12, 4);
+  const std::string bin = glb.substr(20 + json_length + 8);
+  Json j = Json::parse(glb.substr(20, json_length));
+  j["buffers"][0] = {{"byteLength", bin.size()}, {"uri", "scan.bin"}};
+  const auto dir = test_io::temp_dir();
+  test_io::write_file(dir / "scan.bin", bin);
+  DecodeOptions options;
+  options.resource_dir = dir.string();
+  auto from_files = decode(j.dump(), Format::Gltf, options);
+  auto from_glb = decode(glb, Format::Glb);
+  expect_same_surfaces(*from_glb, *from_files);
+  EXPECT_EQ(encoded(*from_glb, Format::Glb), encoded(*from_files, Format::Glb));
+  test_io::write_file(dir / "scan.bin", bin + "pad!");
+  EXPECT_THROW(decode(j.dump(), Format::Gltf, options), FormatError);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
