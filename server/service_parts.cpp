@@ -21,6 +21,7 @@ MemoryJobStoreOptions make_memory_store_options(const ServerConfig& c) {
   MemoryJobStoreOptions o;
   o.result_ttl = std::chrono::milliseconds(std::int64_t(c.result_ttl_s * 1000));
   o.max_stored = c.max_stored_jobs;
+  o.max_stored_per_client = c.effective_client_max_stored_jobs();
   return o;
 }
 

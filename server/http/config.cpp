@@ -8,6 +8,8 @@
 #include <sstream>
 #include <thread>
 
+#include <unistd.h>
+
 namespace mdn::http {
 namespace {
 
@@ -93,6 +95,27 @@ std::vector<Setting> listen_and_jobs_settings() {
       {"max-stored-jobs", "MDN_MAX_STORED_JOBS", "asynchronous jobs kept at most (queued, running, finished); when all are taken, new ones get 503",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_stored_jobs = int(parse_int(n, v, 1, 1000000)); },
        [](const ServerConfig& c) { return std::to_string(c.max_stored_jobs); }},
+      {"client-max-stored-jobs", "MDN_CLIENT_MAX_STORED_JOBS",
+       "asynchronous jobs one client (API key, or address without keys) keeps, not counting downloaded or cancelled "
+       "ones; beyond, its new ones get 429 while others are served; 0 = a quarter of --max-stored-jobs",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.client_max_stored_jobs = int(parse_int(n, v, 0, 1000000)); },
+       [](const ServerConfig& c) {
+         return std::to_string(c.client_max_stored_jobs) + " (" + std::to_string(c.effective_client_max_stored_jobs()) + " here)";
+       }},
+      {"max-queued-bytes", "MDN_MAX_QUEUED_BYTES",
+       "request bodies held for jobs not started yet, all clients, in bytes (suffix K, M or G); beyond, 503; "
+       "0 = a quarter of the memory (cgroup limit or physical)",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.max_queued_bytes = parse_int(n, v, 0, std::int64_t{1} << 50); },
+       [](const ServerConfig& c) {
+         return std::to_string(c.max_queued_bytes) + " (" + std::to_string(c.effective_max_queued_bytes()) + " here)";
+       }},
+      {"client-max-queued-bytes", "MDN_CLIENT_MAX_QUEUED_BYTES",
+       "the same for one client; beyond, its new jobs get 429 while others are served; 0 = --max-body, at most a quarter "
+       "of --max-queued-bytes",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.client_max_queued_bytes = parse_int(n, v, 0, std::int64_t{1} << 50); },
+       [](const ServerConfig& c) {
+         return std::to_string(c.client_max_queued_bytes) + " (" + std::to_string(c.effective_client_max_queued_bytes()) + " here)";
+       }},
   };
 }
 
@@ -192,6 +215,13 @@ std::vector<Setting> connection_settings() {
        "seconds a request body may send nothing before the answer is 408 and the connection closes",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.body_stall_timeout_s = parse_seconds(n, v, 0, 3600, true); },
        [](const ServerConfig& c) { return show_double(c.body_stall_timeout_s); }},
+      {"body-min-rate", "MDN_BODY_MIN_RATE",
+       "bytes per second a request body must average once --body-rate-grace has passed; then 408 and close; 0 = no floor",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.body_min_rate = parse_seconds(n, v, 0, 1e12, false); },
+       [](const ServerConfig& c) { return show_double(c.body_min_rate); }},
+      {"body-rate-grace", "MDN_BODY_RATE_GRACE", "seconds from a body's start before --body-min-rate applies",
+       [](ServerConfig& c, const std::string& n, const std::string& v) { c.body_rate_grace_s = parse_seconds(n, v, 0, 3600, false); },
+       [](const ServerConfig& c) { return show_double(c.body_rate_grace_s); }},
       {"write-timeout", "MDN_WRITE_TIMEOUT", "seconds to wait while sending response bytes",
        [](ServerConfig& c, const std::string& n, const std::string& v) { c.write_timeout_s = parse_seconds(n, v, 0, 3600, true); },
        [](const ServerConfig& c) { return show_double(c.write_timeout_s); }},
@@ -348,6 +378,48 @@ std::string show_queue_setting(const std::optional<RedisAddress>& queue) {
   const std::string host = queue->host.find(':') == std::string::npos ? queue->host : "[" + queue->host + "]";
   return "redis://" + std::string(queue->password.empty() ? "" : "(credentials)@") + host + ":" +
          std::to_string(queue->port) + "/" + std::to_string(queue->db);
+}
+
+namespace {
+
+// A cgroup limit file's value; 0 for "max", an absent file or nonsense.
+std::int64_t cgroup_limit(const char* path) {
+  std::ifstream in(path);
+  std::string text;
+  if (!(in >> text) || text == "max") return 0;
+  try {
+    const long long v = std::stoll(text);
+    return v > 0 && v < (std::int64_t{1} << 60) ? v : 0;  // v1 says "no limit" with a huge number
+  } catch (const std::exception&) {
+    return 0;
+  }
+}
+
+}  // namespace
+
+std::int64_t memory_available_to_process() {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  std::int64_t physical = pages > 0 && page > 0 ? std::int64_t(pages) * page : 0;
+  for (const char* path : {"/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"})
+    if (const std::int64_t limit = cgroup_limit(path); limit > 0 && (physical == 0 || limit < physical)) physical = limit;
+  return physical;
+}
+
+
+int ServerConfig::effective_client_max_stored_jobs() const {
+  return client_max_stored_jobs > 0 ? client_max_stored_jobs : std::max(1, max_stored_jobs / 4);
+}
+
+std::int64_t ServerConfig::effective_max_queued_bytes() const {
+  if (max_queued_bytes > 0) return max_queued_bytes;
+  const std::int64_t memory = memory_available_to_process();
+  return memory > 0 ? memory / 4 : std::int64_t{64} << 20;
+}
+
+std::int64_t ServerConfig::effective_client_max_queued_bytes() const {
+  // By default one client may queue as much as one largest body (decision 79).
+  if (client_max_queued_bytes > 0) return client_max_queued_bytes;
+  return std::max<std::int64_t>(1, std::min(max_body_bytes, effective_max_queued_bytes() / 4));
 }
 
 int ServerConfig::effective_io_threads() const {

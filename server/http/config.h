@@ -53,6 +53,11 @@ struct ServerConfig {
   double sync_start_timeout_s = 30;  // --sync-start-timeout; POST /v1/denoise waits this long for a worker, then 503
   double result_ttl_s = 600;       // --result-ttl; seconds a finished job and its result are kept
   int max_stored_jobs = 1024;      // --max-stored-jobs; finished jobs kept at most (oldest evicted)
+  // Fair shares (decisions 78, 79). A client is an --api-keys client, or a source address
+  // without keys. 0: the default that effective_*() computes.
+  int client_max_stored_jobs = 0;  // --client-max-stored-jobs; jobs one client keeps (0: a quarter of --max-stored-jobs)
+  std::int64_t max_queued_bytes = 0;  // --max-queued-bytes; bodies of jobs not started, all clients (0: a quarter of the memory)
+  std::int64_t client_max_queued_bytes = 0;  // --client-max-queued-bytes; the same, one client (0: --max-body, at most a quarter of --max-queued-bytes)
 
   // --- Job store (asynchronous jobs; see docker/README.md "Job store") ---
   // --queue / MDN_QUEUE: "memory" (this process only, the default: nullopt) or
@@ -91,6 +96,10 @@ struct ServerConfig {
   // --body-stall-timeout: seconds a request body may send nothing before 408 and close (the
   // socket read timeout in effect is the smaller of this and --read-timeout).
   double body_stall_timeout_s = 10;
+  // --body-min-rate, --body-rate-grace: after the grace, a body must have kept this many bytes
+  // a second since it began; then 408 and close (decision 63; 0: no floor).
+  double body_min_rate = 500;
+  double body_rate_grace_s = 10;
   double write_timeout_s = 30;      // --write-timeout
 
   // --- Operations ---
@@ -107,8 +116,15 @@ struct ServerConfig {
   std::string log_level = "info";          // --log-level trace|debug|info|warn|error|off
 
   int effective_workers() const;
+  int effective_client_max_stored_jobs() const;           // at least 1
+  std::int64_t effective_max_queued_bytes() const;         // the machine's memory / 4 (64 MiB if unknown)
+  std::int64_t effective_client_max_queued_bytes() const;
   int effective_io_threads() const;  // io_threads, or for 0: max(8, 4 x hardware_concurrency)
 };
+
+// The memory this process may use: the cgroup's limit (v2 memory.max, v1
+// memory.limit_in_bytes) when one is set and lower, else the physical memory; 0 if unknown.
+std::int64_t memory_available_to_process();
 
 // The decoder limits of the configuration (--max-faces ... --max-accessors): what the workers and
 // POST /v1/compare decode under.

@@ -175,6 +175,8 @@ struct HttpService::Impl {
                                      .keep_alive_max = config.keep_alive_max,
                                      .read_timeout_s = std::min(config.read_timeout_s, config.body_stall_timeout_s),
                                      .body_timeout_s = config.body_timeout_s,
+                                     .body_min_rate = config.body_min_rate,
+                                     .body_rate_grace_s = config.body_rate_grace_s,
                                      .write_timeout_s = config.write_timeout_s,
                                      .max_connections_per_client = config.max_connections_per_client,
                                      .max_connections = config.max_connections,

@@ -123,6 +123,11 @@ std::string Metrics::render(const Gauges& g) const {
   out += "# HELP mdn_long_polls Long polls (GET /v1/jobs/{id}?wait=) waiting now; at most half the HTTP threads.\n"
          "# TYPE mdn_long_polls gauge\n";
   out += "mdn_long_polls " + std::to_string(g.long_polls) + "\n";
+  out += "# HELP mdn_queued_request_bytes Bytes of request bodies this process holds for jobs no worker has taken yet "
+         "(decision 79).\n# TYPE mdn_queued_request_bytes gauge\n";
+  out += "mdn_queued_request_bytes " + std::to_string(g.queued_bytes) + "\n";
+  out += "# HELP mdn_max_queued_request_bytes Their bound, --max-queued-bytes.\n# TYPE mdn_max_queued_request_bytes gauge\n";
+  out += "mdn_max_queued_request_bytes " + std::to_string(g.max_queued_bytes) + "\n";
   return out;
 }
 

@@ -39,6 +39,7 @@ class Metrics {
     int queue_depth, queue_capacity, running, workers;
     bool draining;
     int long_polls;  // GET /v1/jobs/{id}?wait= requests waiting now
+    std::int64_t queued_bytes = 0, max_queued_bytes = 0;  // request bodies no worker has taken yet, and their bound
   };
   // The whole exposition; gauges are read at scrape time.
   std::string render(const Gauges& gauges) const;

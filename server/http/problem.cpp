@@ -60,6 +60,7 @@ constexpr ProblemKind kCatalogue[] = {
     {T::InputLost, "input-lost", "Job input lost", 500},
     {T::QueueFull, "queue-full", "Job queue full", 503},
     {T::StoreFull, "store-full", "Job store full", 503},
+    {T::OverClientShare, "over-client-share", "Over this client's share", 429},
     {T::QueueUnavailable, "queue-unavailable", "Job store unavailable", 503},
     {T::QueueError, "queue-error", "Job store error", 500},
     {T::Draining, "draining", "Server draining", 503},

@@ -51,7 +51,7 @@ enum class ProblemType {
   InvalidParams, MalformedMesh, InvalidMesh, UnsupportedContent, SolverFailed, ResultTooLarge,
   // Jobs and their store.
   JobNotFound, JobNotFinished, JobFailed, JobCancelled, Cancelled, TimeLimitExceeded, IdempotencyKeyReused,
-  AttemptsExhausted, InputLost, QueueFull, StoreFull, QueueUnavailable, QueueError, Draining, ShuttingDown,
+  AttemptsExhausted, InputLost, QueueFull, StoreFull, OverClientShare, QueueUnavailable, QueueError, Draining, ShuttingDown,
   // The server itself.
   OutOfMemory, Internal,
 };

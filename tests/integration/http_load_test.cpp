@@ -231,7 +231,7 @@ TEST(HttpLoad, SigtermDrainsWithoutLosingAcceptedJobs) {
 // evicted before their lifetime (1,063 of 1,572 answered 202 then 404). Now the store refuses
 // new jobs when full, and every accepted job stays retrievable.
 TEST(HttpLoad, AFullJobStoreRefusesNewJobsAndEvictsNone) {
-  ServerProcess server({"--workers", "2", "--max-stored-jobs", "3"});
+  ServerProcess server({"--workers", "2", "--max-stored-jobs", "3", "--client-max-stored-jobs", "4"});  // one client may fill it
   ASSERT_TRUE(server.started()) << server.log();
   auto c = server.client();
   const std::string small = noisy_sphere_off(1);
@@ -266,7 +266,9 @@ TEST(HttpLoad, AFullJobStoreRefusesNewJobsAndEvictsNone) {
 // answered 202 is still there, finished, with its result. The memory figures are printed, not
 // asserted (the 1.5x target is a benchmark figure).
 TEST(HttpLoad, AnOverloadLosesNoAcceptedJob) {
-  ServerProcess server({"--workers", "1", "--queue-capacity", "8", "--max-stored-jobs", "256", "--result-ttl", "120"});
+  // The four clients are one address, one share: larger than the store, so that it fills (decision 78).
+  ServerProcess server({"--workers", "1", "--queue-capacity", "8", "--max-stored-jobs", "256", "--client-max-stored-jobs", "257",
+                        "--result-ttl", "120"});
   ASSERT_TRUE(server.started()) << server.log();
   const std::string small = noisy_sphere_off(1);
   const std::string params = R"({"n_normal":5,"n_vertex":5})";

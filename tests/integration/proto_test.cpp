@@ -323,6 +323,19 @@ TEST(Proto, OpenApiDocumentsExactlyTheServersRoutesAndStatuses) {
   }
 
   {
+    // One client over its shares (decisions 78, 79): 429 while its jobs hold them.
+    ServerProcess server({"--workers", "1", "--client-max-stored-jobs", "2", "--client-max-queued-bytes", "1"});
+    ASSERT_TRUE(server.started()) << server.log();
+    auto c = server.client();
+    auto running = c->Post("/v1/jobs", heavy_params, heavy, "model/x-off");
+    ASSERT_TRUE(running && running->status == 202);
+    auto queued = c->Post("/v1/jobs", mesh, "model/x-off");  // behind it, holding its bytes
+    ASSERT_TRUE(queued && queued->status == 202) << (queued ? queued->body : "no answer");
+    observe(seen, "POST", "/v1/jobs", c->Post("/v1/jobs", mesh, "model/x-off"));        // 429: two jobs kept
+    observe(seen, "POST", "/v1/denoise", c->Post("/v1/denoise", mesh, "model/x-off"));  // 429: bytes queued
+  }
+
+  {
     // An API-only server (--web off): no page.
     ServerProcess server({"--workers", "1", "--web", "off"});
     ASSERT_TRUE(server.started()) << server.log();

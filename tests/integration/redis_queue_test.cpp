@@ -706,5 +706,69 @@ TEST_F(RedisQueue, ApiKeysScopeJobsAcrossReplicas) {
   EXPECT_EQ(result->status, 200);
 }
 
+// Issue 49, item 4 with the shared store: one client's share of stored jobs is counted in Redis,
+// so it holds across replicas; over it, 429 with Retry-After while another client is served; a
+// downloaded result and a cancelled job give their slots up (decision 78).
+TEST_F(RedisQueue, ClientSharesHoldAcrossReplicas) {
+  RedisServer redis;
+  const std::string dir = temp_dir("shares");
+  write_file(dir + "/keys", "greedy:key-aaaaaaaaaaaaaaaa\nother:key-bbbbbbbbbbbbbbbb\n");
+  const std::vector<std::string> flags = {"--api-keys", dir + "/keys", "--client-max-stored-jobs", "2"};
+  auto a = replica(redis, flags);
+  auto b = replica(redis, flags);
+  auto as = [](ServerProcess& s, const char* key) {
+    auto c = s.client();
+    c->set_bearer_token_auth(key);
+    return c;
+  };
+  const std::string small = noisy_sphere_off(1, 3);
+  auto submit = [&](ServerProcess& s, const char* key) {
+    return as(s, key)->Post("/v1/jobs", {{"X-Denoise-Params", kSmallParams}}, small, "model/x-off");
+  };
+  std::vector<std::string> ids;
+  for (ServerProcess* s : {a.get(), b.get()}) {  // one job on each replica: the share is full
+    auto r = submit(*s, "key-aaaaaaaaaaaaaaaa");
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 202) << r->body;
+    ids.push_back(parse_json(r->body).value("id", ""));
+  }
+  for (ServerProcess* s : {a.get(), b.get()}) {
+    auto r = submit(*s, "key-aaaaaaaaaaaaaaaa");
+    const json p = expect_problem(r, 429);
+    EXPECT_EQ(p.value("type", ""), "urn:meshdenoise:problem:over-client-share");
+    ASSERT_TRUE(r);
+    EXPECT_FALSE(r->get_header_value("Retry-After").empty());
+  }
+  auto other = submit(*b, "key-bbbbbbbbbbbbbbbb");
+  ASSERT_TRUE(other);
+  ASSERT_EQ(other->status, 202) << other->body;
+  const std::string other_id = parse_json(other->body).value("id", "");
+  auto other_a = as(*a, "key-bbbbbbbbbbbbbbbb");
+  ASSERT_TRUE(other_a->Get("/v1/jobs/" + other_id + "?wait=30"));
+  auto other_result = other_a->Get("/v1/jobs/" + other_id + "/result");
+  ASSERT_TRUE(other_result);
+  EXPECT_EQ(other_result->status, 200) << other_result->body;
+  // Downloading one result frees its slot (on the other replica).
+  auto greedy_a = as(*a, "key-aaaaaaaaaaaaaaaa");
+  auto done = greedy_a->Get("/v1/jobs/" + ids[0] + "?wait=30");
+  ASSERT_TRUE(done);
+  EXPECT_EQ(parse_json(done->body).value("state", ""), "succeeded") << done->body;
+  auto result = greedy_a->Get("/v1/jobs/" + ids[0] + "/result");
+  ASSERT_TRUE(result);
+  EXPECT_EQ(result->status, 200);
+  auto third = submit(*b, "key-aaaaaaaaaaaaaaaa");
+  ASSERT_TRUE(third);
+  ASSERT_EQ(third->status, 202) << third->body;
+  expect_problem(submit(*a, "key-aaaaaaaaaaaaaaaa"), 429);
+  // Deleting one (finished or not) frees its slot too.
+  auto deleted = as(*b, "key-aaaaaaaaaaaaaaaa")->Delete("/v1/jobs/" + ids[1]);
+  ASSERT_TRUE(deleted);
+  EXPECT_TRUE(deleted->status == 200 || deleted->status == 202 || deleted->status == 204) << deleted->body;
+  if (deleted->status == 202) wait_state(*a, ids[1], {"cancelled", "succeeded"});  // a running job ends first
+  auto fourth = submit(*a, "key-aaaaaaaaaaaaaaaa");
+  ASSERT_TRUE(fourth);
+  EXPECT_EQ(fourth->status, 202) << fourth->body;
+}
+
 }  // namespace
 }  // namespace mdn::test

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
 #include <numbers>
 #include <set>
@@ -76,6 +77,9 @@ TEST(RangeScan, AxialNoiseOnAPlaneMatchesThePublishedSigmaAtEachDistance) {
       const Errors e = errors(im, sensor);
       ASSERT_GT(e.count, static_cast<int>(0.95 * im.depth.size()));  // the wall fills the view
       EXPECT_NEAR(e.rms / e.sigma, 1.0, 0.06) << "rms " << e.rms << " published " << e.sigma;
+      std::printf("%s at %.1f m: rms / published sigma %.3f, mean / sigma %.3f\n",
+                  sensor.kind == SensorKind::StructuredLight ? "structured light" : "time of flight", z, e.rms / e.sigma,
+                  e.mean / e.sigma);
       EXPECT_LT(std::abs(e.mean), 0.1 * e.sigma);
     }
   // The published curves themselves, at the figures quoted above.
@@ -85,6 +89,47 @@ TEST(RangeScan, AxialNoiseOnAPlaneMatchesThePublishedSigmaAtEachDistance) {
   // Both grow again towards grazing incidence.
   EXPECT_GT(axial_sigma(kinect_v1(), 1.0, 70 * kPi / 180), 1.1 * axial_sigma(kinect_v1(), 1.0, 0));
   EXPECT_GT(axial_sigma(kinect_v2(), 1.0, 70 * kPi / 180), 1.1 * axial_sigma(kinect_v2(), 1.0, 0));
+}
+
+// The correlation of the depth error of pixel (c, r) with that of (c + lag, r) and (c, r + lag),
+// over the pixels where both are reported.
+double neighbour_correlation(const RangeImage& im, int lag) {
+  double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
+  int count = 0;
+  const auto error = [&](int c, int r) {
+    const std::size_t i = static_cast<std::size_t>(r * im.cols + c);
+    return im.depth[i] - im.clean_depth[i];
+  };
+  for (int r = 0; r + lag < im.rows; ++r)
+    for (int c = 0; c + lag < im.cols; ++c)
+      for (const auto& [dc, dr] : {std::pair{lag, 0}, std::pair{0, lag}}) {
+        const double a = error(c, r), b = error(c + dc, r + dr);
+        if (std::isnan(a) || std::isnan(b)) continue;
+        sa += a, sb += b, saa += a * a, sbb += b * b, sab += a * b;
+        ++count;
+      }
+  const double ma = sa / count, mb = sb / count;
+  return (sab / count - ma * mb) / std::sqrt((saa / count - ma * ma) * (sbb / count - mb * mb));
+}
+
+// Structured light's depth error is the 9x9 correlation window's (decision 84): on a wall facing
+// the camera, neighbouring sampled pixels (two native pixels apart, windows sharing 7/9 of their
+// columns) err together, while pixels five apart (ten native pixels: windows that share nothing)
+// do not. Without quantisation the near correlation would be 7/9; the rounding into 1/8-pixel
+// disparity steps (half of the error's spread at 0.6 m, twice it at 1.6 m) takes some of it
+// away. Time of flight measures each pixel on its own.
+TEST(RangeScan, StructuredLightErrorsAreCorrelatedOverItsWindowTimeOfFlightsAreNot) {
+  for (const double z : {0.6, 1.0, 1.6}) {
+    SCOPED_TRACE(testing::Message() << "at " << z << " m");
+    const RangeImage sl = capture(wall(z), kinect_v1(), {7, 0});
+    const double near = neighbour_correlation(sl, 1), far = neighbour_correlation(sl, 5);
+    EXPECT_GT(near, 0.5);
+    EXPECT_LT(std::abs(far), 0.05);
+    const RangeImage tof = capture(wall(z), kinect_v2(), {7, 0});
+    EXPECT_LT(std::abs(neighbour_correlation(tof, 1)), 0.05);
+    std::printf("at %.1f m: structured light %.3f (1 pixel), %.3f (5 pixels); time of flight %.3f\n", z, near, far,
+                neighbour_correlation(tof, 1));
+  }
 }
 
 // Structured light reports disparities in eighths of a pixel: every depth is b f / (k / 8) for
@@ -293,6 +338,26 @@ TEST(RangeScan, TheSameSeedGivesByteIdenticalScans) {
     const RangeScan c = scan_shape(shape, sensor, {0.3, 0.8, 6});
     EXPECT_FALSE(c.noisy.rows() == a.noisy.rows() && c.noisy == a.noisy);
   }
+}
+
+// Structured light's correlated draws are computed over the object's pixels only (decision 84),
+// yet a pixel's value is its own: a second board far to the side, which widens the computed
+// region, leaves the first board's reported depths the same bits.
+TEST(RangeScan, CorrelatedNoiseOfAPixelDoesNotDependOnTheRestOfTheImage) {
+  // The second board is above and to the left: the region's first row and column both move.
+  const TriMesh first = square(Vec3(0.15, 0, 1.0), Vec3::UnitX(), Vec3::UnitY(), 0.2);
+  const TriMesh both = join(first, square(Vec3(-0.3, -0.1, 1.0), Vec3::UnitX(), Vec3::UnitY(), 0.2));
+  const RangeImage a = capture(first, kinect_v1(), {23, 0}), b = capture(both, kinect_v1(), {23, 0});
+  int compared = 0;
+  for (std::size_t i = 0; i < a.depth.size(); ++i) {
+    const int c = static_cast<int>(i) % a.cols, r = static_cast<int>(i) / a.cols;
+    if (std::isnan(a.clean_depth[i]) || a.point(c, r, a.clean_depth[i]).x() < 0.07) continue;  // the first board, inside
+    ASSERT_EQ(std::isnan(a.depth[i]), std::isnan(b.depth[i])) << "pixel " << i;  // lost at its edge in both, or in neither
+    if (std::isnan(a.depth[i])) continue;
+    ASSERT_EQ(0, std::memcmp(&a.depth[i], &b.depth[i], sizeof(double))) << "pixel " << i;
+    ++compared;
+  }
+  EXPECT_GT(compared, 3000);
 }
 
 }  // namespace

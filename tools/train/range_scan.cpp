@@ -294,6 +294,56 @@ double sigma_before_quantisation(const RangeSensor& sensor, double z, double the
   return std::sqrt(std::max(0.25 * s * s, s * s - q * q / 12));
 }
 
+// Structured light's disparity error (decision 84): the sensor finds each pixel's disparity by
+// matching a 9x9 window of the speckle pattern, so the windows of neighbouring pixels share most
+// of their pixels and their errors most of their cause. Modelled as white noise on the native
+// grid summed over the 9x9 window around each pixel and divided by 9: unit variance, a
+// correlation of (9 - d) / 9 per axis at d native pixels, none beyond 8. Each native pixel's draw
+// is a hash of (seed, native pixel, stream) and each sum runs in a fixed order, so a value does
+// not depend on which part of the image is computed: the same bits on every platform.
+class WindowNoise {
+ public:
+  static constexpr int kHalf = 4;  // the window is 2 kHalf + 1 = 9 native pixels wide
+
+  // The field at the sampled pixels [col0, col1] x [row0, row1] of `sensor`'s image.
+  WindowNoise(const RangeSensor& sensor, std::uint64_t seed, std::uint64_t stream, int col0, int row0, int col1, int row1)
+      : col0_(col0), row0_(row0), cols_(col1 - col0 + 1) {
+    const int s = sensor.stride;
+    const int x0 = col0 * s - kHalf, x1 = col1 * s + kHalf, y0 = row0 * s - kHalf, y1 = row1 * s + kHalf;
+    const auto stride_x = static_cast<std::uint64_t>(sensor.width + 2 * kHalf);
+    // Row sums: across[(y - y0) * cols_ + (c - col0)] = the 9 draws of native row y around column c s.
+    std::vector<double> white(static_cast<std::size_t>(x1 - x0 + 1));
+    std::vector<double> across(static_cast<std::size_t>(y1 - y0 + 1) * static_cast<std::size_t>(cols_));
+    for (int y = y0; y <= y1; ++y) {
+      for (int x = x0; x <= x1; ++x)  // native pixel (x, y); x, y >= -kHalf
+        white[static_cast<std::size_t>(x - x0)] =
+            gauss(seed, static_cast<std::uint64_t>(y + kHalf) * stride_x + static_cast<std::uint64_t>(x + kHalf), stream);
+      for (int c = col0; c <= col1; ++c) {
+        double sum = 0;
+        for (int k = 0; k <= 2 * kHalf; ++k) sum += white[static_cast<std::size_t>(c * s - kHalf + k - x0)];
+        across[static_cast<std::size_t>(y - y0) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(c - col0)] = sum;
+      }
+    }
+    field_.resize(static_cast<std::size_t>(row1 - row0 + 1) * static_cast<std::size_t>(cols_));
+    for (int r = row0; r <= row1; ++r)
+      for (int c = col0; c <= col1; ++c) {
+        double sum = 0;
+        for (int k = 0; k <= 2 * kHalf; ++k)
+          sum += across[static_cast<std::size_t>(r * s - kHalf + k - y0) * static_cast<std::size_t>(cols_) +
+                        static_cast<std::size_t>(c - col0)];
+        field_[index(c, r)] = sum / (2 * kHalf + 1);
+      }
+  }
+  double at(int col, int row) const { return field_[index(col, row)]; }
+
+ private:
+  std::size_t index(int col, int row) const {
+    return static_cast<std::size_t>(row - row0_) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(col - col0_);
+  }
+  int col0_, row0_, cols_;
+  std::vector<double> field_;
+};
+
 // Components through shared vertices; the small ones (islands of flying pixels, specks at
 // silhouettes, fused crumbs) dropped as scanner software does (decision 59).
 std::vector<std::array<int, 3>> drop_small_components(const std::vector<std::array<int, 3>>& tris,
@@ -388,6 +438,23 @@ RangeImage capture(const TriMesh& scene_mesh, const RangeSensor& sensor, const C
       im.incidence[i] = std::acos(std::clamp(centre[i].cos_incidence, 0.0, 1.0));
     }
 
+  // Structured light's three correlated draws (decision 84), over the object's pixels: the
+  // window's position across and down the image (lateral noise) and the disparity itself.
+  std::optional<std::array<WindowNoise, 3>> window;
+  if (sensor.kind == SensorKind::StructuredLight) {
+    int col0 = im.cols, row0 = im.rows, col1 = -1, row1 = -1;
+    for (int r = 0; r < im.rows; ++r)
+      for (int c = 0; c < im.cols; ++c)
+        if (centre[static_cast<std::size_t>(r) * static_cast<std::size_t>(im.cols) + static_cast<std::size_t>(c)].object) {
+          col0 = std::min(col0, c), col1 = std::max(col1, c);
+          row0 = std::min(row0, r), row1 = std::max(row1, r);
+        }
+    if (col1 >= 0)
+      window.emplace(std::array<WindowNoise, 3>{WindowNoise(sensor, options.seed, 3, col0, row0, col1, row1),
+                                                WindowNoise(sensor, options.seed, 4, col0, row0, col1, row1),
+                                                WindowNoise(sensor, options.seed, 5, col0, row0, col1, row1)});
+  }
+
   for (int r = 0; r < im.rows; ++r)
     for (int c = 0; c < im.cols; ++c) {
       const std::size_t i =
@@ -407,10 +474,9 @@ RangeImage capture(const TriMesh& scene_mesh, const RangeSensor& sensor, const C
         // Lateral noise: the correlation window's position is uncertain by about a pixel,
         // sigma_L = 0.8 + 0.035 theta / (pi/2 - theta) native pixels (Nguyen et al. 2012), so the depth is that of a
         // nearby point of the surface, reported on this pixel's ray. On a slope or at an edge that reads as depth noise
-        // and ragged edges.
+        // and ragged edges. Neighbouring windows overlap, so the shift is correlated (decision 84).
         const double sigma_l = (0.8 + 0.035 * theta / (kHalfPi - theta)) / sensor.stride;
-        const Sample moved =
-            scene.trace(ray(im, c + sigma_l * gauss(options.seed, i, 0), r + sigma_l * gauss(options.seed, i, 1)));
+        const Sample moved = scene.trace(ray(im, c + sigma_l * (*window)[0].at(c, r), r + sigma_l * (*window)[1].at(c, r)));
         if (std::isnan(moved.z)) continue;  // the window slid off the object into nothing
         z = moved.z;
       } else {
@@ -439,7 +505,12 @@ RangeImage capture(const TriMesh& scene_mesh, const RangeSensor& sensor, const C
         }
         z += multipath_bias(scene, p, centre[i].normal, dir);
       }
-      const double noisy = z + sigma_before_quantisation(sensor, z, theta) * gauss(options.seed, i, 2);
+      // Time of flight measures each pixel on its own: independent draws. Structured light's
+      // disparity error is the window's (decision 84): smooth bumps about 9 native pixels wide,
+      // which the quantisation below turns into terraces on a plane.
+      const double draw =
+          sensor.kind == SensorKind::StructuredLight ? (*window)[2].at(c, r) : gauss(options.seed, i, 2);
+      const double noisy = z + sigma_before_quantisation(sensor, z, theta) * draw;
       im.depth[i] = quantise_depth(sensor, noisy);
     }
   return im;

@@ -10,6 +10,10 @@
 # to WORK_DIR/model_data.inc only. Needs a Release build with the benchmarks
 # (build/release/tools/train/train_corpus; $MDN_BUILD_DIR overrides), CGAL's demo data for the
 # full corpus (fetched on first use) and Debian's python3-sklearn.
+#
+# Reproducible to the bit (decision 85): the tables are sorted by case once filled (the same
+# bytes for any --jobs), and the training runs on one thread with Debian's reference BLAS
+# (libblas3) whatever BLAS the alternatives select, so the same tables give the same model.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
 tiny=0
@@ -38,8 +42,21 @@ if [ "$tiny" = 1 ]; then
 else
   out="$root/core/auto/model_data.inc"
 fi
+# Rows are appended as cases finish (in any order with several jobs): the header, then by case.
+sort_table() { { head -n 1 "$1"; tail -n +2 "$1" | LC_ALL=C sort; } > "$1.sorted" && mv "$1.sorted" "$1"; }
 "$bin" label --jobs "$jobs" "${select[@]}" "$work/labels.tsv"
+sort_table "$work/labels.tsv"
 "$bin" describe --jobs "$jobs" "${select[@]}" "$work/descriptors.tsv"
-"$python" "$root/tools/train/train.py" "$work/labels.tsv" "$work/descriptors.tsv" "$out" \
+sort_table "$work/descriptors.tsv"
+# One thread, one BLAS: numpy and scipy link libblas.so.3 and liblapack.so.3, which the loader
+# finds in libblas3's and liblapack3's own directories before the alternatives' choice (an
+# OpenBLAS picks its kernels by CPU and may use threads; OPENBLAS_CORETYPE pins the x86-64
+# baseline's should one be loaded all the same). train.py records the library it got.
+lib=/usr/lib/x86_64-linux-gnu
+for f in blas/libblas.so.3 lapack/liblapack.so.3; do
+  [ -e "$lib/$f" ] || { echo "$lib/$f not found: install libblas3 and liblapack3" >&2; exit 2; }
+done
+LD_LIBRARY_PATH="$lib/blas:$lib/lapack" OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 OPENBLAS_CORETYPE=Prescott \
+  PYTHONHASHSEED=0 "$python" "$root/tools/train/train.py" "$work/labels.tsv" "$work/descriptors.tsv" "$out" \
   --report "$work/report.json" "${train_args[@]}"
 echo "model written to $out"

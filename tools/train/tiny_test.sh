@@ -1,14 +1,60 @@
 #!/usr/bin/env bash
 # The offline pipeline end to end on a dozen cases (ctest): the model file it writes must have
-# the shipped model's shape (the descriptors core computes, the identity set, every array).
+# the shipped model's shape (the descriptors core computes, the identity set, every array), and
+# its two tables and the model must be the bits recorded in tiny_digests.txt (decision 85).
+#
+#   bash tools/train/tiny_test.sh BUILD_DIR WORK_DIR [--jobs N] [--refresh]
+#
+# --refresh rewrites tiny_digests.txt from this run: after an intended change of the method, the
+# corpus, the descriptors or the trainer (say which in the commit).
 set -euo pipefail
 build="$1"
 work="$2"
+shift 2
+jobs=2
+refresh=0
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --jobs) jobs="$2"; shift 2 ;;
+    --refresh) refresh=1; shift ;;
+    *) echo "usage: $0 BUILD_DIR WORK_DIR [--jobs N] [--refresh]" >&2; exit 2 ;;
+  esac
+done
 rm -rf "$work"
 root="$(cd "$(dirname "$0")/../.." && pwd)"
-MDN_BUILD_DIR="$build" bash "$root/tools/train/run.sh" --tiny --jobs 2 "$work"
+MDN_BUILD_DIR="$build" bash "$root/tools/train/run.sh" --tiny --jobs "$jobs" "$work"
 model="$work/model_data.inc"
 fail() { echo "FAIL: $*" >&2; exit 1; }
+# Bit for bit: the tables, and the model file but for its "built" line (the date and the commit).
+digests="$root/tools/train/tiny_digests.txt"
+{
+  echo "# tools/train/tiny_test.sh's run: the C++ build, the model card's toolchain line, and the SHA-256 of"
+  echo "# the tables and of the model without its \"built\" line. Refresh after an intended change:"
+  echo "#   bash tools/train/tiny_test.sh build/release /tmp/tiny --refresh"
+  # The tables are the C++ build's: its compiler and build type (CMake's record of them; the
+  # last one listed, should the build directory hold several CMake versions' records).
+  cxx="$(ls "$build"/CMakeFiles/*/CMakeCXXCompiler.cmake | tail -n 1)"
+  echo "compiler $(sed -n 's/^set(CMAKE_CXX_COMPILER_\(ID\|VERSION\) "\(.*\)")$/\2/p' "$cxx" | tr '\n' ' ')$(
+    sed -n 's/^CMAKE_BUILD_TYPE:STRING=//p' "$build/CMakeCache.txt")"
+  echo "toolchain $(grep -m1 '^//   python ' "$model" | cut -c6-)"
+  echo "labels.tsv $(sha256sum < "$work/labels.tsv" | cut -d' ' -f1)"
+  echo "descriptors.tsv $(sha256sum < "$work/descriptors.tsv" | cut -d' ' -f1)"
+  echo "model_data.inc $(grep -v '^//   built ' "$model" | sha256sum | cut -d' ' -f1)"
+} > "$work/digests.txt"
+if [ "$refresh" = 1 ]; then
+  cp "$work/digests.txt" "$digests"
+  echo "tiny_digests.txt refreshed"
+fi
+if ! cmp -s <(grep -E '^(compiler|toolchain) ' "$work/digests.txt") <(grep -E '^(compiler|toolchain) ' "$digests"); then
+  diff <(grep -E '^(compiler|toolchain) ' "$digests") <(grep -E '^(compiler|toolchain) ' "$work/digests.txt") >&2 || true
+  fail "the compiler or the toolchain differs from those tiny_digests.txt was made with (<, above): the bits may differ for that alone"
+fi
+for name in labels.tsv descriptors.tsv model_data.inc; do
+  [ "$(grep "^$name " "$work/digests.txt")" = "$(grep "^$name " "$digests")" ] \
+    || fail "$name is not the recorded bits (tiny_digests.txt; $work/digests.txt has this run's)"
+done
+grep -q '^//   labels.tsv sha256 '"$(grep '^labels.tsv ' "$digests" | cut -d' ' -f2)" "$model" \
+  || fail "the model card does not name the labels table's SHA-256"
 [ "$(wc -l < "$work/labels.tsv")" -eq 13 ] || fail "labels.tsv should hold 12 cases and a header"
 [ "$(wc -l < "$work/descriptors.tsv")" -eq 13 ] || fail "descriptors.tsv should hold 12 cases and a header"
 # The descriptor names are the shipped model's (both lists generated from the same tables).

@@ -11,7 +11,9 @@
 //
 // Thread-safety contract: every method may be called from any thread at any time.
 // Errors: methods throw HttpError (503 queue-unavailable with Retry-After when the store cannot
-// be reached, 503 queue-full / draining, 422 idempotency-key-reused) and nothing else escapes
+// be reached, 503 queue-full / store-full / draining, 429 over-client-share with Retry-After
+// when the submitting client holds its share of stored jobs, 422 idempotency-key-reused) and
+// nothing else escapes
 // but std::bad_alloc.
 #pragma once
 
@@ -23,6 +25,7 @@
 #include <vector>
 
 #include "server/http/jobs/job.h"
+#include "server/http/jobs/queued_bytes.h"
 #include "server/http/problem.h"
 #include "service/job_runner.h"
 
@@ -36,11 +39,20 @@ class JobStore {
     JobSnapshot job;
     bool replayed = false;  // an earlier job with the same Idempotency-Key and body
   };
+  // Whose job it is (fair shares, decision 78): `client` names the API key's client, or the
+  // source address without keys ("" counts against no share); `queued_bytes` counts its body
+  // until the body is in a worker's hands (memory) or in Redis.
+  struct Owner {
+    std::string client;
+    QueuedBytes::Hold queued_bytes;
+  };
   // Accepts an asynchronous job. Once this returns, the job is stored: it runs even if this
   // process dies (Redis) or until this process stops (memory). `fingerprint` identifies the
-  // body and parameters for idempotency and is ignored without a key.
+  // body and parameters for idempotency and is ignored without a key. A client that already
+  // keeps its share of stored jobs (--client-max-stored-jobs: jobs queued, running, or finished
+  // within their result lifetime and neither downloaded nor cancelled) is refused 429.
   virtual Submitted submit(service::JobInput input, const std::optional<std::string>& idempotency_key,
-                           const std::string& fingerprint) = 0;
+                           const std::string& fingerprint, Owner owner) = 0;
 
   // The job's state; nullopt when unknown, deleted or expired. With `with_result`, a succeeded
   // job's output carries its bytes (GET /result); without, only their count (output_bytes).

@@ -6,6 +6,16 @@
 #include "server/http/secure_random.h"
 
 namespace mdn::http {
+namespace {
+
+// A downloaded result or a cancelled job gives its slot up (decision 62): it no longer counts
+// against its client's share either.
+bool holds_slot(const Job& job) {
+  const JobState state = job.state();
+  return !((state == JobState::Succeeded && job.result_fetched()) || state == JobState::Cancelled);
+}
+
+}  // namespace
 
 MemoryJobStore::MemoryJobStore(WorkerPool& pool, MemoryJobStoreOptions options)
     : pool_(pool), options_(options) {}
@@ -24,7 +34,7 @@ std::vector<std::shared_ptr<Job>> MemoryJobStore::all() {
 }
 
 JobStore::Submitted MemoryJobStore::submit(service::JobInput input, const std::optional<std::string>& idempotency_key,
-                                           const std::string& fingerprint) {
+                                           const std::string& fingerprint, Owner owner) {
   std::lock_guard lock(mutex_);
   sweep_locked();
   if (idempotency_key) {
@@ -38,6 +48,9 @@ JobStore::Submitted MemoryJobStore::submit(service::JobInput input, const std::o
     }
   }
   pool_.check_admission();  // draining, queue full: before the store's own limit, as always
+  // The client's share before the store's: a client over its share is told so (429) even when
+  // the store is full because of it (decision 78).
+  if (!owner.client.empty()) check_client_share_locked(owner.client);
   // An accepted job stays retrievable for its whole result lifetime: when every stored-job
   // slot is taken, new jobs are refused rather than old ones evicted early; except that a
   // result already downloaded, or a job cancelled, gives its slot up first (decision 62).
@@ -52,8 +65,13 @@ JobStore::Submitted MemoryJobStore::submit(service::JobInput input, const std::o
   std::string id;
   do id = new_job_id();
   while (jobs_.count(id) != 0);
-  auto job = pool_.submit(id, std::move(input), {.asynchronous = true, .admit = true});
+  auto job = pool_.submit(id, std::move(input),
+                          {.asynchronous = true, .admit = true, .queued_bytes = std::move(owner.queued_bytes)});
   jobs_.emplace(id, job);
+  if (!owner.client.empty()) {
+    client_jobs_[owner.client].insert(id);
+    clients_.emplace(id, std::move(owner.client));
+  }
   if (idempotency_key) idempotency_[*idempotency_key] = {fingerprint, id};
   return {snapshot(*job), false};
 }
@@ -96,7 +114,21 @@ std::optional<JobSnapshot> MemoryJobStore::wait_finished(const std::string& id, 
 }
 
 void MemoryJobStore::result_fetched(const std::string& id) {
-  if (auto job = find_job(id)) job->mark_result_fetched();
+  auto job = find_job(id);
+  if (!job) return;
+  job->mark_result_fetched();
+  std::lock_guard lock(mutex_);
+  leave_share_locked(id);
+}
+
+void MemoryJobStore::leave_share_locked(const std::string& id) {
+  const auto it = clients_.find(id);
+  if (it == clients_.end()) return;
+  if (auto jobs = client_jobs_.find(it->second); jobs != client_jobs_.end()) {
+    jobs->second.erase(id);
+    if (jobs->second.empty()) client_jobs_.erase(jobs);
+  }
+  clients_.erase(it);
 }
 
 JobStore::CancelResult MemoryJobStore::cancel(const std::string& id) {
@@ -107,7 +139,10 @@ JobStore::CancelResult MemoryJobStore::cancel(const std::string& id) {
   if (it == jobs_.end()) return r;
   std::shared_ptr<Job> job = it->second;
   switch (pool_.cancel(job, cancelled_before_start())) {
-    case WorkerPool::Cancelled::Queued: r.outcome = CancelOutcome::CancelledQueued; break;
+    case WorkerPool::Cancelled::Queued:
+      r.outcome = CancelOutcome::CancelledQueued;
+      leave_share_locked(id);
+      break;
     case WorkerPool::Cancelled::Requested: r.outcome = CancelOutcome::CancelRequested; break;
     case WorkerPool::Cancelled::AlreadyFinished:
       drop_locked(id);
@@ -157,6 +192,7 @@ JobSnapshot MemoryJobStore::snapshot(const Job& job) const {
 }
 
 void MemoryJobStore::drop_locked(const std::string& id) {
+  leave_share_locked(id);
   jobs_.erase(id);
   asked_.erase(id);
   for (auto k = idempotency_.begin(); k != idempotency_.end();)
@@ -167,8 +203,7 @@ void MemoryJobStore::evict_done_locked() {
   const std::string* oldest = nullptr;
   std::optional<Clock::time_point> oldest_at;
   for (const auto& [id, job] : jobs_) {
-    const JobState state = job->state();
-    if (!((state == JobState::Succeeded && job->result_fetched()) || state == JobState::Cancelled)) continue;
+    if (holds_slot(*job)) continue;
     const auto finished = job->finished_at();
     if (finished && (!oldest_at || *finished < *oldest_at)) {
       oldest = &id;
@@ -184,6 +219,33 @@ void MemoryJobStore::sweep_locked() {
   for (const auto& [id, job] : jobs_)
     if (auto finished = job->finished_at(); finished && *finished + options_.result_ttl <= now) expired.push_back(id);
   for (const auto& id : expired) drop_locked(id);
+}
+
+void MemoryJobStore::check_client_share_locked(const std::string& client) const {
+  const auto own = client_jobs_.find(client);
+  if (own == client_jobs_.end() || int(own->second.size()) < options_.max_stored_per_client) return;
+  int held = 0;
+  std::optional<Clock::time_point> oldest_finished;
+  for (const std::string& id : own->second) {
+    const Job& job = *jobs_.at(id);
+    if (!holds_slot(job)) continue;  // cancelled while running
+    ++held;
+    if (auto finished = job.finished_at(); finished && (!oldest_finished || *finished < *oldest_finished))
+      oldest_finished = finished;
+  }
+  if (held < options_.max_stored_per_client) return;
+  Problem p = make_problem(ProblemType::OverClientShare,
+                           "this client keeps " + std::to_string(held) + " jobs, its share of the job store (" +
+                               std::to_string(options_.max_stored_per_client) +
+                               ", --client-max-stored-jobs); download or delete finished ones, or retry later");
+  p.extensions["limit_jobs"] = options_.max_stored_per_client;
+  // A slot of this client frees when it downloads a result (now) or its oldest finished job's
+  // lifetime ends; with none finished, when its queued jobs run.
+  const double left = oldest_finished
+                           ? std::chrono::duration<double>(*oldest_finished + options_.result_ttl - Clock::now()).count()
+                           : double(pool_.retry_after_s());
+  p.retry_after_s = int(std::clamp(std::ceil(left), 1.0, 60.0));
+  throw HttpError(std::move(p));
 }
 
 int MemoryJobStore::store_retry_after_s_locked() const {

@@ -12,6 +12,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,9 @@ struct MemoryJobStoreOptions {
   std::chrono::milliseconds result_ttl{600'000};  // how long finished jobs stay
   int max_stored = 1024;  // jobs kept at most (queued, running, finished); when all are taken,
                           // new ones get 503 (none is evicted early)
+  // Jobs one client may keep that still hold their slot (not downloaded, not cancelled); beyond,
+  // its new ones get 429 while other clients are served (decision 78).
+  int max_stored_per_client = 256;
 };
 
 class MemoryJobStore final : public JobStore {
@@ -32,7 +36,7 @@ class MemoryJobStore final : public JobStore {
   ~MemoryJobStore() override;  // requests cancellation of what still runs
 
   Submitted submit(service::JobInput input, const std::optional<std::string>& idempotency_key,
-                   const std::string& fingerprint) override;
+                   const std::string& fingerprint, Owner owner) override;
   std::optional<JobSnapshot> find(const std::string& id, bool with_result) override;
   std::optional<JobSnapshot> wait_finished(const std::string& id, Clock::time_point deadline) override;
   void result_fetched(const std::string& id) override;
@@ -59,12 +63,20 @@ class MemoryJobStore final : public JobStore {
   void evict_done_locked();
   void drop_locked(const std::string& id);  // mutex_ held: the job and its keys
   int store_retry_after_s_locked() const;  // mutex_ held: until a stored-job slot frees
+  // mutex_ held: 429 when `client` keeps max_stored_per_client jobs that hold their slot.
+  void check_client_share_locked(const std::string& client) const;
   std::vector<std::shared_ptr<Job>> all();  // after a sweep
 
   WorkerPool& pool_;
   const MemoryJobStoreOptions options_;
   mutable std::mutex mutex_;
   std::map<std::string, std::shared_ptr<Job>> jobs_;  // every kept job by id
+  // Each client's jobs that may still hold a slot (decision 78): a job leaves its client's set
+  // once it can no longer hold one (downloaded, cancelled before it ran, removed), so checking
+  // a share reads that client's few jobs, not the whole table.
+  std::map<std::string, std::string> clients_;               // job id -> its Owner::client
+  std::map<std::string, std::set<std::string>> client_jobs_;  // Owner::client -> job ids
+  void leave_share_locked(const std::string& id);            // mutex_ held
   struct IdempotencyEntry { std::string fingerprint, job_id; };
   std::map<std::string, IdempotencyEntry> idempotency_;
   // When a client last asked about each job (find, wait_finished): who still follows a result.

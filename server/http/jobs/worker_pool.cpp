@@ -1,5 +1,7 @@
 #include "server/http/jobs/worker_pool.h"
 
+#include <malloc.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -141,6 +143,7 @@ std::shared_ptr<Job> WorkerPool::submit(std::string id, service::JobInput input,
   input.threads = options_.threads_per_job;
   auto job = std::make_shared<Job>(std::move(id), std::move(input), how.asynchronous);
   job->held_ = how.held;
+  job->queued_bytes_ = std::move(how.queued_bytes);
   {
     std::lock_guard lock(mutex_);
     if (how.admit) check_admission_locked();
@@ -172,8 +175,11 @@ WorkerPool::Cancelled WorkerPool::cancel(const std::shared_ptr<Job>& job, Proble
   if (job->state_ != JobState::Queued) return Cancelled::Requested;
   queue_.erase(std::remove(queue_.begin(), queue_.end(), job), queue_.end());
   finish_locked(*job, JobState::Cancelled, std::move(why), nullptr);
+  const std::int64_t freed = job->input_bytes_;
   job_lock.unlock();
+  lock.unlock();
   idle_cv_.notify_all();
+  return_freed_memory(freed);
   return Cancelled::Queued;
 }
 
@@ -275,6 +281,7 @@ void WorkerPool::run(const std::shared_ptr<Job>& job) {
     std::lock_guard lock(job->mutex_);
     input = std::move(job->input_);
     job->input_ = {};
+    job->queued_bytes_.release();  // the run holds the body now; the workers bound how many
   }
   Job::Observer observer(*job, *job->started_ + options_.time_limit);
   std::shared_ptr<const service::JobOutput> output;
@@ -299,6 +306,7 @@ void WorkerPool::run(const std::shared_ptr<Job>& job) {
     error = problem_from_exception(std::current_exception());
   }
   input = {};  // free the rest of the request (the bytes, if decoding failed) before publishing
+  return_freed_memory(job->input_bytes_);
   bool report = true;
   {
     std::lock_guard lock(mutex_);  // the pool's mutex first (lock order)
@@ -343,12 +351,21 @@ void WorkerPool::finish_locked(Job& job, JobState state, std::optional<Problem> 
   job.finished_ = Clock::now();
   job.error_ = std::move(error);
   job.output_ = std::move(output);
-  job.input_ = {};
+  // Moved out to be destroyed: assigning {} to a std::string keeps its buffer (libstdc++ copies
+  // an empty short string into it), so a cancelled job held its whole body until it expired.
+  { service::JobInput freed = std::move(job.input_); }
+  job.queued_bytes_.release();
   if (state == JobState::Succeeded) {
     job.stage_ = "done";
     job.fraction_ = 1;
   }
   job.done_cv_.notify_all();
+}
+
+void WorkerPool::return_freed_memory(std::int64_t freed_bytes) {
+  // glibc keeps freed memory in its arenas (one per thread that allocated); 25 cancelled 40 MB
+  // bodies left 735 MB resident. malloc_trim(0) returns every arena's free pages.
+  if (freed_bytes >= (std::int64_t{1} << 20)) malloc_trim(0);
 }
 
 }  // namespace mdn::http

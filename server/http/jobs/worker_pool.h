@@ -27,6 +27,7 @@
 
 #include "core/io/document.h"
 #include "server/http/jobs/job.h"
+#include "server/http/jobs/queued_bytes.h"
 #include "server/http/problem.h"
 #include "service/job_runner.h"
 
@@ -61,6 +62,7 @@ class Job {
   mutable std::condition_variable done_cv_;
   service::JobInput input_;  // released when the job starts running
   std::int64_t input_bytes_ = 0;
+  QueuedBytes::Hold queued_bytes_;  // released with input_ (decision 79)
   JobState state_ = JobState::Queued;
   std::string stage_ = "queued";
   double fraction_ = 0;
@@ -109,6 +111,9 @@ class WorkerPool {
     // the run): it runs at once, but its end is not published (finished hook, final state)
     // until settle(job, true). The caller must settle it either way.
     bool held = false;
+    // The body's count in the queued bytes (queued_bytes.h): kept until the run takes the body
+    // or the job ends without running.
+    QueuedBytes::Hold queued_bytes;
   };
   // Queues a job for the next free worker; `id` is the store's (or a request's) id, which
   // names it in logs and metrics. The caller keeps the job: the pool forgets it once it ended.
@@ -158,6 +163,9 @@ class WorkerPool {
   void finish_locked(Job& job, JobState state, std::optional<Problem> error,
                      std::shared_ptr<const service::JobOutput> output);  // job.mutex_ held
   void check_admission_locked() const;  // mutex_ held
+  // After a body of at least 1 MiB was freed: hands the allocator's free pages back to the
+  // system (malloc_trim), so that memory a burst of large bodies took returns (decision 79).
+  static void return_freed_memory(std::int64_t freed_bytes);
 
   const WorkerPoolOptions options_;
   const JobFinishedHook on_finished_;

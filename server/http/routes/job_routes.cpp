@@ -35,6 +35,7 @@ JobRoutes::JobRoutes(const ServerConfig& config, std::shared_ptr<const EventLog>
       keys_(config.api_keys),
       sync_start_timeout_s_(config.sync_start_timeout_s),
       bodies_(config.max_body_bytes, std::min(config.read_timeout_s, config.body_stall_timeout_s), config.body_timeout_s, metrics),
+      queued_bytes_(config.effective_max_queued_bytes(), config.effective_client_max_queued_bytes()),
       max_waiting_(std::max(1, config.effective_io_threads() / 2)) {}
 
 const ApiKey* JobRoutes::client_of(const Context& ctx) const {
@@ -43,6 +44,26 @@ const ApiKey* JobRoutes::client_of(const Context& ctx) const {
   // The pre-routing check let only known keys through to /v1.
   if (client == nullptr) throw HttpError(make_problem(ProblemType::Unauthorized, "this server requires an API key"));
   return client;
+}
+
+std::string JobRoutes::share_of(const Context& ctx) const {
+  if (const ApiKey* client = client_of(ctx)) return "key:" + client->name;
+  // Behind a proxy every client is the proxy's address: one share (docker/README.md).
+  return "addr:" + ctx.req.remote_addr;
+}
+
+std::pair<service::JobInput, QueuedBytes::Hold> JobRoutes::read_counted_input(Context& ctx, const std::string& share) {
+  if (const auto declared = BodyReader::declared_length(ctx.req)) {
+    try {
+      queued_bytes_.check(share, *declared, pool_.retry_after_s());
+    } catch (const HttpError&) {
+      close_after_response(ctx.res);  // the body stays unread
+      throw;
+    }
+  }
+  service::JobInput input = bodies_.read_job_input(ctx);
+  QueuedBytes::Hold hold = queued_bytes_.reserve(share, std::int64_t(input.bytes.size()), pool_.retry_after_s());
+  return {std::move(input), std::move(hold)};
 }
 
 std::string JobRoutes::store_id_of(const Context& ctx) const {
@@ -97,8 +118,8 @@ JobSnapshot JobRoutes::wait_job(Context& ctx) {
 }
 
 void JobRoutes::denoise(Context& ctx) {
-  service::JobInput input = bodies_.read_job_input(ctx);
-  std::shared_ptr<Job> job = pool_.submit(new_job_id(), std::move(input), {.asynchronous = false});
+  auto [input, queued] = read_counted_input(ctx, share_of(ctx));
+  std::shared_ptr<Job> job = pool_.submit(new_job_id(), std::move(input), {.asynchronous = false, .queued_bytes = std::move(queued)});
   const auto probe = ConnectionProbe::current(ctx.req.remote_port);
   const auto start_by = Clock::now() + std::chrono::milliseconds(std::int64_t(sync_start_timeout_s_ * 1000));
   while (!job->wait_for(std::chrono::milliseconds(50))) {
@@ -132,7 +153,8 @@ void JobRoutes::create_job(Context& ctx) {
         }))
       throw HttpError(make_problem(ProblemType::BadIdempotencyKey, "Idempotency-Key must be 1 to 255 visible ASCII characters"));
   }
-  service::JobInput input = bodies_.read_job_input(ctx);
+  const std::string share = share_of(ctx);
+  auto [input, queued] = read_counted_input(ctx, share);
   // What can be refused at once is refused before the job is accepted (not 202 and a failed
   // job later): parameters that do not validate (400), a body that is not the declared
   // container (415).
@@ -151,7 +173,7 @@ void JobRoutes::create_job(Context& ctx) {
   // Idempotency keys are the client's own: another client's same key is another job.
   if (key)
     if (const ApiKey* client = client_of(ctx)) key = client->name + ":" + *key;
-  auto submitted = store_.submit(std::move(input), key, fingerprint);
+  auto submitted = store_.submit(std::move(input), key, fingerprint, {share, std::move(queued)});
   JobSnapshot& s = submitted.job;
   s.id = public_id(ctx, s.id);
   if (submitted.replayed) ctx.res.set_header("Idempotent-Replayed", "true");

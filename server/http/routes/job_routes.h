@@ -34,6 +34,7 @@ class JobRoutes {
   void delete_job(Context& ctx);
 
   int waiting() const { return waiting_; }  // long polls waiting now
+  const QueuedBytes& queued_bytes() const { return queued_bytes_; }
   const ClientKeys& client_keys() const { return keys_; }
 
  private:
@@ -44,6 +45,13 @@ class JobRoutes {
   std::string store_id_of(const Context& ctx) const;
   std::string public_id(const Context& ctx, const std::string& store_id) const;
   const ApiKey* client_of(const Context& ctx) const;
+  // Whose share a request counts against (decision 78): "key:<name>" of its --api-keys client,
+  // else "addr:<source address>".
+  std::string share_of(const Context& ctx) const;
+  // The job body of this request, counted in the queued bytes of `share` (decision 79): a
+  // declared length over a share is refused (429 or 503, and the connection closed) before the
+  // body is read, the body read is counted once it has arrived.
+  std::pair<service::JobInput, QueuedBytes::Hold> read_counted_input(Context& ctx, const std::string& share);
 
   const std::shared_ptr<const EventLog> log_;
   WorkerPool& pool_;
@@ -51,6 +59,7 @@ class JobRoutes {
   const ClientKeys keys_;
   const double sync_start_timeout_s_;  // POST /v1/denoise: longest wait for a worker, then 503
   BodyReader bodies_;
+  QueuedBytes queued_bytes_;
   const int max_waiting_;  // long polls at once: half the HTTP threads
   std::atomic<int> waiting_{0};
 };

@@ -87,6 +87,9 @@ io::Format resolve_format(const std::string& content_type, std::string_view byte
 std::string BodyReader::read_body(Context& ctx, const ContentReader& reader) {
   std::string body;
   check_declared_length(ctx);
+  // One allocation of the declared size: growing by doubling left the smaller buffers behind in
+  // the allocator's arenas (decision 79).
+  if (const auto declared = declared_length(ctx.req)) body.reserve(std::size_t(*declared));
   bool over = false;
   auto last_byte = std::chrono::steady_clock::now();
   const bool ok = reader([&](const char* data, std::size_t n) {
@@ -157,6 +160,16 @@ void BodyReader::check_declared_length(Context& ctx) {
     throw HttpError(make_problem(ProblemType::BadRequest, "Content-Length is not a number"));
   }
   if (n > std::uint64_t(max_body_bytes_)) throw_too_large(ctx);
+}
+
+std::optional<std::int64_t> BodyReader::declared_length(const Request& req) {
+  if (lower(req.get_header_value("Transfer-Encoding")).find("chunked") != std::string::npos) return std::nullopt;
+  if (!req.has_header("Content-Length")) return std::nullopt;
+  const std::string text = req.get_header_value("Content-Length");
+  std::int64_t n = 0;
+  auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), n);
+  if (ec != std::errc() || ptr != text.data() + text.size() || text.empty() || n < 0) return std::nullopt;
+  return n;
 }
 
 // Body, container and parameters of a job, from a raw body or a multipart form.

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -47,6 +48,9 @@ class BodyReader {
   // (POST /v1/jobs' mesh and params, POST /v1/compare's reference and mesh). Throws HttpError
   // (400 bad form, 408, 411, 413).
   std::map<std::string, FormFile> read_form(Context& ctx, const std::vector<std::string>& names);
+  // The body's declared Content-Length when it is a valid one and the body is not chunked; what
+  // a route may check before reading the body (the queued-bytes shares).
+  static std::optional<std::int64_t> declared_length(const Request& req);
 
  private:
   std::string read_body(Context& ctx, const ContentReader& reader);

@@ -43,7 +43,8 @@ void ServiceRoutes::readyz(Context& ctx) {
 void ServiceRoutes::metrics_route(Context& ctx) {
   ctx.res.status = 200;
   std::string text = metrics_.render({pool_.queued(), pool_.capacity(), pool_.running(), pool_.workers(),
-                                     pool_.draining(), std::max(0, jobs_.waiting())});
+                                     pool_.draining(), std::max(0, jobs_.waiting()), jobs_.queued_bytes().total(),
+                                     jobs_.queued_bytes().total_limit()});
   store_.render_metrics(text);
   render_connection_metrics(text);
   ctx.res.set_content(text, "text/plain; version=0.0.4; charset=utf-8");

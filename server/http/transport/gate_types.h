@@ -18,7 +18,8 @@ struct GateOptions {
   double body_timeout_s = 300;      // a whole body
   // The body's minimum rate (decision 63, in the manner of mod_reqtimeout's MinRate): after
   // body_rate_grace_s, a body must have sent body_min_rate bytes per second since it began,
-  // however steadily it trickles; then 408 and close. 0: no floor.
+  // however steadily it trickles; then 408 and close. 0: no floor. Flags --body-min-rate and
+  // --body-rate-grace (config.h).
   double body_min_rate = 500;
   double body_rate_grace_s = 10;
   double write_timeout_s = 30;

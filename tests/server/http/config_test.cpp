@@ -170,6 +170,32 @@ TEST(Config, ApiKeysAreNameKeyLines) {
   EXPECT_NE(error_of({"--api-keys", "/nonexistent/keys"}).find("cannot read"), std::string::npos);
 }
 
+TEST(Config, SharesDefaultToFractionsOfTheStoreAndTheMachine) {
+  const ServerConfig c = parse({});
+  EXPECT_EQ(c.effective_client_max_stored_jobs(), 256);  // a quarter of 1,024
+  EXPECT_EQ(parse({"--max-stored-jobs", "3"}).effective_client_max_stored_jobs(), 1);
+  const std::int64_t memory = memory_available_to_process();
+  ASSERT_GT(memory, 0);
+  EXPECT_EQ(c.effective_max_queued_bytes(), memory / 4);
+  EXPECT_EQ(c.effective_client_max_queued_bytes(), std::min(c.max_body_bytes, memory / 16));
+  const ServerConfig set = parse({"--client-max-stored-jobs", "5", "--max-queued-bytes", "1G", "--client-max-queued-bytes", "64M"});
+  EXPECT_EQ(set.effective_client_max_stored_jobs(), 5);
+  EXPECT_EQ(set.effective_max_queued_bytes(), std::int64_t{1} << 30);
+  EXPECT_EQ(set.effective_client_max_queued_bytes(), std::int64_t{64} << 20);
+  EXPECT_EQ(parse({"--max-queued-bytes", "100M"}).effective_client_max_queued_bytes(), std::int64_t{25} << 20);
+  EXPECT_NE(error_of({"--client-max-stored-jobs", "-1"}).find("--client-max-stored-jobs"), std::string::npos);
+}
+
+TEST(Config, TheBodyRateFloorAndItsGraceAreSettings) {
+  EXPECT_EQ(parse({}).body_min_rate, 500);
+  EXPECT_EQ(parse({}).body_rate_grace_s, 10);
+  const ServerConfig set = parse({"--body-min-rate", "0", "--body-rate-grace", "2.5"});
+  EXPECT_EQ(set.body_min_rate, 0);
+  EXPECT_EQ(set.body_rate_grace_s, 2.5);
+  EXPECT_EQ(parse({}, {{"MDN_BODY_MIN_RATE", "2000"}}).body_min_rate, 2000);
+  EXPECT_NE(error_of({"--body-min-rate", "-1"}).find("--body-min-rate"), std::string::npos);
+}
+
 TEST(Config, HelpNamesEveryFlagWithItsVariable) {
   const std::string help = help_text();
   for (const char* s : {"--port (MDN_PORT)", "--queue (MDN_QUEUE)", "--auth-token (MDN_AUTH_TOKEN)",
@@ -177,7 +203,10 @@ TEST(Config, HelpNamesEveryFlagWithItsVariable) {
                         "--max-nodes (MDN_MAX_NODES)", "--max-accessors (MDN_MAX_ACCESSORS)",
                         "--body-stall-timeout (MDN_BODY_STALL_TIMEOUT)", "--api-keys (MDN_API_KEYS)",
                         "--header-timeout (MDN_HEADER_TIMEOUT)", "--body-timeout (MDN_BODY_TIMEOUT)",
-                        "--max-connections-per-client (MDN_MAX_CONNECTIONS_PER_CLIENT)", "--sync-start-timeout (MDN_SYNC_START_TIMEOUT)"})
+                        "--max-connections-per-client (MDN_MAX_CONNECTIONS_PER_CLIENT)", "--sync-start-timeout (MDN_SYNC_START_TIMEOUT)",
+                        "--client-max-stored-jobs (MDN_CLIENT_MAX_STORED_JOBS)", "--max-queued-bytes (MDN_MAX_QUEUED_BYTES)",
+                        "--client-max-queued-bytes (MDN_CLIENT_MAX_QUEUED_BYTES)", "--body-min-rate (MDN_BODY_MIN_RATE)",
+                        "--body-rate-grace (MDN_BODY_RATE_GRACE)"})
     EXPECT_NE(help.find(s), std::string::npos) << s;
 }
 

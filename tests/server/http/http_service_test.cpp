@@ -28,7 +28,7 @@ class FakeStore final : public JobStore {
     p.retry_after_s = 2;
     return p;
   }
-  Submitted submit(service::JobInput, const std::optional<std::string>&, const std::string&) override {
+  Submitted submit(service::JobInput, const std::optional<std::string>&, const std::string&, Owner) override {
     ++submits;
     if (down) throw HttpError(outage());
     throw HttpError(make_problem(ProblemType::QueueFull, "the fake store takes nothing"));

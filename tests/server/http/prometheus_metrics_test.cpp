@@ -21,7 +21,7 @@ TEST(Metrics, CountersAddUpPerLabelSet) {
   m.add_bytes_in(10);
   m.add_bytes_in(5);
   m.add_bytes_out(7);
-  const std::string text = m.render({0, 64, 0, 2, false, 0});
+  const std::string text = m.render({0, 64, 0, 2, false, 0, 0, 1});
   EXPECT_TRUE(has_line(text, R"(mdn_http_requests_total{route="/v1/jobs",method="POST",status="202"} 2)")) << text;
   EXPECT_TRUE(has_line(text, R"(mdn_http_requests_total{route="/v1/jobs",method="POST",status="503"} 1)")) << text;
   EXPECT_TRUE(has_line(text, "mdn_http_request_bytes_total 15"));
@@ -32,7 +32,7 @@ TEST(Metrics, CountersAddUpPerLabelSet) {
 TEST(Metrics, LabelValuesAreEscaped) {
   Metrics m;
   m.count_request("a\"b\\c\nd", "GET", 404);
-  const std::string text = m.render({0, 1, 0, 1, false, 0});
+  const std::string text = m.render({0, 1, 0, 1, false, 0, 0, 1});
   EXPECT_NE(text.find(R"(route="a\"b\\c\nd")"), std::string::npos) << text;
 }
 
@@ -56,7 +56,7 @@ TEST(Metrics, FinishedJobsAreCountedByStateAndGaugesReadAtScrapeTime) {
   m.job_finished("succeeded", 0.01, 0.2);
   m.job_finished("failed", 0.01, 0.2);
   m.job_finished("succeeded", 0.01, 0.2);
-  const std::string text = m.render({3, 64, 1, 2, true, 5});
+  const std::string text = m.render({3, 64, 1, 2, true, 5, 4096, 65536});
   EXPECT_TRUE(has_line(text, R"(mdn_jobs_total{state="succeeded"} 2)")) << text;
   EXPECT_TRUE(has_line(text, R"(mdn_jobs_total{state="failed"} 1)")) << text;
   EXPECT_TRUE(has_line(text, "mdn_job_duration_seconds_count 3")) << text;
@@ -66,6 +66,8 @@ TEST(Metrics, FinishedJobsAreCountedByStateAndGaugesReadAtScrapeTime) {
   EXPECT_TRUE(has_line(text, "mdn_workers 2"));
   EXPECT_TRUE(has_line(text, "mdn_draining 1"));
   EXPECT_TRUE(has_line(text, "mdn_long_polls 5"));
+  EXPECT_TRUE(has_line(text, "mdn_queued_request_bytes 4096"));
+  EXPECT_TRUE(has_line(text, "mdn_max_queued_request_bytes 65536"));
 }
 
 }  // namespace

@@ -25,9 +25,10 @@ Argv start_argv(const std::string& text, const std::string& stream, const StartF
 std::vector<std::string_view> views(const Argv& argv) { return {argv.begin(), argv.end()}; }
 
 Argv SubmitArgs::to_argv() const {
-  static const std::string text = join({"submit_job", "submit"});
+  static const std::string text = join({"finish_helpers", "submit_job", "submit"});
   return {"EVAL", text, "4", hash, input, stream, idem, job.id, job.input_length,
-          job.format, job.params, job.created_ms, job.capacity, job.fingerprint, group, job.has_key, job_prefix};
+          job.format, job.params, job.created_ms, job.capacity, job.fingerprint, group, job.has_key, job_prefix,
+          job.client, job.client_quota};
 }
 
 Argv SubmitStartArgs::to_argv() const {
@@ -36,7 +37,7 @@ Argv SubmitStartArgs::to_argv() const {
   a[2] = std::string(1, '4');  // KEYS: stream, hash, input, idem (not = "4": GCC 12 warns falsely, -Wrestrict)
   a.insert(a.begin() + 4, {hash, input, idem});
   a.insert(a.end(), {job.id, job.input_length, job.format, job.params, job.created_ms, job.capacity, job.fingerprint,
-                     job.has_key});  // ARGV[11] to ARGV[18]
+                     job.has_key, job.client, job.client_quota});  // ARGV[11] to ARGV[20]
   return a;
 }
 
@@ -77,6 +78,11 @@ Argv ReleaseArgs::to_argv() const {
 Argv CancelArgs::to_argv() const {
   static const std::string text = join({"finish_helpers", "cancel"});
   return {"EVAL", text, "3", hash, input, result, problem, now_ms, ttl_ms};
+}
+
+Argv FetchedArgs::to_argv() const {
+  static const std::string text = join({"finish_helpers", "fetched"});
+  return {"EVAL", text, "1", hash};
 }
 
 Argv ForgetConsumersArgs::to_argv() const {

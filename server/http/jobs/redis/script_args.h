@@ -23,6 +23,7 @@ struct StartFields {
 // A new job's hash fields (lua/submit_job.lua).
 struct SubmitFields {
   std::string id, input_length, format, params, created_ms, capacity, fingerprint, has_key;
+  std::string client, client_quota;  // the client's share key ("" for none) and its quota
 };
 
 struct SubmitArgs {  // lua/submit.lua
@@ -75,6 +76,11 @@ struct ReleaseArgs {  // lua/release.lua
 
 struct CancelArgs {  // lua/cancel.lua
   std::string hash, input, result, problem, now_ms, ttl_ms;
+  Argv to_argv() const;
+};
+
+struct FetchedArgs {  // lua/fetched.lua
+  std::string hash;
   Argv to_argv() const;
 };
 

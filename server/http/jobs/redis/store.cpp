@@ -78,8 +78,11 @@ class RedisJobStore final : public JobStore {
   ~RedisJobStore() override { stop(); }
 
   // ---------------------------------------------------------------- JobStore
+  // The body's count in the queued bytes (owner.queued_bytes) ends with this call: Redis keeps
+  // the body from then on. The client's share of stored jobs is counted in Redis, across
+  // replicas (decision 78).
   Submitted submit(service::JobInput input, const std::optional<std::string>& key,
-                   const std::string& fingerprint) override {
+                   const std::string& fingerprint, Owner owner) override {
     if (worker_pool_.draining() || draining_) {
       Problem p = make_problem(ProblemType::Draining, "the server is shutting down and accepts no new jobs");
       p.retry_after_s = 5;
@@ -112,7 +115,8 @@ class RedisJobStore final : public JobStore {
     auto reply = run([&](Connection& c) {
       // The input by a plain SET, then the script (see lua/submit_job.lua), in one round trip.
       const std::vector<std::string_view> set = {"SET", input_name, input.bytes, "PX", kUnacceptedInputMs};
-      const SubmitFields job{id, input_length, format, params, created, capacity, fingerprint, key ? "1" : "0"};
+      const SubmitFields job{id,          input_length, format, params, created, capacity, fingerprint, key ? "1" : "0",
+                             share_key(owner.client), client_quota_};
       const Argv args = slot ? SubmitStartArgs{keys_.stream, keys_.job(id), input_name, idem, slots_.start_fields(), job}.to_argv()
                              : SubmitArgs{keys_.job(id), input_name, keys_.stream, idem, job, Keys::kGroup, job_prefix}.to_argv();
       return std::move(c.checked_pipeline({set, views(args)}).back());
@@ -142,6 +146,17 @@ class RedisJobStore final : public JobStore {
     if (outcome == "full") {
       Problem p = make_problem(ProblemType::QueueFull, "all " + capacity + " slots of the shared queue are taken; retry later");
       p.retry_after_s = 5;
+      throw HttpError(std::move(p));
+    }
+    if (outcome == "over") {
+      Problem p = make_problem(ProblemType::OverClientShare,
+                               "this client keeps " + std::string(str(element(reply.get(), 1))) +
+                                   " jobs, its share of the job store (" + client_quota_ +
+                                   ", --client-max-stored-jobs); download or delete finished ones, or retry later");
+      p.extensions["limit_jobs"] = std::stoi(client_quota_);
+      // Until its first slot frees: its oldest finished job's lifetime ends (or 5 s while all run).
+      const double frees_ms = std::stod(std::string(str(element(reply.get(), 2))));
+      p.retry_after_s = frees_ms >= 9e15 ? 5 : int(std::clamp(std::ceil((frees_ms - double(now_ms())) / 1000), 1.0, 60.0));
       throw HttpError(std::move(p));
     }
     if (outcome == "replay") {
@@ -210,7 +225,11 @@ class RedisJobStore final : public JobStore {
     }
   }
 
-  void result_fetched(const std::string&) override {}  // results live in Redis: nothing waits for this
+  // Results live in Redis (nothing waits for this); the result gives its client's slot up.
+  void result_fetched(const std::string& id) override {
+    if (!valid_id(id)) return;
+    run([&](Connection& c) { return c.checked(views(FetchedArgs{keys_.job(id)}.to_argv())); });
+  }
 
   CancelResult cancel(const std::string& id) override {
     CancelResult r;
@@ -303,6 +322,11 @@ class RedisJobStore final : public JobStore {
   static constexpr const char* kUnacceptedInputMs = "600000";
   static constexpr int kRetryAfterS = 2;
 
+  // The sorted set of a client's jobs (lua/finish_helpers.lua); "" for none.
+  std::string share_key(const std::string& client) const {
+    return client.empty() ? std::string() : keys_.prefix + "client:" + client;
+  }
+
   static bool valid_id(const std::string& id) {
     return id.size() == 32 && std::all_of(id.begin(), id.end(), [](char c) {
              return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
@@ -372,6 +396,7 @@ class RedisJobStore final : public JobStore {
 
   const Keys keys_;
   const std::string ttl_ms_;
+  const std::string client_quota_ = std::to_string(config_.effective_client_max_stored_jobs());
 
   std::atomic<bool> draining_{false}, stopping_{false};
   std::atomic<std::int64_t> started_on_submit_{0}, results_served_locally_{0}, early_runs_discarded_{0};

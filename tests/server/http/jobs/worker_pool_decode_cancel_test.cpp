@@ -64,7 +64,7 @@ TEST(WorkerPoolDecodeCancel, TheTimeLimitStopsADecode) {
   o.time_limit = std::chrono::milliseconds(std::int64_t(decode_s * 1000 / 10));  // a tenth of the decode
   WorkerPool pool(o);
   MemoryJobStore q(pool);
-  auto job = q.job(q.submit(input(), std::nullopt, "").job.id);
+  auto job = q.job(q.submit(input(), std::nullopt, "", {}).job.id);
   ASSERT_TRUE(job->wait_for(60s));
   const JobSnapshot s = job->snapshot();
   EXPECT_EQ(s.state, JobState::Failed);
@@ -82,7 +82,7 @@ TEST(WorkerPoolDecodeCancel, DeleteStopsADecode) {
   o.workers = 1;
   WorkerPool pool(o);
   MemoryJobStore q(pool);
-  auto job = q.job(q.submit(input(), std::nullopt, "").job.id);
+  auto job = q.job(q.submit(input(), std::nullopt, "", {}).job.id);
   const auto deadline = Clock::now() + 30s;
   while (job->state() == JobState::Queued && Clock::now() < deadline) std::this_thread::sleep_for(1ms);
   std::this_thread::sleep_for(std::chrono::milliseconds(std::int64_t(decode_s * 1000 / 10)));  // inside the decode

@@ -11,6 +11,7 @@ elseif st == 'running' then
   return 'requested'
 end
 local idem = redis.call('HGET', KEYS[1], 'idem')
+leave_share(KEYS[1])
 redis.call('DEL', KEYS[1], KEYS[2], KEYS[3])
 if idem then redis.call('DEL', idem) end
 return 'removed'
