@@ -148,8 +148,26 @@ bool FaceReader::flat(std::int64_t f) const {
   return ring_cos >= flat_cos && N0_.row(f).dot(z) >= flat_cos;
 }
 
+Eigen::Matrix3d FaceReader::frame_of(std::int64_t f) const {
+  const Vec3 n0 = N0_.row(f).transpose();
+  const Vec3 z = axis(f);
+  // x: the noisy normal's tilt from z, else the once-filtered normal's, else the first edge.
+  Vec3 x = n0 - n0.dot(z) * z;
+  if (x.norm() < 1e-9) x = Vec3(M1_.row(f).transpose()) - M1_.row(f).dot(z) * z;
+  if (x.norm() < 1e-9) {
+    const Vec3 edge = (P_.row(F_(f, 1)) - P_.row(F_(f, 0))).transpose();
+    x = edge - edge.dot(z) * z;
+  }
+  if (x.norm() < 1e-9) x = z.cross(std::abs(z.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY());
+  x.normalize();
+  Eigen::Matrix3d frame;
+  frame.row(0) = x.transpose();
+  frame.row(1) = z.cross(x).transpose();
+  frame.row(2) = z.transpose();
+  return frame;
+}
+
 void FaceReader::read(std::int64_t f, double* out_row, Eigen::Matrix3d& frame) const {
-  const Vertices& P = P_;
   const Triangles& F = F_;
   const Topology& topo = topo_;
   const Vertices &N0 = N0_, &M1 = M1_, &M4 = M4_, &C = C_;
@@ -157,20 +175,8 @@ void FaceReader::read(std::int64_t f, double* out_row, Eigen::Matrix3d& frame) c
   const double range_scale = 1 - std::cos(M_PI / 6);  // the bilateral pass's 30 degrees
   const auto fi = static_cast<std::size_t>(f);
   const Vec3 n0 = N0.row(f).transpose();
-  const Vec3 z = axis(f);
-  // x: the noisy normal's tilt from z, else the once-filtered normal's, else the first edge.
-  Vec3 x = n0 - n0.dot(z) * z;
-  if (x.norm() < 1e-9) x = Vec3(M1.row(f).transpose()) - M1.row(f).dot(z) * z;
-  if (x.norm() < 1e-9) {
-    const Vec3 edge = (P.row(F(f, 1)) - P.row(F(f, 0))).transpose();
-    x = edge - edge.dot(z) * z;
-  }
-  if (x.norm() < 1e-9) x = z.cross(std::abs(z.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY());
-  x.normalize();
-  const Vec3 y = z.cross(x);
-  frame.row(0) = x.transpose();
-  frame.row(1) = y.transpose();
-  frame.row(2) = z.transpose();
+  frame = frame_of(f);
+  const Vec3 x = frame.row(0).transpose(), y = frame.row(1).transpose(), z = frame.row(2).transpose();
   const auto local = [&](const Vec3& v) { return Vec3(x.dot(v), y.dot(v), z.dot(v)); };
   Eigen::Map<Eigen::Matrix<double, 1, kFaceFeatures>> row(out_row);
   row.segment<3>(0) = local(n0).transpose();

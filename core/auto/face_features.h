@@ -60,6 +60,7 @@ class FaceReader {
 
  private:
   Vec3 axis(std::int64_t f) const;  // the frame's z
+  Eigen::Matrix3d frame_of(std::int64_t f) const;  // rows x, y, z (decision 87)
   const Vertices& P_;
   const Triangles& F_;
   const Topology& topo_;

@@ -113,7 +113,7 @@ class WorkerPool {
     bool held = false;
     // The body's count in the queued bytes (queued_bytes.h): kept until the run takes the body
     // or the job ends without running.
-    QueuedBytes::Hold queued_bytes;
+    QueuedBytes::Hold queued_bytes{};
   };
   // Queues a job for the next free worker; `id` is the store's (or a request's) id, which
   // names it in logs and metrics. The caller keeps the job: the pool forgets it once it ended.

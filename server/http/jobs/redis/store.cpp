@@ -139,26 +139,7 @@ class RedisJobStore final : public JobStore {
     } catch (const std::exception& e) {
       throw HttpError(make_problem(ProblemType::QueueError, e.what()));
     }
-    if (outcome == "noinput")
-      throw HttpError(make_problem(ProblemType::QueueError, "the job's input could not be stored"));
-    if (outcome == "reused")
-      throw HttpError(make_problem(ProblemType::IdempotencyKeyReused, "this Idempotency-Key was already used with a different body or parameters"));
-    if (outcome == "full") {
-      Problem p = make_problem(ProblemType::QueueFull, "all " + capacity + " slots of the shared queue are taken; retry later");
-      p.retry_after_s = 5;
-      throw HttpError(std::move(p));
-    }
-    if (outcome == "over") {
-      Problem p = make_problem(ProblemType::OverClientShare,
-                               "this client keeps " + std::string(str(element(reply.get(), 1))) +
-                                   " jobs, its share of the job store (" + client_quota_ +
-                                   ", --client-max-stored-jobs); download or delete finished ones, or retry later");
-      p.extensions["limit_jobs"] = std::stoi(client_quota_);
-      // Until its first slot frees: its oldest finished job's lifetime ends (or 5 s while all run).
-      const double frees_ms = std::stod(std::string(str(element(reply.get(), 2))));
-      p.retry_after_s = frees_ms >= 9e15 ? 5 : int(std::clamp(std::ceil((frees_ms - double(now_ms())) / 1000), 1.0, 60.0));
-      throw HttpError(std::move(p));
-    }
+    throw_if_refused(outcome, reply, capacity);
     if (outcome == "replay") {
       const std::string earlier(str(element(reply.get(), 1)));
       if (auto s = find(earlier, false)) return {std::move(*s), true};
@@ -331,6 +312,31 @@ class RedisJobStore final : public JobStore {
     return id.size() == 32 && std::all_of(id.begin(), id.end(), [](char c) {
              return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
            });
+  }
+
+  // The submit script's refusals as problems: the input not stored, an Idempotency-Key reused,
+  // the shared queue full, the client over its share of stored jobs (decision 78).
+  void throw_if_refused(std::string_view outcome, const Reply& reply, const std::string& capacity) const {
+    if (outcome == "noinput")
+      throw HttpError(make_problem(ProblemType::QueueError, "the job's input could not be stored"));
+    if (outcome == "reused")
+      throw HttpError(make_problem(ProblemType::IdempotencyKeyReused, "this Idempotency-Key was already used with a different body or parameters"));
+    if (outcome == "full") {
+      Problem p = make_problem(ProblemType::QueueFull, "all " + capacity + " slots of the shared queue are taken; retry later");
+      p.retry_after_s = 5;
+      throw HttpError(std::move(p));
+    }
+    if (outcome == "over") {
+      Problem p = make_problem(ProblemType::OverClientShare,
+                               "this client keeps " + std::string(str(element(reply.get(), 1))) +
+                                   " jobs, its share of the job store (" + client_quota_ +
+                                   ", --client-max-stored-jobs); download or delete finished ones, or retry later");
+      p.extensions["limit_jobs"] = std::stoi(client_quota_);
+      // Until its first slot frees: its oldest finished job's lifetime ends (or 5 s while all run).
+      const double frees_ms = std::stod(std::string(str(element(reply.get(), 2))));
+      p.retry_after_s = frees_ms >= 9e15 ? 5 : int(std::clamp(std::ceil((frees_ms - double(now_ms())) / 1000), 1.0, 60.0));
+      throw HttpError(std::move(p));
+    }
   }
 
   [[noreturn]] void throw_unavailable(const std::string& detail) const {

@@ -44,7 +44,7 @@ TEST(RedisScriptArgs, FinishKeepsItsUnusedSlotAndCallsTheHelpers) {
 
 TEST(RedisScriptArgs, SubmitStartHasFourKeysThenStartJobsArgvThenTheJobs) {
   const StartFields start{"me", "5", "3", "workers", "exhausted", "cancelled", "600000", "lost", "mdn:job:"};
-  const SubmitFields job{"id1", "42", "off", "{}", "4", "64", "fp", "1"};
+  const SubmitFields job{"id1", "42", "off", "{}", "4", "64", "fp", "1", "client:ann", "8"};
   const Argv a = SubmitStartArgs{"s", "h", "i", "idem", start, job}.to_argv();
   EXPECT_EQ(a[1], lua_script("finish_helpers") + lua_script("start_job") + lua_script("submit_job") +
                       lua_script("submit_start"));
@@ -52,7 +52,7 @@ TEST(RedisScriptArgs, SubmitStartHasFourKeysThenStartJobsArgvThenTheJobs) {
   const std::vector<std::string> start_argv = {"me", "5", "3", "" /* unused */, "workers", "exhausted", "cancelled",
                                                "600000", "lost", "mdn:job:"};
   std::vector<std::string> all = start_argv;
-  all.insert(all.end(), {"id1", "42", "off", "{}", "4", "64", "fp", "1"});
+  all.insert(all.end(), {"id1", "42", "off", "{}", "4", "64", "fp", "1", "client:ann", "8"});
   expect_argv(a, all);
   // Taking an entry uses the same ten start fields behind the one key.
   const Argv t = TakeArgs{"s", start}.to_argv();
