@@ -20,8 +20,9 @@ double ms_since(Clock::time_point start) {
 
 bool is_gltf(io::Format format) { return format == io::Format::Glb || format == io::Format::Gltf; }
 
-// The job; `release` (the input's own bytes, or null) is emptied once decoded, so a large
-// input's bytes are not held through the denoising.
+// The job; `release` (the input's own bytes, or null) is handed to the decoder, which frees it
+// as soon as it has read it (io::decode_owned), so a large input's bytes are not held through
+// the decoding's copies or the denoising.
 JobOutput run(const JobInput& input, std::string* release, const io::Limits& limits, ProgressObserver* progress) {
   // Parameters first: a bad request is refused before any decoding work.
   validate(input.params);
@@ -33,10 +34,10 @@ JobOutput run(const JobInput& input, std::string* release, const io::Limits& lim
   io::Limits bounded = limits;
   bounded.cancel = progress;
   auto start = Clock::now();
+  const io::DecodeOptions how{.limits = bounded, .resource_dir = input.resource_dir};
   std::unique_ptr<io::MeshDocument> document =
-      io::decode(input.bytes, input.format, io::DecodeOptions{.limits = bounded, .resource_dir = input.resource_dir});
+      release ? io::decode_owned(std::move(*release), input.format, how) : io::decode(input.bytes, input.format, how);
   out.timings.decode_ms = ms_since(start);
-  if (release) std::string().swap(*release);
 
   io::EncodeOptions encode = input.params.output;
   encode.cancel = progress;

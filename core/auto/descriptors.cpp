@@ -5,6 +5,7 @@
 #include <cmath>
 #include <optional>
 
+#include "core/auto/face_features.h"
 #include "core/auto/surface_sample.h"
 #include "core/params.h"
 #include "core/parallel.h"
@@ -50,17 +51,6 @@ double share_above(const std::vector<double>& v, double t) {
 }
 
 double angle(const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
-
-// Area-weighted mean of the normals of the faces sharing a vertex with f (and f itself).
-Vec3 ring_mean(const Topology& topo, const Vertices& N, const Eigen::VectorXd& A, std::int64_t f) {
-  Vec3 s = A(f) * N.row(f).transpose();
-  for (std::int32_t k = topo.ff_offsets[static_cast<std::size_t>(f)]; k < topo.ff_offsets[static_cast<std::size_t>(f) + 1]; ++k) {
-    const std::int32_t g = topo.ff_faces[static_cast<std::size_t>(k)];
-    s += A(g) * N.row(g).transpose();
-  }
-  const double n = s.norm();
-  return n > 0 ? Vec3(s / n) : Vec3::Zero();
-}
 
 }  // namespace
 

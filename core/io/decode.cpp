@@ -55,6 +55,14 @@ std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, cons
   return decode(bytes, format, options.limits);
 }
 
+std::unique_ptr<MeshDocument> decode_owned(std::string&& bytes, Format format, const DecodeOptions& options) {
+  std::string owned = std::move(bytes);
+  bytes.clear();
+  if (format == Format::Gltf)  // its data URIs are decoded first, then the body is freed (decision 82)
+    return detail::decode_gltf(owned, format, options.limits, options.resource_dir ? &*options.resource_dir : nullptr, &owned);
+  return decode(owned, format, options);
+}
+
 std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, const Limits& limits) {
   switch (format) {
     case Format::Off: return detail::decode_off(bytes, limits);

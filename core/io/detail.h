@@ -17,8 +17,10 @@ std::unique_ptr<MeshDocument> decode_obj(std::string_view bytes, const Limits& l
 std::unique_ptr<MeshDocument> decode_ply(std::string_view bytes, const Limits& limits);
 std::unique_ptr<MeshDocument> decode_drc(std::string_view bytes, const Limits& limits);
 // resource_dir: null refuses external URIs; else the folder they are read from (DecodeOptions).
+// release: the string `bytes` views, if the caller is done with it (decode_owned): freed once a
+// .gltf's data URIs are decoded from it.
 std::unique_ptr<MeshDocument> decode_gltf(std::string_view bytes, Format format, const Limits& limits,
-                                          const std::string* resource_dir = nullptr);
+                                          const std::string* resource_dir = nullptr, std::string* release = nullptr);
 std::unique_ptr<MeshDocument> decode_stl(std::string_view bytes, const Limits& limits);
 
 // STL detection (sniff_format and decode_stl): the binary size identity 84 + 50 n, and ASCII

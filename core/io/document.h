@@ -143,5 +143,9 @@ struct DecodeOptions {
 // Decodes bytes of the given format. Throws FormatError, UnsupportedError or LimitError.
 std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, const Limits& limits = {});
 std::unique_ptr<MeshDocument> decode(std::string_view bytes, Format format, const DecodeOptions& options);
+// The same, for a caller that is done with the bytes (every job: service::run_job): they are
+// freed as soon as the decoder has read what it needs from them, at the latest before it
+// returns. `bytes` is left empty, whether decoding succeeds or throws.
+std::unique_ptr<MeshDocument> decode_owned(std::string&& bytes, Format format, const DecodeOptions& options);
 
 }  // namespace mdn::io

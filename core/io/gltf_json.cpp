@@ -63,11 +63,12 @@ std::filesystem::path resource_path(const std::string& uri, const std::string& w
 }
 
 // Buffers and images referenced by URI: refused (the service), or, with a resource folder
-// (the command-line tool), read from it and embedded as data URIs before anything else reads
-// the asset, so the rest of the decoder and the encoder only ever see embedded data. Returns
-// how many were read.
+// (the command-line tool), read from it and embedded before anything else reads the asset, so
+// the rest of the decoder and the encoder only ever see embedded data: images as data URIs,
+// buffers (`buffers` given) into element i of `buffers`, as decode_lifted's. Returns how many
+// were read.
 int resolve_external(Json& json, const char* key, const std::string* resource_dir, const Limits& limits,
-                     std::int64_t& read_bytes) {
+                     std::int64_t& read_bytes, std::vector<std::vector<unsigned char>>* buffers) {
   if (!json.contains(key) || !json[key].is_array()) return 0;
   int read = 0;
   for (std::size_t i = 0; i < json[key].size(); ++i) {
@@ -95,6 +96,20 @@ int resolve_external(Json& json, const char* key, const std::string* resource_di
     if (read_bytes > limits.max_decoded_bytes)
       throw LimitError("glTF: the external files come to more than " + std::to_string(limits.max_decoded_bytes) + " bytes");
     std::ifstream in(file, std::ios::binary);
+    if (buffers) {  // a buffer's bytes go to the model as they are, as a data URI's (decision 82)
+      const auto length = item.find("byteLength");
+      if (length == item.end() || !length->is_number_unsigned() || length->get<std::uint64_t>() != size)
+        throw FormatError("glTF: " + where + " names '" + uri.substr(0, 200) + "', of " + std::to_string(size) +
+                          " bytes, and its byteLength does not say so");
+      buffers->resize(json[key].size());
+      std::vector<unsigned char>& data = (*buffers)[i];
+      data.resize(static_cast<std::size_t>(size));
+      if (!in.read(reinterpret_cast<char*>(data.data()), static_cast<std::streamsize>(size)))
+        throw FormatError("glTF: cannot read '" + uri.substr(0, 200) + "'");
+      item["uri"] = "data:application/octet-stream;base64,";
+      ++read;
+      continue;
+    }
     std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     if (!in.good() && !in.eof()) throw FormatError("glTF: cannot read '" + uri.substr(0, 200) + "'");
     std::string mime = "application/octet-stream";

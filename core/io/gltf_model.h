@@ -254,11 +254,34 @@ std::string_view glb_json(std::string_view bytes);
 // Parses the JSON with its nesting depth and size bounded (Limits), checks the shape of what
 // the decoder reads, and charges `bytes` with what the parsed scene will hold.
 Json parse_bounded(std::string_view text, const Limits& limits, std::int64_t& bytes);
-// A .gltf's external buffers or images (`key`) read from `resource_dir` and embedded as data
-// URIs; without a folder any external URI is an UnsupportedError. Returns how many were read.
+// A .gltf's external buffers or images (`key`) read from `resource_dir` and embedded (images as
+// data URIs; buffers, given `buffers`, as their bytes in element i, their uri cut to a data URI's
+// header, the file's size checked against byteLength); without a folder any external URI is an
+// UnsupportedError. Returns how many were read.
 int resolve_external(Json& json, const char* key, const std::string* resource_dir, const Limits& limits,
-                     std::int64_t& read_bytes);
+                     std::int64_t& read_bytes, std::vector<std::vector<unsigned char>>* buffers = nullptr);
 // Whether a required extension is one this adapter reads or carries over (glTF 2.0, 3.12).
 bool understood_extension(std::string_view name);
+
+// gltf_data_uri.cpp: a .gltf's data-URI buffers decoded from the body (decision 82).
+// A string literal of the body whose text starts with "data:" (not an object key; no escape but
+// "\/"): its text's place in the body.
+struct LiftedLiteral {
+  std::size_t offset = 0, length = 0, escapes = 0;
+};
+// The body's JSON with each such literal replaced by a short placeholder (`text`; empty, and no
+// literals, when there is none).
+struct LiftedJson {
+  std::string text;
+  std::vector<LiftedLiteral> literals;
+};
+LiftedJson lift_data_uris(std::string_view text);
+// Resolves the placeholders of the parsed `json`: each buffer's data URI is checked (a media
+// type tinygltf reads, base64, its byteLength) and decoded from `body` into element b of the
+// result (empty for a buffer that had none), its uri cut to the data URI's header; its byteLength
+// is added to `charged` and checked against limits.max_decoded_bytes first. Every other
+// placeholder (an image's uri, an extra) gets its text back. Throws FormatError or LimitError.
+std::vector<std::vector<unsigned char>> decode_lifted(Json& json, std::string_view body, const LiftedJson& lifted,
+                                                      const Limits& limits, std::int64_t& charged);
 
 }  // namespace mdn::io::detail::gltf

@@ -88,7 +88,8 @@ void read_draco_primitive(Reader& reader, const Json& ext, const tinygltf::Primi
 }
 
 // Converts strips and fans to lists (glTF 2.0 spec, 3.7.2.1 "Topology types").
-std::vector<std::uint32_t> to_triangle_list(const std::vector<std::uint32_t>& idx, int mode, const std::string& what) {
+// A TRIANGLES list is returned as it came (moved, not copied).
+std::vector<std::uint32_t> to_triangle_list(std::vector<std::uint32_t> idx, int mode, const std::string& what) {
   std::vector<std::uint32_t> out;
   if (mode == TINYGLTF_MODE_TRIANGLES) {
     if (idx.size() % 3 != 0) throw FormatError(what + ": a TRIANGLES primitive's index count is not a multiple of 3");
@@ -167,7 +168,7 @@ using namespace gltf;
 
 
 static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes, Format format, const Limits& limits,
-                                                          const std::string* resource_dir);
+                                                          const std::string* resource_dir, std::string* release);
 
 namespace {
 
@@ -273,9 +274,18 @@ void check_extensions(const Json& json) {
 // EXT_meshopt_compression's placeholder buffers have no data (no uri, not the GLB chunk), which
 // tinygltf refuses: it is given a one-byte buffer instead; the views that name one are decoded
 // from their extension's buffer later, any other view on it reaches past its end.
+// `embedded`: the buffers already decoded from their data URIs (decode_lifted) or read from
+// their files (resolve_external), empty elements for the others: tinygltf is given a one-byte data URI for each, and its buffer then adopts
+// the decoded bytes (moved, not copied; decision 82).
 tinygltf::Model load_model(const Json& json, std::string_view bytes, std::string_view text, Format format,
-                           bool changed) {
+                           bool changed, std::vector<std::vector<unsigned char>>& embedded) {
   Json for_loader = json;
+  for (std::size_t b = 0; b < embedded.size(); ++b)
+    if (!embedded[b].empty()) {
+      for_loader["buffers"][b]["byteLength"] = 1;
+      for_loader["buffers"][b]["uri"] = "data:application/octet-stream;base64,AA==";
+      changed = true;
+    }
   if (for_loader.contains("meshes") && for_loader["meshes"].is_array())
     for (auto& mesh : for_loader["meshes"])
       if (mesh.is_object() && mesh.contains("primitives") && mesh["primitives"].is_array())
@@ -291,14 +301,21 @@ tinygltf::Model load_model(const Json& json, std::string_view bytes, std::string
       changed = true;
     }
   if (!changed) return load_tinygltf(bytes, format == Format::Glb);
-  if (format == Format::Gltf) return load_tinygltf(for_loader.dump(), false);
-  std::string container = make_glb(for_loader.dump(), {});
-  // make_glb wrote the header and the JSON chunk; the input's BIN chunk follows as is.
-  const std::size_t rest = 20 + text.size();
-  container += bytes.substr(rest);
-  const auto total = static_cast<std::uint32_t>(container.size());
-  std::memcpy(container.data() + 8, &total, 4);
-  return load_tinygltf(container, true);
+  tinygltf::Model model;
+  if (format == Format::Gltf) {
+    model = load_tinygltf(for_loader.dump(), false);
+  } else {
+    std::string container = make_glb(for_loader.dump(), {});
+    // make_glb wrote the header and the JSON chunk; the input's BIN chunk follows as is.
+    const std::size_t rest = 20 + text.size();
+    container += bytes.substr(rest);
+    const auto total = static_cast<std::uint32_t>(container.size());
+    std::memcpy(container.data() + 8, &total, 4);
+    model = load_tinygltf(container, true);
+  }
+  for (std::size_t b = 0; b < embedded.size() && b < model.buffers.size(); ++b)
+    if (!embedded[b].empty()) model.buffers[b].data = std::move(embedded[b]);
+  return model;
 }
 
 // tinygltf 2.7 skips a primitive it cannot parse (no "attributes", say) instead of failing, so
@@ -349,7 +366,7 @@ void read_plain_primitive(Reader& reader, const tinygltf::Primitive& prim, int m
     idx.resize(static_cast<std::size_t>(out.points));
     for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<std::uint32_t>(i);
   }
-  out.triangles = to_triangle_list(idx, mode, what);
+  out.triangles = to_triangle_list(std::move(idx), mode, what);
 }
 
 // Primitive p of mesh m (Draco or plain), its POSITION / NORMAL / TANGENT located and checked.
@@ -380,15 +397,14 @@ Primitive read_primitive(Reader& reader, GltfDocument& doc, std::size_t m, std::
   return out;
 }
 
-// A primitive's positions appended to the surface's points (finite, or a FormatError).
-void append_points(Reader& reader, const Primitive& prim, std::vector<Vec3>& all_points) {
+// A primitive's positions are finite, or a FormatError.
+void check_points(Reader& reader, const Primitive& prim) {
   const std::string what = "mesh " + std::to_string(prim.mesh) + " primitive " + std::to_string(prim.index);
   const Attribute& position = prim.attributes[static_cast<std::size_t>(prim.position)];
   for (std::int64_t i = 0; i < prim.points; ++i) {
     reader.cancel().poll();
-    const Vec3 v(position.value(i, 0), position.value(i, 1), position.value(i, 2));
-    if (!v.allFinite()) throw FormatError(what + ": non-finite POSITION");
-    all_points.push_back(v);
+    if (!Vec3(position.value(i, 0), position.value(i, 1), position.value(i, 2)).allFinite())
+      throw FormatError(what + ": non-finite POSITION");
   }
 }
 
@@ -411,12 +427,21 @@ void assign_normal_slots(Surface& surface, const std::vector<std::int32_t>& weld
   surface.normal_slots = static_cast<std::int64_t>(slots.size());
 }
 
-// The surface's mesh: every primitive's points welded by position, their triangles on the
-// welded vertices; the surface keeps the point -> vertex map and its normal slots.
-TriMesh weld_surface(Surface& surface, const std::vector<Vec3>& all_points, const Limits& limits) {
-  Vertices P(static_cast<Eigen::Index>(all_points.size()), 3);
-  for (std::size_t i = 0; i < all_points.size(); ++i) P.row(static_cast<Eigen::Index>(i)) = all_points[i].transpose();
-  Weld weld = weld_positions(P, 1e-6, limits.cancel);
+// The surface's mesh: every primitive's points (`points` in all) welded by position, their
+// triangles on the welded vertices; the surface keeps the point -> vertex map and its normal
+// slots. The points are gathered once, straight from the primitives, and freed before the faces
+// are allocated (decision 82: the decode's peak memory).
+TriMesh weld_surface(Surface& surface, std::int64_t points, const Limits& limits) {
+  Weld weld;
+  {
+    Vertices P(points, 3);
+    for (const auto& prim : surface.primitives) {
+      const Attribute& position = prim.attributes[static_cast<std::size_t>(prim.position)];
+      for (std::int64_t i = 0; i < prim.points; ++i)
+        P.row(prim.point_offset + i) << position.value(i, 0), position.value(i, 1), position.value(i, 2);
+    }
+    weld = weld_positions(P, 1e-6, limits.cancel);
+  }
   TriMesh tri;
   tri.V = std::move(weld.V);
   std::int64_t faces = 0;
@@ -427,7 +452,7 @@ TriMesh weld_surface(Surface& surface, const std::vector<Vec3>& all_points, cons
     for (std::size_t c = 0; c < prim.triangles.size(); c += 3, ++f)
       for (int k = 0; k < 3; ++k)
         tri.F(f, k) = weld.map[static_cast<std::size_t>(prim.point_offset) + prim.triangles[c + static_cast<std::size_t>(k)]];
-  assign_normal_slots(surface, weld.map, all_points.size());
+  assign_normal_slots(surface, weld.map, static_cast<std::size_t>(points));
   surface.point_to_weld = std::move(weld.map);
   surface.welded = tri.V.rows();
   return tri;
@@ -441,7 +466,7 @@ void read_surfaces(Reader& reader, GltfDocument& doc, const Limits& limits) {
   for (std::size_t m = 0; m < model.meshes.size(); ++m) {
     Surface surface;
     surface.mesh = static_cast<int>(m);
-    std::vector<Vec3> all_points;
+    std::int64_t points = 0;
     for (std::size_t p = 0; p < model.meshes[m].primitives.size(); ++p) {
       const int mode = model.meshes[m].primitives[p].mode < 0 ? TINYGLTF_MODE_TRIANGLES : model.meshes[m].primitives[p].mode;
       if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN)
@@ -453,12 +478,13 @@ void read_surfaces(Reader& reader, GltfDocument& doc, const Limits& limits) {
       total_faces += static_cast<std::int64_t>(out.triangles.size() / 3);
       check_count(total_points, limits.max_vertices, "vertices");
       check_count(total_faces, limits.max_faces, "faces");
-      out.point_offset = static_cast<std::int64_t>(all_points.size());
-      append_points(reader, out, all_points);
+      out.point_offset = points;
+      points += out.points;
+      check_points(reader, out);
       surface.primitives.push_back(std::move(out));
     }
     if (surface.primitives.empty()) continue;
-    doc.meshes_.push_back(weld_surface(surface, all_points, limits));
+    doc.meshes_.push_back(weld_surface(surface, points, limits));
     doc.surfaces_.push_back(std::move(surface));
   }
   if (doc.surfaces_.empty()) throw FormatError("glTF: the asset has no triangle primitives to denoise");
@@ -472,28 +498,37 @@ void read_surfaces(Reader& reader, GltfDocument& doc, const Limits& limits) {
 }  // namespace
 
 std::unique_ptr<MeshDocument> decode_gltf(std::string_view bytes, Format format, const Limits& limits,
-                                          const std::string* resource_dir) {
+                                          const std::string* resource_dir, std::string* release) {
   try {
-    return decode_gltf_checked(bytes, format, limits, resource_dir);
+    return decode_gltf_checked(bytes, format, limits, resource_dir, release);
   } catch (const Json::exception& e) {  // a shape check_shape does not cover: still the input's fault
     throw FormatError(std::string("glTF: unexpected JSON content (") + e.what() + ")");
   }
 }
 
 static std::unique_ptr<MeshDocument> decode_gltf_checked(std::string_view bytes, Format format, const Limits& limits,
-                                                          const std::string* resource_dir) {
+                                                          const std::string* resource_dir, std::string* release) {
   auto doc = std::make_unique<GltfDocument>();
   doc->format_ = format;
-  const std::string_view text = format == Format::Glb ? glb_json(bytes) : bytes;
+  // A .gltf's data URIs: the JSON parsers see placeholders, each buffer is decoded once from the
+  // body, which the caller may then free (decision 82).
+  const LiftedJson lifted = format == Format::Gltf ? lift_data_uris(bytes) : LiftedJson{};
+  const std::string_view text = format == Format::Glb ? glb_json(bytes) : lifted.literals.empty() ? bytes : lifted.text;
   std::int64_t scene_bytes = 0;
   doc->json_ = parse_bounded(text, limits, scene_bytes);
+  std::vector<std::vector<unsigned char>> embedded = decode_lifted(doc->json_, bytes, lifted, limits, scene_bytes);
+  if (release && !lifted.literals.empty()) {  // tinygltf reads the JSON's dump (load_model), not the body
+    std::string().swap(*release);
+    bytes = {};
+  }
   // Before tinygltf sees the asset: without a resource folder nothing external is ever opened.
   std::int64_t external_bytes = 0;
   int external = 0;
   for (const char* key : {"buffers", "images"})
-    external += resolve_external(doc->json_, key, resource_dir, limits, external_bytes);
+    external += resolve_external(doc->json_, key, resource_dir, limits, external_bytes, key == std::string("buffers") ? &embedded : nullptr);
   check_extensions(doc->json_);
-  doc->model_ = load_model(doc->json_, bytes, text, format, external > 0);
+  doc->model_ = load_model(doc->json_, bytes, text, format, external > 0 || !lifted.literals.empty(), embedded);
+  if (release) std::string().swap(*release);
   check_meshes_match_json(doc->json_, doc->model_);
   Reader reader(doc->model_, limits);
   reader.charge(scene_bytes, "glTF");

@@ -12,11 +12,16 @@
 //       parameters), the noise estimate, the cost, the clean inputs and Fandisk. --grid-cache F
 //       keeps each case's label-grid best in F (TSV) and reuses it: delete F when the method
 //       changes (the grid is most of the report's time).
+//   tune_bench prior-cost
+//       the per-face prior's cost on a 102,400-face torus, noisy and clean, on one and two threads.
 //   tune_bench guided  [--data DIR] [--jobs N] [--set S] [--only MESH] [--grid-cache F] [--max-faces N]
 //       issue 48's oracle experiment: auto's pick held fixed, without guidance and with the clean
 //       face normals plus random angular errors (6 and 10 degrees) as the normal filter's
 //       guidance (decision 53); ratios per case, per noise kind and per surface class. The grid's
-//       best (--grid-cache) costs most of the time: --max-faces leaves larger cases out.
+//       best (--grid-cache) costs most of the time: --max-faces leaves larger cases out. Beside the
+//       oracle, the learned per-face prior's guidance (core/auto/face_prior.h; gL, s30gL, pgL), its
+//       angle errors per clean face class against the noisy normals', and its cost; --light leaves
+//       out the oracle's g10, g6h, self and b8 runs.
 //
 // The sets (issue 31). The trained model learns from tools/train's corpus, never from these
 // meshes. "validation": every CGAL demo mesh of 1,000 to 20,000 triangles that is not a corpus
@@ -61,6 +66,7 @@
 
 #include "bench_stats.h"
 #include "cgal_data.h"
+#include "oracle_guidance.h"
 #include "core/auto/measures.h"
 #include "core/auto/recorrupted.h"
 #include "core/auto/surface_sample.h"
@@ -69,6 +75,8 @@
 #include "core/noise.h"
 #include "core/auto/noise_estimate.h"
 #include "core/auto/denoise.h"
+#include "core/auto/face_features.h"
+#include "core/auto/face_prior.h"
 #include "core/topology.h"
 #include "core/auto/tune.h"
 #include "support/noisy.h"
@@ -593,7 +601,9 @@ int clean_command(const fs::path& data, int jobs, const std::string& only) {
     }
   }
   std::sort(meshes.begin(), meshes.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  struct Out { std::string chosen; double sigma = 0, moved = 0, msae = 0; };
+  // reading: the per-face prior's noise reading (core/auto/face_prior.h; issue 48, item 3): the
+  // median, 90th percentile and share above 2 degrees of its predicted noisy-to-clean angle.
+  struct Out { std::string chosen; double sigma = 0, moved = 0, msae = 0; FaceNoiseSummary reading; };
   std::vector<Out> out(meshes.size());
   run_parallel(meshes.size(), jobs, [&](std::size_t i) {
     const TriMesh& m = meshes[i].second;
@@ -601,15 +611,18 @@ int clean_command(const fs::path& data, int jobs, const std::string& only) {
     p.mode = ParamMode::Auto;
     const DenoiseResult r = denoise(m, p);
     const ParameterChoice& c = *r.report.choice;
-    out[i] = {c.chosen, c.noise.sigma_edges,
-              (r.mesh.V - m.V).rowwise().norm().maxCoeff() / diagonal(m), msae(r.mesh, m)};
+    Executor one(1);
+    out[i] = {c.chosen, c.noise.sigma_edges, (r.mesh.V - m.V).rowwise().norm().maxCoeff() / diagonal(m), msae(r.mesh, m),
+              face_prior(m.V, m.F, Topology::build(m.F, static_cast<std::int32_t>(m.V.rows())), one).summary};
   });
-  std::printf("%-10s %-26s %7s  %-12s %8s %10s %10s\n", "set", "mesh", "faces", "chose", "sigma", "moved %", "msae e-2");
+  std::printf("%-10s %-26s %7s  %-12s %8s %10s %10s  %s\n", "set", "mesh", "faces", "chose", "sigma", "moved %", "msae e-2",
+              "reading p50 / p90 / >2deg");
   std::vector<double> moved;
   for (std::size_t i = 0; i < meshes.size(); ++i) {
     const auto& [name, m] = meshes[i];
-    std::printf("%-10s %-26s %7lld  %-12s %8.4f %10.4f %10.4g\n", train::is_training_cgal_mesh(name) ? "train" : "validation", name.c_str(),
-                static_cast<long long>(m.num_faces()), out[i].chosen.c_str(), out[i].sigma, 100 * out[i].moved, 100 * out[i].msae);
+    std::printf("%-10s %-26s %7lld  %-12s %8.4f %10.4f %10.4g  %6.2f %6.2f %6.3f\n", train::is_training_cgal_mesh(name) ? "train" : "validation", name.c_str(),
+                static_cast<long long>(m.num_faces()), out[i].chosen.c_str(), out[i].sigma, 100 * out[i].moved, 100 * out[i].msae,
+                out[i].reading.median_deg, out[i].reading.p90_deg, out[i].reading.share_over_2deg);
     moved.push_back(out[i].moved);
   }
   const auto count = [&](double above) { return std::count_if(moved.begin(), moved.end(), [&](double x) { return x > above; }); };
@@ -625,23 +638,6 @@ int clean_command(const fs::path& data, int jobs, const std::string& only) {
 // angle of a given mean: a stand-in for a per-face regressor of that accuracy). The stop rule:
 // less than 15% off the pick's MSAE at the median.
 
-// N's rows turned about random tangent axes: the tangent-plane offset is a 2D Gaussian, so the
-// angle is Rayleigh distributed with mean mean_deg. Zero rows stay zero. Seeded.
-Vertices perturbed_normals(const Vertices& N, double mean_deg, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> gauss(0.0, mean_deg * M_PI / 180 / std::sqrt(M_PI / 2));
-  Vertices out = N;
-  for (Eigen::Index f = 0; f < N.rows(); ++f) {
-    const Vec3 n = N.row(f).transpose();
-    const double gx = gauss(rng), gy = gauss(rng);
-    if (n.squaredNorm() == 0) continue;
-    const Vec3 t1 = n.cross(std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).normalized(), t2 = n.cross(t1);
-    const Vec3 d = gx * t1 + gy * t2;
-    if (const double theta = d.norm(); theta > 0) out.row(f) = (std::cos(theta) * n + std::sin(theta) / theta * d).transpose();
-  }
-  return out;
-}
-
 // The share of the clean mesh's interior edges with a dihedral angle above 45 degrees: the
 // cases are told "sharp" (CAD-like, at least 1%) from "smooth" by it.
 double sharp_edge_share(const TriMesh& m) {
@@ -655,7 +651,7 @@ double sharp_edge_share(const TriMesh& m) {
 }
 
 int guided_command(const fs::path& data, int jobs, const std::string& which, const std::string& only,
-                   const fs::path& grid_cache, std::int64_t max_faces) {
+                   const fs::path& grid_cache, std::int64_t max_faces, bool light) {
   std::vector<Case> cases = build_cases(data, which, only);
   std::erase_if(cases, [&](const Case& c) { return c.config == "clean" || c.truth.num_faces() > max_faces; });
   GridCache cache(grid_cache);
@@ -664,16 +660,46 @@ int guided_command(const fs::path& data, int jobs, const std::string& which, con
   // range factor, and so its guidance, barely weighs); paper: Table 1's Fandisk row.
   // self: guided by the face normals of the pick's own unguided output (no oracle: what a guidance
   // that knows nothing more than the method gives).
-  enum Run { Auto, Pick, PickG6, PickG10, PickG6Half, S30, S30G6, Paper, PaperG6, PaperG10, PickSelf, S30Self, kRuns };
-  struct Out { std::array<double, kRuns> msae; double b8, b8g6, grid, sharp; std::string chosen; double sigma_gamma; };
+  // gL, s30gL, pgL: the same three sets guided by the learned per-face prior (core/auto/face_prior.h;
+  // issue 48, item 2), computed on the noisy input. --light leaves out the oracle's g10, g6h, self
+  // and b8 runs (nan in their columns).
+  enum Run { Auto, Pick, PickG6, PickG10, PickG6Half, S30, S30G6, Paper, PaperG6, PaperG10, PickSelf, S30Self, PickGL, S30GL,
+             PaperGL, kRuns };
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  struct Out {
+    std::array<double, kRuns> msae;
+    double b8, b8g6, grid, sharp;
+    std::string chosen;
+    double sigma_gamma;
+    std::array<std::vector<double>, kFaceClasses> prior_err, noisy_err;  // per clean face class, degrees
+    FaceNoiseSummary reading;
+    double prior_ms = 0, pick_ms = 0;
+  };
   std::vector<Out> out(cases.size());
   run_parallel(cases.size(), jobs, [&](std::size_t i) {
     const Case& c = cases[i];
     const DenoiseResult r = denoise(c.noisy, test::automatic());
+    Out& o = out[i];
+    const Topology noisy_topo = Topology::build(c.noisy.F, static_cast<std::int32_t>(c.noisy.V.rows()));
+    Executor one(1);
+    const FacePrior prior = face_prior(c.noisy.V, c.noisy.F, noisy_topo, one);
+    o.prior_ms = prior.ms;
+    o.reading = prior.summary;
+    {
+      const Vertices clean_n = face_normals(c.truth.V, c.truth.F), noisy_n = face_normals(c.noisy.V, c.noisy.F);
+      const std::vector<FaceClass> cls = face_classes(c.truth.V, c.truth.F, noisy_topo, one);
+      const auto deg = [](const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / M_PI; };
+      for (Eigen::Index f = 0; f < c.truth.F.rows(); ++f) {
+        if (clean_n.row(f).squaredNorm() == 0 || noisy_n.row(f).squaredNorm() == 0) continue;
+        const auto k = static_cast<std::size_t>(cls[static_cast<std::size_t>(f)]);
+        o.prior_err[k].push_back(deg(prior.guidance.row(f).transpose(), clean_n.row(f).transpose()));
+        o.noisy_err[k].push_back(deg(noisy_n.row(f).transpose(), clean_n.row(f).transpose()));
+      }
+    }
     const DenoiseParams pick = r.report.params;
     const Vertices truth = face_normals(c.truth.V, c.truth.F);
     const std::uint64_t seed = case_seed(c.mesh, c.config);
-    const Vertices g6 = perturbed_normals(truth, 6, seed ^ 6), g10 = perturbed_normals(truth, 10, seed ^ 10);
+    const Vertices g6 = bench::perturbed_normals(truth, 6, seed ^ 6), g10 = bench::perturbed_normals(truth, 10, seed ^ 10);
     const auto run = [&](const DenoiseParams& q, const Vertices* guidance) {
       RunOptions options;
       options.guidance = guidance;
@@ -682,11 +708,15 @@ int guided_command(const fs::path& data, int jobs, const std::string& which, con
     DenoiseParams half = pick, s30 = pick;
     half.n_normal = pick.n_normal / 2;
     s30.sigma_gamma = 30;
-    Out& o = out[i];
     const Vertices self = face_normals(r.mesh.V, r.mesh.F);
-    o.msae = {msae(r.mesh, c.truth), run(pick, nullptr), run(pick, &g6), run(pick, &g10), run(half, &g6), run(s30, nullptr),
-              run(s30, &g6), run(DenoiseParams{}, nullptr), run(DenoiseParams{}, &g6), run(DenoiseParams{}, &g10),
-              run(pick, &self), run(s30, &self)};
+    const auto t_pick = std::chrono::steady_clock::now();
+    const double pick_msae = run(pick, nullptr);
+    o.pick_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_pick).count();
+    const auto heavy = [&](const DenoiseParams& q, const Vertices* guidance) { return light ? nan : run(q, guidance); };
+    o.msae = {msae(r.mesh, c.truth), pick_msae, run(pick, &g6), heavy(pick, &g10), heavy(half, &g6), run(s30, nullptr),
+              run(s30, &g6), run(DenoiseParams{}, nullptr), run(DenoiseParams{}, &g6), heavy(DenoiseParams{}, &g10),
+              heavy(pick, &self), heavy(s30, &self), run(pick, &prior.guidance), run(s30, &prior.guidance),
+              run(DenoiseParams{}, &prior.guidance)};
     // b8: a small grid around the pick, where the guidance weighs: its pre-filter and vertex
     // steps (the paper's row's where it is identity) with sigma_gamma 20, 30, 45 and 20 or 100
     // normal iterations, with the pick and the paper's row; the best of the eight unguided
@@ -696,6 +726,10 @@ int guided_command(const fs::path& data, int jobs, const std::string& which, con
     o.b8g6 = std::min(o.msae[PickG6], o.msae[PaperG6]);
     for (const double sigma_gamma : {20.0, 30.0, 45.0})
       for (const int n_normal : {20, 100}) {
+        if (light) {
+          o.b8 = o.b8g6 = nan;
+          break;
+        }
         DenoiseParams q = base;
         q.sigma_gamma = sigma_gamma;
         q.n_normal = n_normal;
@@ -711,11 +745,12 @@ int guided_command(const fs::path& data, int jobs, const std::string& which, con
   // or guided at 6 degrees (the outside measurement was a best of three sets).
   const std::vector<std::string> names{"g6/p",    "g10/p",  "g6h/p",  "s30g6/p", "pg6/pp",  "pg10/pp",
                                        "b3g6/b3", "b3g6/p", "self/p", "s30sf/p", "b8/p",   "b8g6/b8",
-                                       "b8g6/p",  "p/grid", "b3g6/grd", "b8g6/grd"};
+                                       "b8g6/p",  "p/grid", "b3g6/grd", "b8g6/grd", "gL/p",   "s30gL/p",
+                                       "pgL/pp",  "s30gL/s30g6", "b3gL/p"};
   std::printf("%-10s %-22s %-9s %7s %6s %-6s  %8s %8s %8s %8s ", "set", "mesh", "config", "faces", "sharp%", "class", "pick", "g6",
               "paper", "pg6");
   for (const std::string& n : names) std::printf(" %8s", n.c_str());
-  std::printf("  pick\n");
+  std::printf("  %-24s %6s %6s %6s\n", "pick", "r p50", "r p90", "r >2");
   std::map<std::string, std::vector<std::vector<double>>> groups;  // name -> columns of ratios
   int mismatched = 0;
   for (std::size_t i = 0; i < cases.size(); ++i) {
@@ -730,9 +765,12 @@ int guided_command(const fs::path& data, int jobs, const std::string& which, con
                                      b3g6 / b3,             b3g6 / m[Pick],         m[PickSelf] / m[Pick],
                                      m[S30Self] / m[Pick],  out[i].b8 / m[Pick],    out[i].b8g6 / out[i].b8,
                                      out[i].b8g6 / m[Pick], grid > 0 ? m[Pick] / grid : 0,
-                                     grid > 0 ? b3g6 / grid : 0, grid > 0 ? out[i].b8g6 / grid : 0};
+                                     grid > 0 ? b3g6 / grid : 0, grid > 0 ? out[i].b8g6 / grid : 0,
+                                     m[PickGL] / m[Pick],   m[S30GL] / m[Pick],     m[PaperGL] / m[Paper],
+                                     m[S30GL] / m[S30G6],   std::min({m[PickGL], m[S30GL], m[PaperGL]}) / m[Pick]};
     const std::string by_pick = out[i].chosen == "identity" ? "identity" : out[i].sigma_gamma >= 90 ? "sigma_gamma 90" : "sigma_gamma <= 45";
-    for (const std::string& g : {std::string("all"), "kind:" + c.config, "class:" + cls, "pick:" + by_pick}) {
+    const std::string reading = out[i].reading.median_deg < 2 ? "reading: median < 2 deg" : "reading: median >= 2 deg";
+    for (const std::string& g : {std::string("all"), "kind:" + c.config, "class:" + cls, "pick:" + by_pick, reading}) {
       auto& cols = groups[g];
       cols.resize(ratios.size());
       for (std::size_t k = 0; k < ratios.size(); ++k) cols[k].push_back(ratios[k]);
@@ -741,7 +779,8 @@ int guided_command(const fs::path& data, int jobs, const std::string& which, con
                 static_cast<long long>(c.truth.num_faces()), 100 * out[i].sharp, cls.c_str(), 100 * m[Pick], 100 * m[PickG6],
                 100 * m[Paper], 100 * m[PaperG6]);
     for (const double r : ratios) std::printf(" %8.3f", r);
-    std::printf("  %s\n", out[i].chosen.c_str());
+    std::printf("  %-24s %6.2f %6.2f %6.3f\n", out[i].chosen.c_str(), out[i].reading.median_deg, out[i].reading.p90_deg,
+                out[i].reading.share_over_2deg);
   }
   std::printf("\nMSAE x 1e-2. p, pick: auto's pick unguided; g6, g10: the pick guided by the clean face normals with random\n"
               "errors of mean 6 and 10 degrees; g6h: at 6 degrees with half the pick's normal iterations; s30g6: the pick\n"
@@ -760,9 +799,77 @@ int guided_command(const fs::path& data, int jobs, const std::string& which, con
       std::printf(" | %6.3f %6.3f %6.3f", median(col), *std::max_element(col.begin(), col.end()), *std::min_element(col.begin(), col.end()));
     std::printf("\n");
   }
+  // The learned prior's own reading: its angle to the clean normal per clean face class, against
+  // the noisy normals', over every face of the set and per noise kind; its cost.
+  std::printf("\nThe prior's guidance (prior) and the noisy normals (noisy) against the clean normals, degrees:\n"
+              "%-26s %-7s %9s | %8s %8s | %8s %8s\n", "group", "class", "faces", "prior p50", "p90", "noisy p50", "p90");
+  std::map<std::string, std::array<std::pair<std::vector<double>, std::vector<double>>, kFaceClasses>> errs;
+  const auto p90 = [](std::vector<double> v) {
+    const auto k = static_cast<std::ptrdiff_t>(0.9 * static_cast<double>(v.size() - 1) + 0.5);
+    std::nth_element(v.begin(), v.begin() + k, v.end());
+    return v[static_cast<std::size_t>(k)];
+  };
+  std::vector<double> prior_ms;
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    for (const std::string& g : {std::string("all"), "kind:" + cases[i].config})
+      for (int k = 0; k < kFaceClasses; ++k) {
+        auto& [pe, ne] = errs[g][static_cast<std::size_t>(k)];
+        pe.insert(pe.end(), out[i].prior_err[static_cast<std::size_t>(k)].begin(), out[i].prior_err[static_cast<std::size_t>(k)].end());
+        ne.insert(ne.end(), out[i].noisy_err[static_cast<std::size_t>(k)].begin(), out[i].noisy_err[static_cast<std::size_t>(k)].end());
+      }
+    prior_ms.push_back(out[i].prior_ms / std::max(1.0, out[i].pick_ms));
+  }
+  for (const auto& [name, per] : errs)
+    for (int k = 0; k < kFaceClasses; ++k) {
+      const auto& [pe, ne] = per[static_cast<std::size_t>(k)];
+      if (pe.empty()) continue;
+      std::printf("%-26s %-7s %9zu | %8.2f %8.2f | %8.2f %8.2f\n", name.c_str(), face_class_name(static_cast<FaceClass>(k)), pe.size(),
+                  median(pe), p90(pe), median(ne), p90(ne));
+    }
+  std::printf("\nThe prior's cost over one unguided run of the pick (one thread each, loaded machine): median %.3f, worst %.3f\n",
+              median(prior_ms), *std::max_element(prior_ms.begin(), prior_ms.end()));
+  const auto gain = [&](std::size_t column) { return 1 - median(groups["all"][column]); };
+  std::printf("Gain at the median (1 - ratio): pick guided g6 %.3f, gL %.3f; sigma_gamma 30 s30g6 %.3f, s30gL %.3f; paper "
+              "pg6 %.3f, pgL %.3f.\nIssue 48's rule: the learned guidance must gain at least half of what the oracle's gains "
+              "(s30gL against s30g6): %s\n",
+              gain(0), gain(16), gain(3), gain(17), gain(4), gain(18), gain(17) >= 0.5 * gain(3) ? "it does" : "it does not");
   const double med = median(groups["all"][0]);
   std::printf("\nStop rule (issue 48): the pick's MSAE guided at 6 degrees over unguided, median %.3f: %s\n", med,
               med <= 0.85 ? "at least 15% lower, go on" : "less than 15% lower, stop");
+  return 0;
+}
+
+// The per-face prior's cost (issue 48): a noisy torus of 102,400 faces at 0.2 l and the same
+// clean, the features alone and the whole prior (features and network over the faces that do not
+// read plainly flat), on one and two threads (median of three), beside one run of the paper's
+// Table 1 row on the same threads.
+int prior_cost_command() {
+  const TriMesh clean = test::torus(320, 160, 0.3);
+  const TriMesh noisy = test::with_noise(clean, 0.2);
+  std::printf("%-6s %8s %7s %12s %12s %10s %12s\n", "input", "faces", "threads", "features ms", "prior ms", "evaluated",
+              "paper run ms");
+  for (const TriMesh* m : {&noisy, &clean})
+    for (const int threads : {1, 2}) {
+      Executor ex(threads);
+      const Topology topo = Topology::build(m->F, static_cast<std::int32_t>(m->V.rows()));
+      std::vector<double> feat, whole, run;
+      std::int64_t evaluated = 0;
+      for (int rep = 0; rep < 3; ++rep) {
+        auto t = bench::Clock::now();
+        const FaceFeatures ff = face_features(m->V, m->F, topo, ex);
+        feat.push_back(bench::ms_since(t));
+        t = bench::Clock::now();
+        evaluated = face_prior(m->V, m->F, topo, ex).evaluated;
+        whole.push_back(bench::ms_since(t));
+        RunOptions options;
+        options.threads = threads;
+        t = bench::Clock::now();
+        (void)denoise(*m, DenoiseParams{}, options);
+        run.push_back(bench::ms_since(t));
+      }
+      std::printf("%-6s %8lld %7d %12.1f %12.1f %10lld %12.1f\n", m == &noisy ? "noisy" : "clean", static_cast<long long>(m->F.rows()),
+                  threads, median(feat), median(whole), static_cast<long long>(evaluated), median(run));
+    }
   return 0;
 }
 
@@ -773,7 +880,9 @@ int guided_command(const fs::path& data, int jobs, const std::string& which, con
                "                         [--grid-cache FILE] [ROWS.tsv]\n"
                "       tune_bench noise [--data DIR] [--jobs N] [--set train|validation|all]\n"
                "       tune_bench clean [--data DIR] [--jobs N] [--only MESH]\n"
-               "       tune_bench guided [--data DIR] [--jobs N] [--set S] [--only MESH] [--grid-cache FILE] [--max-faces N]\n");
+               "       tune_bench guided [--data DIR] [--jobs N] [--set S] [--only MESH] [--grid-cache FILE] [--max-faces N]\n"
+               "                         [--light]\n"
+               "       tune_bench prior-cost\n");
   std::exit(code);
 }
 
@@ -786,7 +895,7 @@ int main(int argc, char** argv) {
   fs::path data = bench::default_cgal_data(), file;
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::string which = "all", only;
-  bool with_search = false;
+  bool with_search = false, light = false;
   fs::path grid_cache;
   std::int64_t max_faces = std::numeric_limits<std::int64_t>::max();  // guided: larger cases left out
   for (int i = 2; i < argc; ++i) {
@@ -800,19 +909,23 @@ int main(int argc, char** argv) {
     else if (a == "--set") which = value();
     else if (a == "--only") only = value();
     else if (a == "--search") with_search = true;
+    else if (a == "--light") light = true;
     else if (a == "--grid-cache") grid_cache = value();
     else if (a == "--max-faces") max_faces = std::stoll(value());
     else if (a == "--help" || a == "-h") usage(0);
     else if (!a.empty() && a[0] != '-' && file.empty()) file = a;
     else usage(2);
   }
-  if (file.empty() && command != "noise" && command != "clean" && command != "report" && command != "guided") usage(2);
+  if (file.empty() && command != "noise" && command != "clean" && command != "report" && command != "guided" &&
+      command != "prior-cost")
+    usage(2);
   try {
     if (command == "search") return search(data, jobs, which, only, file);
     if (command == "report") return report(data, jobs, which, file, with_search, only, grid_cache);
     if (command == "noise") return noise_command(data, jobs, which);
     if (command == "clean") return clean_command(data, jobs, only);
-    if (command == "guided") return guided_command(data, jobs, which, only, grid_cache, max_faces);
+    if (command == "prior-cost") return prior_cost_command();
+    if (command == "guided") return guided_command(data, jobs, which, only, grid_cache, max_faces, light);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "tune_bench: %s\n", e.what());
     return 1;

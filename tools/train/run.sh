@@ -60,3 +60,14 @@ LD_LIBRARY_PATH="$lib/blas:$lib/lapack" OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
   PYTHONHASHSEED=0 "$python" "$root/tools/train/train.py" "$work/labels.tsv" "$work/descriptors.tsv" "$out" \
   --report "$work/report.json" "${train_args[@]}"
 echo "model written to $out"
+
+# The per-face prior (issue 48; decisions 87-89): its rows and its network, into
+# core/auto/face_model_data.inc, on the same pinned BLAS as the parameter model (decision 85).
+# Not with --tiny: ctest's face_tiny_test.sh checks that part.
+if [ "$tiny" = 0 ]; then
+  "$bin" faces --jobs "$jobs" --cases 1000 --rows 600 "$work/face_rows"
+  LD_LIBRARY_PATH="$lib/blas:$lib/lapack" OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 \
+    OPENBLAS_CORETYPE=Prescott PYTHONHASHSEED=0 "$python" "$root/tools/train/face_train.py" "$work/face_rows" \
+    "$root/core/auto/face_model_data.inc" --hidden 32 --report "$work/face_report.json"
+  echo "face prior written to $root/core/auto/face_model_data.inc"
+fi

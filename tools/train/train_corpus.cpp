@@ -7,17 +7,34 @@
 //       identity; appends, and skips the cases OUT already holds (resumable).
 //   train_corpus describe [--data DIR] [--jobs N] [--limit N] [--shapes A,B] OUT.tsv
 //       every case's run-time descriptors (core/auto/descriptors.h); resumable the same way.
+//   train_corpus faces    [--data DIR] [--jobs N] [--cases N] [--rows N] OUT
+//       the per-face prior's rows (issue 48; decisions 87-88): N cases (default 800) drawn by a
+//       hash of their names, three in four from training-split shapes and the rest from
+//       holdout-split shapes, each giving at most --rows faces (default 600), a quarter per
+//       clean face class (flat, curved, crease, corner). Writes OUT.train.f32 and
+//       OUT.holdout.f32 (float32 rows of kFaceRowWidth: the features, the clean normal in the
+//       face's frame, the noisy-to-clean angle in radians, the class) and OUT.cases.tsv. The
+//       same bytes for any --jobs.
+//   train_corpus guided   [--data DIR] [--jobs N] [--cases N] [--max-faces N]
+//       issue 48's paired check of the per-face prior on holdout-split shapes, where its rule
+//       is chosen (never on tune_bench's validation set): N holdout cases (default 80) of at most
+//       --max-faces (default 20,000), auto's pick held fixed, unguided, guided by the oracle
+//       (clean normals turned by 6 degrees) and by the prior, for the pick, the pick with
+//       sigma_gamma 20, 30 and 45 degrees and the paper's Table 1 row (and the diagnostic guidances
+//       cmd_guided names); median ratios per group.
 //
 // DIR: CGAL's demo data (scripts/fetch-cgal-data.sh; default $MDN_CGAL_DATA or
 // third_party_data/cgal). --limit N keeps the first N cases of each split's shapes in turn
 // (CI's tiny run).
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <set>
@@ -27,7 +44,11 @@
 #include <vector>
 
 #include "../../tests/bench/cgal_data.h"
+#include "../../tests/bench/oracle_guidance.h"
+#include "core/auto/face_prior.h"
+#include "core/auto/choice.h"
 #include "core/auto/descriptors.h"
+#include "core/auto/face_features.h"
 #include "core/auto/measures.h"
 #include "core/metrics.h"
 #include "core/normal_filter.h"
@@ -50,6 +71,9 @@ struct Options {
   fs::path data = bench::default_cgal_data();
   int jobs = 2;
   int limit = 0;
+  int cases = 0;    // faces, guided: cases drawn (0: 800 and 80)
+  int rows = 600;   // faces: rows per case at most
+  std::int64_t max_faces = 20000;  // guided: larger cases left out
   std::set<std::string> shapes;
   std::vector<std::string> positional;
 };
@@ -176,6 +200,201 @@ int cmd_describe(const Options& o) {
   });
 }
 
+// One case's rows of `train_corpus faces` (decision 88): up to `cap` faces, a quarter per
+// clean class in a fixed order (a hash of the case and the face), degenerate faces left out.
+constexpr int kFaceRowWidth = kFaceFeatures + 5;
+std::vector<float> face_rows(const NoisyCase& pair, const std::string& name, int cap) {
+  Executor ex(1);
+  const Topology topo = Topology::build(pair.clean.F, static_cast<std::int32_t>(pair.clean.num_vertices()));
+  const FaceFeatures ff = face_features(pair.noisy, pair.clean.F, topo, ex);
+  const std::vector<FaceClass> cls = face_classes(pair.clean.V, pair.clean.F, topo, ex);
+  const Vertices clean = face_normals(pair.clean.V, pair.clean.F);
+  std::array<std::vector<std::pair<std::uint64_t, std::int64_t>>, kFaceClasses> by_class;
+  const std::uint64_t seed = hash_name(name);
+  for (std::int64_t f = 0; f < pair.clean.num_faces(); ++f) {
+    if (clean.row(f).squaredNorm() == 0 || ff.noisy.row(f).squaredNorm() == 0) continue;
+    const std::uint64_t key = (seed ^ (static_cast<std::uint64_t>(f) * 0x9E3779B97F4A7C15ull)) * 0xBF58476D1CE4E5B9ull;
+    by_class[static_cast<std::size_t>(cls[static_cast<std::size_t>(f)])].push_back({key, f});
+  }
+  std::vector<float> out;
+  for (int c = 0; c < kFaceClasses; ++c) {
+    auto& faces = by_class[static_cast<std::size_t>(c)];
+    std::sort(faces.begin(), faces.end());
+    const std::size_t take = std::min<std::size_t>(faces.size(), static_cast<std::size_t>(cap / kFaceClasses));
+    for (std::size_t k = 0; k < take; ++k) {
+      const std::int64_t f = faces[k].second;
+      for (int j = 0; j < kFaceFeatures; ++j) out.push_back(static_cast<float>(ff.X(f, j)));
+      const Vec3 target = to_frame(ff, f, clean.row(f).transpose());
+      for (int j = 0; j < 3; ++j) out.push_back(static_cast<float>(target(j)));
+      const Vec3 n0 = ff.noisy.row(f).transpose(), nc = clean.row(f).transpose();
+      out.push_back(static_cast<float>(std::atan2(n0.cross(nc).norm(), n0.dot(nc))));
+      out.push_back(static_cast<float>(c));
+    }
+  }
+  return out;
+}
+
+int cmd_faces(const Options& o, int wanted, int cap) {
+  const fs::path cgal = bench::cgal_meshes(o.data);
+  Options all = o;
+  all.limit = 0;
+  std::map<std::string, Shape> shapes;
+  std::vector<CaseRef> cases = all_cases(cgal, all, shapes);
+  std::sort(cases.begin(), cases.end(),
+            [](const CaseRef& a, const CaseRef& b) { return hash_name(a.name()) < hash_name(b.name()); });
+  std::vector<CaseRef> chosen;
+  for (const std::string split : {"train", "holdout"}) {
+    const int want = split == "train" ? wanted - wanted / 4 : wanted / 4;
+    int n = 0;
+    for (const CaseRef& c : cases)
+      if (n < want && split_of(c.shape) == split) {
+        chosen.push_back(c);
+        ++n;
+      }
+  }
+  std::vector<std::vector<float>> rows(chosen.size());
+  std::atomic<int> finished{0};
+  const auto t0 = std::chrono::steady_clock::now();
+  run_parallel(chosen.size(), o.jobs, [&](std::size_t i) {
+    const CaseRef& c = chosen[i];
+    const Shape& s = shapes.at(c.shape);
+    rows[i] = face_rows(make_noisy_case(s, c.noise, hash_name(s.name + "/" + c.noise)), c.name(), cap);
+    const int k = ++finished;
+    if (k % 50 == 0) {
+      std::printf("%d / %zu (%.0f s)\n", k, chosen.size(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      std::fflush(stdout);
+    }
+  });
+  const std::string prefix = o.positional.at(0);
+  std::ofstream train(prefix + ".train.f32", std::ios::binary), holdout(prefix + ".holdout.f32", std::ios::binary),
+      index(prefix + ".cases.tsv");
+  index << "case\tshape\tsplit\tnoise\trows\n";
+  std::array<std::size_t, 2> total{0, 0};
+  for (std::size_t i = 0; i < chosen.size(); ++i) {
+    const bool is_train = split_of(chosen[i].shape) == "train";
+    std::ofstream& file = is_train ? train : holdout;
+    file.write(reinterpret_cast<const char*>(rows[i].data()), static_cast<std::streamsize>(rows[i].size() * sizeof(float)));
+    const std::size_t n = rows[i].size() / kFaceRowWidth;
+    total[is_train ? 0 : 1] += n;
+    index << chosen[i].name() << '\t' << chosen[i].shape << '\t' << split_of(chosen[i].shape) << '\t' << chosen[i].noise << '\t' << n
+          << '\n';
+  }
+  std::printf("%zu cases: %zu training rows, %zu holdout rows of %d floats\n", chosen.size(), total[0], total[1], kFaceRowWidth);
+  return 0;
+}
+
+double median_of(std::vector<double> v) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+int cmd_guided(const Options& o, int wanted, std::int64_t max_faces) {
+  const fs::path cgal = bench::cgal_meshes(o.data);
+  Options all = o;
+  all.limit = 0;
+  std::map<std::string, Shape> shapes;
+  std::vector<CaseRef> cases = all_cases(cgal, all, shapes);
+  std::sort(cases.begin(), cases.end(),
+            [](const CaseRef& a, const CaseRef& b) { return hash_name(a.name()) < hash_name(b.name()); });
+  std::vector<CaseRef> chosen;
+  for (const CaseRef& c : cases)
+    if (static_cast<int>(chosen.size()) < wanted && split_of(c.shape) == "holdout" && c.noise != "clean" &&
+        shapes.at(c.shape).mesh.num_faces() <= max_faces)
+      chosen.push_back(c);
+  // s30gF, s30gS: a diagnosis of where the prior falls short of the oracle: the oracle's guidance
+  // at the clean surface's crease and corner faces and the prior's elsewhere (F), and the other
+  // way round (S).
+  // gP, s30gP, pgP: guided by the most consistent patch's normal (decision 87's reading, no
+  // network: guided normal filtering's patch choice over one ring).
+  enum Run { P, G6, GL, S20GL, S30, S30G6, S30GL, S45GL, PP, PG6, PGL, S30GF, S30GS, GP, S30GP, PGP, kRuns };
+  const std::vector<std::string> names{"g6/p",   "gL/p",     "s20gL/p", "s30/p",   "s30g6/p", "s30gL/p", "s45gL/p",
+                                       "pg6/pp", "pgL/pp",   "best3L/p", "s30gF/p", "s30gS/p", "gP/p",    "s30gP/p",
+                                       "pgP/pp"};
+  struct Out {
+    std::array<double, kRuns> msae;
+    std::string pick;
+    double sigma_gamma = 0, reading = 0;
+  };
+  std::vector<Out> out(chosen.size());
+  run_parallel(chosen.size(), o.jobs, [&](std::size_t i) {
+    const CaseRef& c = chosen[i];
+    const Shape& s = shapes.at(c.shape);
+    const NoisyCase pair = make_noisy_case(s, c.noise, hash_name(s.name + "/" + c.noise));
+    const TriMesh noisy{pair.noisy, pair.clean.F};
+    DenoiseParams automatic;
+    automatic.mode = ParamMode::Auto;
+    const DenoiseResult r = denoise(noisy, automatic);
+    const DenoiseParams pick = r.report.params;
+    Executor one(1);
+    const Topology topo = Topology::build(noisy.F, static_cast<std::int32_t>(noisy.V.rows()));
+    const FacePrior prior = face_prior(noisy.V, noisy.F, topo, one);
+    const Vertices g6 = bench::perturbed_normals(face_normals(pair.clean.V, pair.clean.F), 6, hash_name(c.name()) ^ 6);
+    const auto run = [&](const DenoiseParams& q, const Vertices* guidance) {
+      RunOptions options;
+      options.guidance = guidance;
+      return msae(denoise(noisy, q, options).mesh, pair.clean);
+    };
+    const auto with_gamma = [&](double g) {
+      DenoiseParams q = pick;
+      q.sigma_gamma = g;
+      return q;
+    };
+    const Vertices* L = &prior.guidance;
+    const std::vector<FaceClass> cls = face_classes(pair.clean.V, pair.clean.F, topo, one);
+    Vertices patch(noisy.F.rows(), 3);
+    {
+      const FaceFeatures ff = face_features(noisy.V, noisy.F, topo, one);
+      for (Eigen::Index f = 0; f < noisy.F.rows(); ++f) {
+        const Vec3 local = ff.X.row(f).segment<3>(36).transpose();
+        patch.row(f) = (local.norm() > 0 ? from_frame(ff, f, local.normalized()) : Vec3(ff.noisy.row(f).transpose())).transpose();
+      }
+    }
+    Vertices at_features = prior.guidance, elsewhere = g6;
+    for (Eigen::Index f = 0; f < noisy.F.rows(); ++f)
+      if (cls[static_cast<std::size_t>(f)] == FaceClass::Crease || cls[static_cast<std::size_t>(f)] == FaceClass::Corner) {
+        at_features.row(f) = g6.row(f);
+        elsewhere.row(f) = prior.guidance.row(f);
+      }
+    out[i] = {{run(pick, nullptr), run(pick, &g6), run(pick, L), run(with_gamma(20), L), run(with_gamma(30), nullptr),
+               run(with_gamma(30), &g6), run(with_gamma(30), L), run(with_gamma(45), L), run(DenoiseParams{}, nullptr),
+               run(DenoiseParams{}, &g6), run(DenoiseParams{}, L), run(with_gamma(30), &at_features),
+               run(with_gamma(30), &elsewhere), run(pick, &patch), run(with_gamma(30), &patch), run(DenoiseParams{}, &patch)},
+              r.report.choice->chosen, pick.sigma_gamma, prior.summary.median_deg};
+  });
+  std::map<std::string, std::vector<std::vector<double>>> groups;
+  std::printf("%-40s %7s %-24s %6s", "case", "faces", "pick", "read");
+  for (const std::string& n : names) std::printf(" %8s", n.c_str());
+  std::printf("\n");
+  for (std::size_t i = 0; i < chosen.size(); ++i) {
+    const auto& m = out[i].msae;
+    const std::vector<double> ratios{m[G6] / m[P],  m[GL] / m[P],  m[S20GL] / m[P], m[S30] / m[P],   m[S30G6] / m[P],
+                                     m[S30GL] / m[P], m[S45GL] / m[P], m[PG6] / m[PP], m[PGL] / m[PP],
+                                     std::min({m[GL], m[S30GL], m[PGL]}) / m[P], m[S30GF] / m[P], m[S30GS] / m[P],
+                                     m[GP] / m[P], m[S30GP] / m[P], m[PGP] / m[PP]};
+    const std::string kind = chosen[i].noise.substr(0, chosen[i].noise.find(':'));
+    const std::string by_pick = out[i].pick == "identity" ? "identity" : out[i].sigma_gamma >= 90 ? "sigma_gamma 90" : "sigma_gamma <= 45";
+    for (const std::string& g : {std::string("all"), "kind:" + kind, "pick:" + by_pick}) {
+      auto& cols = groups[g];
+      cols.resize(ratios.size());
+      for (std::size_t k = 0; k < ratios.size(); ++k) cols[k].push_back(ratios[k]);
+    }
+    std::printf("%-40s %7lld %-24s %6.2f", chosen[i].name().c_str(), static_cast<long long>(shapes.at(chosen[i].shape).mesh.num_faces()),
+                out[i].pick.c_str(), out[i].reading);
+    for (const double x : ratios) std::printf(" %8.3f", x);
+    std::printf("\n");
+  }
+  std::printf("\nMedian ratio per group (the same runs, paired per case; worst in brackets):\n%-26s %5s", "group", "cases");
+  for (const std::string& n : names) std::printf(" %15s", n.c_str());
+  std::printf("\n");
+  for (const auto& [name, cols] : groups) {
+    std::printf("%-26s %5zu", name.c_str(), cols[0].size());
+    for (const auto& col : cols) std::printf("   %5.3f (%5.2f)", median_of(col), *std::max_element(col.begin(), col.end()));
+    std::printf("\n");
+  }
+  return 0;
+}
+
 int cmd_shapes(const Options& o) {
   const fs::path cgal = bench::cgal_meshes(o.data);
   int cases = 0;
@@ -196,7 +415,7 @@ int cmd_shapes(const Options& o) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: train_corpus shapes|label|describe [--data DIR] [--jobs N] [--limit N] [--shapes A,B] [OUT.tsv]\n");
+    std::fprintf(stderr, "usage: train_corpus shapes|label|describe|faces|guided [--data DIR] [--jobs N] [--limit N] [--shapes A,B] [--cases N] [--rows N] [OUT]\n");
     return 2;
   }
   const std::string verb = argv[1];
@@ -210,6 +429,9 @@ int main(int argc, char** argv) {
     if (a == "--data") o.data = value();
     else if (a == "--jobs") o.jobs = std::stoi(value());
     else if (a == "--limit") o.limit = std::stoi(value());
+    else if (a == "--cases") o.cases = std::stoi(value());
+    else if (a == "--rows") o.rows = std::stoi(value());
+    else if (a == "--max-faces") o.max_faces = std::stoll(value());
     else if (a == "--shapes") {
       std::stringstream ss(value());
       for (std::string s; std::getline(ss, s, ',');) o.shapes.insert(s);
@@ -217,9 +439,11 @@ int main(int argc, char** argv) {
   }
   try {
     if (verb == "shapes") return cmd_shapes(o);
-    if (o.positional.size() != 1) throw std::invalid_argument(verb + " needs OUT.tsv");
+    if (verb == "guided") return cmd_guided(o, o.cases > 0 ? o.cases : 80, o.max_faces);
+    if (o.positional.size() != 1) throw std::invalid_argument(verb + " needs OUT");
     if (verb == "label") return cmd_label(o);
     if (verb == "describe") return cmd_describe(o);
+    if (verb == "faces") return cmd_faces(o, o.cases > 0 ? o.cases : 800, o.rows);
     throw std::invalid_argument("unknown verb " + verb);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "train_corpus: %s\n", e.what());
