@@ -253,6 +253,17 @@ std::vector<Setting> access_and_log_settings() {
          c.api_keys_file = v;
        },
        [](const ServerConfig& c) { return c.api_keys_file.empty() ? std::string("(none)") : c.api_keys_file; }},
+      {"trusted-proxies", "MDN_TRUSTED_PROXIES",
+       "comma-separated IPv4/IPv6 CIDRs of the proxies in front (e.g. 10.0.0.0/8,::1/128): from a peer in them, the "
+       "client (its share, the access log) is the rightmost X-Forwarded-For entry not in them; empty = the peer",
+       [](ServerConfig& c, const std::string& n, const std::string& v) {
+         try {
+           c.trusted_proxies = TrustedProxies::parse(v);
+         } catch (const std::invalid_argument& e) {
+           throw ConfigError(n + ": " + e.what());
+         }
+       },
+       [](const ServerConfig& c) { return c.trusted_proxies.empty() ? std::string("(none)") : c.trusted_proxies.text(); }},
       {"cors-origin", "MDN_CORS_ORIGIN", "Access-Control-Allow-Origin for browser clients; empty disables CORS",
        [](ServerConfig& c, const std::string&, const std::string& v) { c.cors_origin = v; },
        [](const ServerConfig& c) { return c.cors_origin.empty() ? std::string("(disabled)") : c.cors_origin; }},

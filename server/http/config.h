@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/io/document.h"
+#include "server/http/trusted_proxies.h"
 
 namespace mdn::http {
 
@@ -110,6 +111,10 @@ struct ServerConfig {
   // Exclusive with --auth-token.
   std::vector<ApiKey> api_keys;
   std::string api_keys_file;
+  // --trusted-proxies / MDN_TRUSTED_PROXIES: CIDRs of the proxies in front (decision 86); from
+  // those, the client is read from X-Forwarded-For for the shares and the access log. None: the
+  // socket's peer is the client.
+  TrustedProxies trusted_proxies;
   std::string cors_origin = "*"; // --cors-origin; Access-Control-Allow-Origin; empty = no CORS
   bool web = true;               // --web / MDN_WEB on|off; the web page at / (off: API only)
   LogFormat log_format = LogFormat::Text;  // --log-format text|json

@@ -455,16 +455,19 @@ struct HttpService::Impl {
     if (!log) return;
     // Probes are frequent: log them at debug level.
     const bool probe = route == "/healthz" || route == "/readyz" || route == "/metrics";
-    // req.remote_addr is the socket's peer; never the REMOTE_ADDR header a client may send.
-    log->log(probe ? spdlog::level::debug : spdlog::level::info, "request",
-             {{"request_id", res.get_header_value("X-Request-Id")},
-              {"method", req.method},
-              {"path", req.path},
-              {"route", route},
-              {"status", res.status},
-              {"duration_ms", ms},
-              {"bytes_out", res.body.size()},
-              {"remote", req.remote_addr}});
+    // req.remote_addr is the socket's peer; never the REMOTE_ADDR header a client may send. The
+    // client is the peer, or from a --trusted-proxies peer its X-Forwarded-For (decision 86).
+    const std::string client = config.trusted_proxies.client_address_of(req.remote_addr, req.headers);
+    nlohmann::json fields = {{"request_id", res.get_header_value("X-Request-Id")},
+                             {"method", req.method},
+                             {"path", req.path},
+                             {"route", route},
+                             {"status", res.status},
+                             {"duration_ms", ms},
+                             {"bytes_out", res.body.size()},
+                             {"remote", client}};
+    if (client != req.remote_addr) fields["proxy"] = req.remote_addr;
+    log->log(probe ? spdlog::level::debug : spdlog::level::info, "request", fields);
   }
 
   // ---------------------------------------------------------------- state

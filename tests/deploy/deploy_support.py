@@ -262,9 +262,10 @@ class Response:
             raise TestFailure("expected JSON, got %d %r" % (self.status, self.body[:200]))
 
 
-def request(port, method, path, body=None, headers=None, timeout=60, host="127.0.0.1"):
-    """One request on a fresh connection. Raises OSError/http.client errors on failure."""
-    conn = http.client.HTTPConnection(host, port, timeout=timeout)
+def request(port, method, path, body=None, headers=None, timeout=60, host="127.0.0.1", source=None):
+    """One request on a fresh connection (from the local address `source` if given, e.g. another
+    loopback address). Raises OSError/http.client errors on failure."""
+    conn = http.client.HTTPConnection(host, port, timeout=timeout, source_address=(source, 0) if source else None)
     try:
         conn.request(method, path, body=body, headers=headers or {})
         r = conn.getresponse()

@@ -17,6 +17,10 @@ docker-compose.yml).
      whichever replica each request reaches. The balancer's own answers: an oversized body
      refused with 413 before any replica sees it, /metrics not proxied, and a replica's own
      error passed through unchanged and not retried.
+  6. Fair shares per client through nginx (decision 86): the replicas trust nginx's address
+     (MDN_TRUSTED_PROXIES), so clients at 127.0.0.2 and 127.0.0.3 have a share each; one over
+     its MDN_CLIENT_MAX_STORED_JOBS gets 429 while the other is served, and an X-Forwarded-For
+     it writes itself does not make it another client.
 
 Every process started here is stopped at the end, also when a check fails.
 """
@@ -41,6 +45,7 @@ from deploy_support import (Processes, TestFailure, check, check_denoised, free_
                             metric, noisy_icosphere_off, run_main, tail, wait_http)
 
 DENOISE_OK = {"route": "/v1/denoise", "method": "POST", "status": "200"}
+CLIENT_JOBS = 8  # --client-max-stored-jobs of the replicas
 
 
 def parse_args():
@@ -168,12 +173,16 @@ def main():
             time.sleep(0.05)
         queue_url = "redis://127.0.0.1:%d/0" % redis_port
 
-        # Replicas: the defaults of docker-compose.yml, except one worker each (two shared cores).
+        # Replicas: the defaults of docker-compose.yml, except one worker each (two shared cores),
+        # a small share of stored jobs per client (step 6; step 5 holds 6 at once), and nginx's
+        # address alone trusted (the compose file trusts the private ranges nginx lives in; here
+        # the clients are on loopback too).
         replicas, servers = [], []
         for i in range(args.replicas):
             port_file = os.path.join(tmp, "replica-%d.port" % i)
             p = procs.start([args.server, "--host", "127.0.0.1", "--port", "0", "--port-file", port_file,
-                             "--workers", "1", "--log-format", "json", "--log-level", "warn", "--queue", queue_url],
+                             "--workers", "1", "--log-format", "json", "--log-level", "warn", "--queue", queue_url,
+                             "--trusted-proxies", "127.0.0.1/32", "--client-max-stored-jobs", str(CLIENT_JOBS)],
                             os.path.join(tmp, "replica-%d.log" % i))
             end = time.monotonic() + 30
             while not os.path.exists(port_file):
@@ -353,6 +362,24 @@ def main():
             r = request(lb, "DELETE", "/v1/jobs/" + jid)
             check(r.status == 204, "DELETE /v1/jobs/%s through the balancer: %d" % (jid, r.status))
         log("jobs: %d created, polled, fetched and deleted through the balancer (shared Redis queue)" % len(job_ids))
+
+        # 6. Each client its share: nginx forwards the address it saw, the replicas believe it.
+        def submit(source, headers=None):
+            h = {"Content-Type": "model/x-off"}
+            h.update(headers or {})
+            r = request(lb, "POST", "/v1/jobs", small, h, source=source)
+            check(r.status in (202, 429), "POST /v1/jobs from %s: %d %r" % (source, r.status, r.body[:300]))
+            if r.status == 429:
+                check(r.json().get("type") == "urn:meshdenoise:problem:over-client-share", "429 from %s: %r"
+                      % (source, r.body[:300]))
+            return r.status
+        greedy = [submit("127.0.0.2") for _ in range(CLIENT_JOBS + 1)]
+        check(greedy == [202] * CLIENT_JOBS + [429], "127.0.0.2's jobs through nginx: %s" % greedy)
+        spoofed = submit("127.0.0.2", {"X-Forwarded-For": "127.0.0.3"})
+        check(spoofed == 429, "127.0.0.2 writing X-Forwarded-For: 127.0.0.3 was another client (%d)" % spoofed)
+        check(submit("127.0.0.3") == 202, "127.0.0.3 was refused with 127.0.0.2's share full: one share for all")
+        log("shares: 127.0.0.2 refused 429 after %d jobs (also when it writes X-Forwarded-For), 127.0.0.3 served"
+            % CLIENT_JOBS)
 
         conn = http.client.HTTPConnection("127.0.0.1", lb, timeout=30)
         try:

@@ -2,10 +2,12 @@
 // loopback: one client over its share of the job store or of the queued request bytes is told
 // 429 with Retry-After while another client is still served; downloaded and cancelled jobs give
 // their slots up; the bytes of queued bodies are bounded, and the memory they took returns once
-// the jobs end. (The Redis store's shares: redis_queue_test, ClientSharesHoldAcrossReplicas.)
+// the jobs end. Behind a --trusted-proxies proxy each forwarded client has its own share
+// (decision 86). (The Redis store's shares: redis_queue_test, ClientSharesHoldAcrossReplicas.)
 #include "http_fixture.h"
 
 #include <optional>
+#include <sstream>
 
 namespace mdn::test {
 namespace {
@@ -204,6 +206,73 @@ TEST(HttpClientShares, MemoryOfCancelledBodiesReturns) {
   auto still = c->Get("/v1/jobs/" + long_job);
   ASSERT_TRUE(still);
   EXPECT_EQ(parse_json(still->body).value("state", ""), "running") << "the worker was free: " << still->body;
+}
+
+
+// Decision 86: behind the shipped nginx every client arrived from nginx's address and shared one
+// share, so one anonymous client over it locked every other out (issue 49's finding 4 again).
+// From a --trusted-proxies peer the client is the rightmost untrusted X-Forwarded-For entry.
+// Here the loopback peer plays nginx; `xff` is what nginx would send (the client's own header,
+// if any, then the address it saw). Returns the statuses of `n` tiny jobs.
+std::vector<int> submit_as(httplib::Client& c, const std::string& xff, int n) {
+  std::vector<int> statuses;
+  for (int i = 0; i < n; ++i) {
+    auto r = c.Post("/v1/jobs", {{"X-Forwarded-For", xff}}, noisy_sphere_off(1), "model/x-off");
+    EXPECT_TRUE(r) << xff;
+    if (!r) break;
+    if (r->status != 202) expect_over_share(r);
+    statuses.push_back(r->status);
+  }
+  return statuses;
+}
+
+TEST(HttpClientShares, BehindATrustedProxyEachForwardedClientHasItsOwnShare) {
+  ServerProcess s({"--trusted-proxies", "10.0.0.0/8,127.0.0.1/32,::1/128", "--client-max-stored-jobs", "2",
+                   "--workers", "1", "--log-format", "json"});
+  ASSERT_TRUE(s.started()) << s.log();
+  auto c = s.client();
+  EXPECT_EQ(submit_as(*c, "198.51.100.1", 3), (std::vector<int>{202, 202, 429}));
+  // A second client through the same proxy is served; its own share ends at 2 as well.
+  EXPECT_EQ(submit_as(*c, "198.51.100.2", 3), (std::vector<int>{202, 202, 429}));
+  // Spoofing: entries a client writes itself stay left of the one the proxy appends, and the
+  // walk stops at that one (here as the first client, whatever it claims to be).
+  EXPECT_EQ(submit_as(*c, "198.51.100.3, 198.51.100.1", 1), (std::vector<int>{429}));
+  // Through a chain of trusted proxies (a load balancer's 10.x before nginx), a third client.
+  EXPECT_EQ(submit_as(*c, "198.51.100.1, 203.0.113.9, 10.1.2.3", 1), (std::vector<int>{202}));
+  // The access log names the client, and the proxy it came through.
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  int logged = 0;
+  std::istringstream lines(s.log());
+  for (std::string line; std::getline(lines, line);) {
+    const json j = parse_json(line);
+    if (!j.is_object() || j.value("event", "") != "request" || j.value("route", "") != "/v1/jobs") continue;
+    EXPECT_EQ(j.value("proxy", ""), "127.0.0.1") << line;
+    const std::string remote = j.value("remote", "");
+    EXPECT_TRUE(remote == "198.51.100.1" || remote == "198.51.100.2" || remote == "203.0.113.9") << line;
+    ++logged;
+  }
+  EXPECT_EQ(logged, 8) << s.log();
+}
+
+// Without the flag, or from a peer outside it, X-Forwarded-For is anybody's to write: ignored,
+// and the same traffic is one client (the peer's address).
+TEST(HttpClientShares, FromAnUntrustedPeerForwardedForIsIgnored) {
+  const std::vector<std::vector<std::string>> trusts = {{}, {"--trusted-proxies", "10.0.0.0/8,::1/128"}};
+  for (const std::vector<std::string>& trust : trusts) {
+    std::vector<std::string> args = {"--client-max-stored-jobs", "2", "--workers", "1"};
+    args.insert(args.end(), trust.begin(), trust.end());
+    ServerProcess s(args);
+    ASSERT_TRUE(s.started()) << s.log();
+    auto c = s.client();
+    EXPECT_EQ(submit_as(*c, "198.51.100.1", 2), (std::vector<int>{202, 202})) << trust.size();
+    EXPECT_EQ(submit_as(*c, "198.51.100.2", 1), (std::vector<int>{429})) << trust.size();
+  }
+}
+
+TEST(HttpClientShares, ABadTrustedProxyListStopsTheServer) {
+  ServerProcess s({"--trusted-proxies", "10.0.0.0/8,192.168.0.0/33"});
+  EXPECT_EQ(s.wait_exit(), 2);
+  EXPECT_NE(s.log().find("--trusted-proxies: '192.168.0.0/33' is not an IPv4 or IPv6"), std::string::npos) << s.log();
 }
 
 }  // namespace

@@ -33,6 +33,7 @@ JobRoutes::JobRoutes(const ServerConfig& config, std::shared_ptr<const EventLog>
       pool_(pool),
       store_(store),
       keys_(config.api_keys),
+      proxies_(config.trusted_proxies),
       sync_start_timeout_s_(config.sync_start_timeout_s),
       bodies_(config.max_body_bytes, std::min(config.read_timeout_s, config.body_stall_timeout_s), config.body_timeout_s, metrics),
       queued_bytes_(config.effective_max_queued_bytes(), config.effective_client_max_queued_bytes()),
@@ -48,8 +49,9 @@ const ApiKey* JobRoutes::client_of(const Context& ctx) const {
 
 std::string JobRoutes::share_of(const Context& ctx) const {
   if (const ApiKey* client = client_of(ctx)) return "key:" + client->name;
-  // Behind a proxy every client is the proxy's address: one share (docker/README.md).
-  return "addr:" + ctx.req.remote_addr;
+  // Behind a proxy of --trusted-proxies, the address it forwards for (decision 86); behind any
+  // other, every client is the proxy's address: one share (docker/README.md).
+  return "addr:" + proxies_.client_address_of(ctx.req.remote_addr, ctx.req.headers);
 }
 
 std::pair<service::JobInput, QueuedBytes::Hold> JobRoutes::read_counted_input(Context& ctx, const std::string& share) {

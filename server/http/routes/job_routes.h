@@ -46,7 +46,7 @@ class JobRoutes {
   std::string public_id(const Context& ctx, const std::string& store_id) const;
   const ApiKey* client_of(const Context& ctx) const;
   // Whose share a request counts against (decision 78): "key:<name>" of its --api-keys client,
-  // else "addr:<source address>".
+  // else "addr:<client address>" (the peer, or from a --trusted-proxies peer its X-Forwarded-For).
   std::string share_of(const Context& ctx) const;
   // The job body of this request, counted in the queued bytes of `share` (decision 79): a
   // declared length over a share is refused (429 or 503, and the connection closed) before the
@@ -57,6 +57,7 @@ class JobRoutes {
   WorkerPool& pool_;
   JobStore& store_;
   const ClientKeys keys_;
+  const TrustedProxies proxies_;
   const double sync_start_timeout_s_;  // POST /v1/denoise: longest wait for a worker, then 503
   BodyReader bodies_;
   QueuedBytes queued_bytes_;
