@@ -154,7 +154,9 @@ TEST(HttpClientShares, QueuedBytesOverAShareAreRefusedAndMemoryStaysBounded) {
   for (int i = 0; i < 20; ++i) {
     auto r = first->Post("/v1/jobs", body, "model/x-off");
     expect_over_share(r);
-    if (r && i == 0) EXPECT_EQ(parse_json(r->body).value("limit_bytes", 0), 12 << 20);
+    if (r && i == 0) {
+      EXPECT_EQ(parse_json(r->body).value("limit_bytes", 0), 12 << 20);
+    }
   }
   EXPECT_LT(status_mib(s.pid(), "VmRSS"), rss_one + 40) << "refused bodies were kept";
   // Other clients are served until all of them together reach --max-queued-bytes.

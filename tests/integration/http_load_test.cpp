@@ -4,6 +4,7 @@
 #include <netinet/in.h>
 #include <sys/socket.h>
 
+#include <algorithm>
 #include <atomic>
 #include <fstream>
 #include <map>
@@ -203,7 +204,18 @@ TEST(HttpLoad, SigtermDrainsWithoutLosingAcceptedJobs) {
     sync_status = r ? r->status : -1;
     if (r) sync_body = r->body;
   });
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  // The signal only once the synchronous job is in (queued, running or done: four jobs in all);
+  // a fixed pause lost that race on a loaded machine.
+  const auto in_deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  for (;;) {
+    auto m = c->Get("/metrics");
+    ASSERT_TRUE(m && m->status == 200);
+    const double jobs = metric_value(m->body, "mdn_queue_depth") + metric_value(m->body, "mdn_jobs_running") +
+                        std::max(0.0, metric_value(m->body, "mdn_jobs_total{state=\"succeeded\"}"));
+    if (jobs >= 4) break;
+    ASSERT_LT(std::chrono::steady_clock::now(), in_deadline) << "the synchronous job never arrived";
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
   server.signal(SIGTERM);
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
   // Draining: not ready, no new jobs, but accepted jobs run.
