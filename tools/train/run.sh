@@ -56,8 +56,9 @@ lib=/usr/lib/x86_64-linux-gnu
 for f in blas/libblas.so.3 lapack/liblapack.so.3; do
   [ -e "$lib/$f" ] || { echo "$lib/$f not found: install libblas3 and liblapack3" >&2; exit 2; }
 done
-LD_LIBRARY_PATH="$lib/blas:$lib/lapack" OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 OPENBLAS_CORETYPE=Prescott \
-  PYTHONHASHSEED=0 "$python" "$root/tools/train/train.py" "$work/labels.tsv" "$work/descriptors.tsv" "$out" \
+pinned_python=(env LD_LIBRARY_PATH="$lib/blas:$lib/lapack" OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1
+               OPENBLAS_CORETYPE=Prescott PYTHONHASHSEED=0 "$python")
+"${pinned_python[@]}" "$root/tools/train/train.py" "$work/labels.tsv" "$work/descriptors.tsv" "$out" \
   --report "$work/report.json" "${train_args[@]}"
 echo "model written to $out"
 
@@ -66,8 +67,7 @@ echo "model written to $out"
 # Not with --tiny: ctest's face_tiny_test.sh checks that part.
 if [ "$tiny" = 0 ]; then
   "$bin" faces --jobs "$jobs" --cases 1000 --rows 600 "$work/face_rows"
-  LD_LIBRARY_PATH="$lib/blas:$lib/lapack" OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 \
-    OPENBLAS_CORETYPE=Prescott PYTHONHASHSEED=0 "$python" "$root/tools/train/face_train.py" "$work/face_rows" \
-    "$root/core/auto/face_model_data.inc" --hidden 32 --report "$work/face_report.json"
+  "${pinned_python[@]}" "$root/tools/train/face_train.py" "$work/face_rows" "$root/core/auto/face_model_data.inc" \
+    --hidden 32 --report "$work/face_report.json"
   echo "face prior written to $root/core/auto/face_model_data.inc"
 fi
