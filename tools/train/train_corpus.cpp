@@ -234,14 +234,20 @@ std::vector<float> face_rows(const NoisyCase& pair, const std::string& name, int
   return out;
 }
 
-int cmd_faces(const Options& o, int wanted, int cap) {
-  const fs::path cgal = bench::cgal_meshes(o.data);
+// Every case of the corpus (no --limit), in the order of their names' hashes: the prior's
+// commands draw their cases from its start (decision 88).
+std::vector<CaseRef> cases_by_hash(const Options& o, std::map<std::string, Shape>& shapes) {
   Options all = o;
   all.limit = 0;
-  std::map<std::string, Shape> shapes;
-  std::vector<CaseRef> cases = all_cases(cgal, all, shapes);
+  std::vector<CaseRef> cases = all_cases(bench::cgal_meshes(o.data), all, shapes);
   std::sort(cases.begin(), cases.end(),
             [](const CaseRef& a, const CaseRef& b) { return hash_name(a.name()) < hash_name(b.name()); });
+  return cases;
+}
+
+int cmd_faces(const Options& o, int wanted, int cap) {
+  std::map<std::string, Shape> shapes;
+  const std::vector<CaseRef> cases = cases_by_hash(o, shapes);
   std::vector<CaseRef> chosen;
   for (const std::string split : {"train", "holdout"}) {
     const int want = split == "train" ? wanted - wanted / 4 : wanted / 4;
@@ -290,13 +296,8 @@ double median_of(std::vector<double> v) {
 }
 
 int cmd_guided(const Options& o, int wanted, std::int64_t max_faces) {
-  const fs::path cgal = bench::cgal_meshes(o.data);
-  Options all = o;
-  all.limit = 0;
   std::map<std::string, Shape> shapes;
-  std::vector<CaseRef> cases = all_cases(cgal, all, shapes);
-  std::sort(cases.begin(), cases.end(),
-            [](const CaseRef& a, const CaseRef& b) { return hash_name(a.name()) < hash_name(b.name()); });
+  const std::vector<CaseRef> cases = cases_by_hash(o, shapes);
   std::vector<CaseRef> chosen;
   for (const CaseRef& c : cases)
     if (static_cast<int>(chosen.size()) < wanted && split_of(c.shape) == "holdout" && c.noise != "clean" &&
