@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer harnesses (preset "fuzz": clang, ASan + UBSan), generates their seed
-# corpora and runs each one; exits non-zero on the first harness with a finding (crash,
-# sanitizer report, leak, timeout, out of memory), whose reproducer is left in build/fuzz/findings/.
+# corpora and runs each one (smoke and campaign: as many at a time as there are cores); exits
+# non-zero if a harness has a finding (crash, sanitizer report, leak, timeout, out of memory),
+# whose reproducer is left in build/fuzz/findings/.
 #
 #   scripts/fuzz.sh smoke [SECONDS]      # each harness SECONDS (default 12), what run-tests.sh runs
 #   scripts/fuzz.sh campaign [SECONDS]   # each harness SECONDS (default 7200) or 10M runs, corpora kept
@@ -35,8 +36,9 @@ rm -rf "$build/seeds"
 "$build/tests/fuzz/fuzz_seeds" "$build/seeds"
 mkdir -p "$build/findings" "$build/logs"
 
-failed=0
-for h in "${harnesses[@]}"; do
+# One harness: its run, and in long mode the minimisation; non-zero on a finding.
+run_harness() {
+  local h="$1" dict corpus committed inputs log timeout
   dict="$root/tests/fuzz/dict/$h.dict"
   [ "$h" = glb ] && dict="$root/tests/fuzz/dict/gltf.dict"
   if [ "$h" = job ]; then  # parameters, then a mesh: the two dictionaries in one
@@ -73,7 +75,22 @@ for h in "${harnesses[@]}"; do
   else
     echo "fuzz_$h: FINDING (see $log and $build/findings/$h-*)" >&2
     grep -E "ERROR|FINDING|SUMMARY|==[0-9]+==" "$log" | head -20 >&2 || true
-    failed=1
+    return 1
   fi
+}
+
+# smoke and campaign run nproc harnesses at a time (each is one process), long one after the
+# other; each harness's status goes to a file, so none is lost to the order they end in.
+slots="$(nproc)"
+[ "$mode" = long ] && slots=1
+rm -f "$build"/logs/*.rc
+for h in "${harnesses[@]}"; do
+  while [ "$(jobs -rp | wc -l)" -ge "$slots" ]; do wait -n || true; done
+  { rc=0; run_harness "$h" || rc=$?; echo "$rc" >"$build/logs/$h.rc"; } &
+done
+wait
+failed=0
+for h in "${harnesses[@]}"; do
+  [ "$(cat "$build/logs/$h.rc" 2>/dev/null)" = 0 ] || failed=1
 done
 exit "$failed"
