@@ -36,7 +36,8 @@
 // "scans" (issue 48; decision 60): each validation mesh seen by the virtual depth camera of
 // tools/train/range_scan.h, once by structured light and once by time of flight, at the
 // corpus's three distances in turn by the mesh's index (tools/train's scan_noise_names()
-// without the second pose): the scan's noise-free mesh is the truth. "fused": the same
+// without the second pose), and once by structured light at its native resolution, at the
+// corpus's two distances for it in turn (decision 93): the scan's noise-free mesh is the truth. "fused": the same
 // meshes fused from a turntable's six views (range_scan.h's fuse_scans), the two sensors in
 // turn; the fusion of the noise-free depths is the truth. The report adds how many came back
 // unfiltered.
@@ -201,10 +202,13 @@ std::vector<Case> build_cases(const fs::path& data, const std::string& which, co
 // scanned by both sensor kinds; the distances in turn by the mesh's index.
 // "fused": the same meshes, each fused from a turntable's views by one sensor, in turn.
 std::vector<Case> build_scan_cases(const fs::path& data, const std::string& only, bool fused) {
-  std::vector<std::vector<std::string>> kinds(fused ? 1 : 2);  // one view by structured light, by time of flight
+  // One view by structured light (sampled at 320x240), by time of flight, by structured light
+  // at its native 640x480 (decision 93).
+  std::vector<std::vector<std::string>> kinds(fused ? 1 : 3);
   if (fused) kinds[0] = train::fused_noise_names();
   for (const std::string& noise : fused ? std::vector<std::string>{} : train::scan_noise_names())
-    if (std::count(noise.begin(), noise.end(), ':') == 2) kinds[noise.rfind("scan_sl:", 0) == 0 ? 0 : 1].push_back(noise);
+    if (std::count(noise.begin(), noise.end(), ':') == 2)
+      kinds[noise.rfind("scan_sl:", 0) == 0 ? 0 : noise.rfind("scan_tof:", 0) == 0 ? 1 : 2].push_back(noise);
   // Each mesh once, in the validation set's order, with its clean mesh (an "irregular" case's
   // truth is a refinement of the same surface: used only where the mesh has no other case).
   std::vector<std::string> order;
