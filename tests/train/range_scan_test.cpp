@@ -386,6 +386,12 @@ TEST(CorpusScanCases, AreRebuiltFromTheirNameAndShareTheScansMesh) {
     EXPECT_THROW(apply_noise(shape.mesh, noise, seed), std::invalid_argument);
   }
   EXPECT_THROW(make_noisy_case(shape, "scan_sl:0.3", 1), std::invalid_argument);
+  // Decision 93: the native kind samples every pixel of the same sensor, so the same object
+  // and pose give about four times the faces of the 320x240 kind.
+  const std::int64_t half = make_noisy_case(shape, "scan_sl:0.4:1.2", 5).clean.F.rows(),
+                     native = make_noisy_case(shape, "scan_sl640:0.4:1.2", 5).clean.F.rows();
+  EXPECT_GT(native, 3 * half);
+  EXPECT_LT(native, 5 * half);
   // The fused kinds are built from their names too, though no list holds them (decision 60).
   for (const std::string noise : {"fused_sl:0.4:1.2", "fused_tof:0.3:1.2"}) {
     ASSERT_TRUE(is_scan_noise(noise));
