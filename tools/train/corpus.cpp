@@ -312,8 +312,9 @@ NoisyCase scan_case(const TriMesh& mesh, const std::string& noise, std::uint64_t
   const std::string kind = noise.substr(0, noise.find(':'));
   const std::vector<double> v = parse_levels(noise);
   if (!is_scan_noise(noise) || v.size() < 2 || v.size() > 3) throw std::invalid_argument("unknown noise: " + noise);
-  RangeSensor sensor = kind.ends_with("_sl") || kind == "scan_sl640" ? kinect_v1() : kinect_v2();
-  if (kind == "scan_sl640") sensor.stride = 1;  // decision 93: every native pixel
+  const bool native = kind == "scan_sl640";  // decision 93: every native pixel
+  RangeSensor sensor = kind.ends_with("_sl") || native ? kinect_v1() : kinect_v2();
+  if (native) sensor.stride = 1;
   const bool fused = kind.rfind("fused_", 0) == 0;
   // The pose is the seed's; a pose that sees fewer than 100 faces of the shape (a thin part
   // edge-on) is replaced by the next seed's, so that every name makes a case (decision 60).
