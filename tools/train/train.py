@@ -202,6 +202,16 @@ def main():
     ratios = (Lh[np.arange(len(Lh)), pick] + EPS) / (Lh.min(axis=1) + EPS)
     worst = sorted(zip(ratios, [m["case"] for m in hold_meta], [names[k] for k in pick]), reverse=True)[:10]
     figures["holdout_worst"] = [{"case": c, "ratio": float(r), "pick": p} for r, c, p in worst]
+    # Per noise kind (the part of the noise name before its first ':'), and how often the pick
+    # is identity: on clean cases that is the right answer, on noisy ones a mesh left unfiltered.
+    # --clean-weight is chosen on these holdout figures (decision 94).
+    identity = pick == names.index("identity")
+    kinds = np.array([m["noise"].split(":")[0] for m in hold_meta])
+    figures["holdout_by_noise"] = {
+        k: dict(summary(ratios[kinds == k]), left_alone=int(identity[kinds == k].sum())) for k in sorted(set(kinds))}
+    figures["holdout_clean_left_alone"] = "%d of %d" % (identity[kinds == "clean"].sum(), (kinds == "clean").sum())
+    figures["holdout_noisy_left_alone"] = "%d of %d" % (identity[kinds != "clean"].sum(), (kinds != "clean").sum())
+    figures["holdout_noisy"] = summary(ratios[kinds != "clean"])
     print(json.dumps(figures, indent=1))
 
     try:
