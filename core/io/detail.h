@@ -92,6 +92,11 @@ class LineReader {
   std::int64_t number_ = 0;
 };
 
+// The text formats' one shape of parse error: "OFF line 12: <message>".
+[[noreturn]] inline void fail_at_line(const char* where, const LineReader& reader, const std::string& message) {
+  throw FormatError(std::string(where) + " line " + std::to_string(reader.line_number()) + ": " + message);
+}
+
 // Cooperative cancellation in the decode and encode loops: poll() asks the observer every
 // kCancelStride calls (a few hundred microseconds of text parsing) and throws CancelledError
 // when it wants to stop. A null observer costs one branch per call.

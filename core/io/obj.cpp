@@ -84,14 +84,10 @@ class ObjDocument final : public MeshDocument {
   std::vector<TriMesh> surfaces_;
 };
 
-[[noreturn]] void fail(const LineReader& reader, const std::string& message) {
-  throw FormatError("OBJ line " + std::to_string(reader.line_number()) + ": " + message);
-}
-
 // Resolves a 1-based (or negative, relative) OBJ index against `count` entries seen so far.
 std::int64_t resolve(const LineReader& reader, std::string_view token, std::int64_t count, const char* what) {
   std::int64_t index = 0;
-  if (!parse_integer(token, index) || index == 0) fail(reader, std::string("bad ") + what + " index '" + std::string(token.substr(0, 32)) + "'");
+  if (!parse_integer(token, index) || index == 0) fail_at_line("OBJ", reader, std::string("bad ") + what + " index '" + std::string(token.substr(0, 32)) + "'");
   return index > 0 ? index - 1 : count + index;
 }
 
@@ -120,8 +116,8 @@ std::unique_ptr<MeshDocument> decode_obj(std::string_view bytes, const Limits& l
       after = rest;
       for (int k = 0; k < 3; ++k) {
         double value = 0;
-        if (!parse_number(next_token(after), value)) fail(reader, "expected three vertex coordinates");
-        if (!std::isfinite(value)) fail(reader, "non-finite vertex coordinate");
+        if (!parse_number(next_token(after), value)) fail_at_line("OBJ", reader, "expected three vertex coordinates");
+        if (!std::isfinite(value)) fail_at_line("OBJ", reader, "non-finite vertex coordinate");
         coords.push_back(value);
       }
       doc->vertex_spans_.push_back({start, static_cast<std::size_t>(after.data() - text.data())});
@@ -133,7 +129,7 @@ std::unique_ptr<MeshDocument> decode_obj(std::string_view bytes, const Limits& l
       after = rest;
       for (int k = 0; k < 3; ++k) {
         double value = 0;
-        if (!parse_number(next_token(after), value)) fail(reader, "expected three normal coordinates");
+        if (!parse_number(next_token(after), value)) fail_at_line("OBJ", reader, "expected three normal coordinates");
       }
       doc->normal_spans_.push_back({start, static_cast<std::size_t>(after.data() - text.data())});
       ++normal_count;
@@ -150,16 +146,16 @@ std::unique_ptr<MeshDocument> decode_obj(std::string_view bytes, const Limits& l
           const std::string_view vt = corner.substr(s1 + 1, s2 == std::string_view::npos ? std::string_view::npos : s2 - s1 - 1);
           if (!vt.empty()) {
             const std::int64_t t = resolve(reader, vt, texcoord_count, "texture");
-            if (t < 0 || t >= texcoord_count) fail(reader, "texture index out of range");
+            if (t < 0 || t >= texcoord_count) fail_at_line("OBJ", reader, "texture index out of range");
           }
           if (s2 != std::string_view::npos) {
             vn = resolve(reader, corner.substr(s2 + 1), normal_count, "normal");
-            if (vn < 0 || vn >= normal_count) fail(reader, "normal index out of range");
+            if (vn < 0 || vn >= normal_count) fail_at_line("OBJ", reader, "normal index out of range");
           }
         }
         face_normals.push_back(vn);
       }
-      if (poly.indices.size() == static_cast<std::size_t>(poly.offsets.back())) fail(reader, "a face without vertices");
+      if (poly.indices.size() == static_cast<std::size_t>(poly.offsets.back())) fail_at_line("OBJ", reader, "a face without vertices");
       poly.offsets.push_back(static_cast<std::int64_t>(poly.indices.size()));
       check_count(static_cast<std::int64_t>(poly.offsets.size()) - 1, limits.max_faces, "faces");
     }

@@ -73,10 +73,6 @@ class OffDocument final : public MeshDocument {
   std::vector<TriMesh> surfaces_;
 };
 
-[[noreturn]] void fail(const LineReader& reader, const std::string& message) {
-  throw FormatError("OFF line " + std::to_string(reader.line_number()) + ": " + message);
-}
-
 // Next line that is neither blank nor a comment; a trailing comment is cut off.
 bool next_content_line(LineReader& reader, std::string_view& line) {
   while (reader.next(line)) {
@@ -108,14 +104,14 @@ std::unique_ptr<MeshDocument> decode_off(std::string_view bytes, const Limits& l
 
   // The counts may follow the keyword on the same line.
   if (trim(rest).empty()) {
-    if (!next_content_line(reader, line)) fail(reader, "missing vertex and face counts");
+    if (!next_content_line(reader, line)) fail_at_line("OFF", reader, "missing vertex and face counts");
     rest = line;
   }
   std::int64_t nv = 0, nf = 0, ne = 0;
   if (!parse_integer(next_token(rest), nv) || !parse_integer(next_token(rest), nf))
-    fail(reader, "expected '<vertices> <faces> <edges>'");
+    fail_at_line("OFF", reader, "expected '<vertices> <faces> <edges>'");
   const std::string_view edges = next_token(rest);
-  if (!edges.empty() && !parse_integer(edges, ne)) fail(reader, "the edge count is not an integer");
+  if (!edges.empty() && !parse_integer(edges, ne)) fail_at_line("OFF", reader, "the edge count is not an integer");
   check_count(nv, limits.max_vertices, "vertices");
   check_count(nf, limits.max_faces, "faces");
   // Each vertex line takes at least 6 bytes ("0 0 0\n") and each face line 8: a header that
@@ -129,12 +125,12 @@ std::unique_ptr<MeshDocument> decode_off(std::string_view bytes, const Limits& l
   CancelPoll cancel(limits.cancel);
   for (std::int64_t i = 0; i < nv; ++i) {
     cancel.poll();
-    if (!next_content_line(reader, line)) fail(reader, "the file ends after " + std::to_string(i) + " of " + std::to_string(nv) + " vertices");
+    if (!next_content_line(reader, line)) fail_at_line("OFF", reader, "the file ends after " + std::to_string(i) + " of " + std::to_string(nv) + " vertices");
     rest = line;
     for (int k = 0; k < 3; ++k) {
       double value = 0;
-      if (!parse_number(next_token(rest), value)) fail(reader, "expected three vertex coordinates");
-      if (!std::isfinite(value)) fail(reader, "non-finite vertex coordinate");
+      if (!parse_number(next_token(rest), value)) fail_at_line("OFF", reader, "expected three vertex coordinates");
+      if (!std::isfinite(value)) fail_at_line("OFF", reader, "non-finite vertex coordinate");
       poly.V(i, k) = value;
     }
     if (doc->has_normals_)
@@ -145,13 +141,13 @@ std::unique_ptr<MeshDocument> decode_off(std::string_view bytes, const Limits& l
   poly.indices.reserve(static_cast<std::size_t>(nf) * 3);
   for (std::int64_t f = 0; f < nf; ++f) {
     cancel.poll();
-    if (!next_content_line(reader, line)) fail(reader, "the file ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces");
+    if (!next_content_line(reader, line)) fail_at_line("OFF", reader, "the file ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces");
     rest = line;
     std::int64_t n = 0;
-    if (!parse_integer(next_token(rest), n) || n < 1 || n > 1'000'000) fail(reader, "expected a face vertex count");
+    if (!parse_integer(next_token(rest), n) || n < 1 || n > 1'000'000) fail_at_line("OFF", reader, "expected a face vertex count");
     for (std::int64_t k = 0; k < n; ++k) {
       std::int64_t v = 0;
-      if (!parse_integer(next_token(rest), v)) fail(reader, "expected " + std::to_string(n) + " vertex indices");
+      if (!parse_integer(next_token(rest), v)) fail_at_line("OFF", reader, "expected " + std::to_string(n) + " vertex indices");
       poly.indices.push_back(v);
     }
     poly.offsets.push_back(static_cast<std::int64_t>(poly.indices.size()));

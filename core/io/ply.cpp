@@ -306,7 +306,7 @@ void parse_header(LineReader& reader, PlyDocument& doc) {
   std::string_view line;
   bool have_format = false, ended = false;
   auto fail = [&](const std::string& message) -> void {
-    throw FormatError("PLY header line " + std::to_string(reader.line_number()) + ": " + message);
+    fail_at_line("PLY header", reader, message);
   };
   while (reader.next(line)) {
     std::string_view rest = line;

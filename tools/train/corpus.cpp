@@ -17,8 +17,6 @@ namespace mdn::train {
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
 using namespace kit;
 
 using Maker = std::function<TriMesh()>;

@@ -15,8 +15,6 @@ namespace mdn::train::kit {
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
 struct Draw {
   std::mt19937_64 rng;
   double real(double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }

@@ -13,10 +13,6 @@
 
 namespace mdn::train::kit {
 
-namespace {
-constexpr double kPi = std::numbers::pi;
-}  // namespace
-
 // Flips every face if the closed mesh's signed volume is negative (outward normals).
 void orient_outward(TriMesh& m) {
   double volume = 0;

@@ -4,12 +4,15 @@
 
 #include <cstdint>
 #include <functional>
+#include <numbers>
 #include <string>
 #include <vector>
 
 #include "core/mesh.h"
 
 namespace mdn::train::kit {
+
+inline constexpr double kPi = std::numbers::pi;
 
 // Flips every face if the closed mesh's signed volume is negative (outward normals).
 void orient_outward(TriMesh& m);
