@@ -19,7 +19,7 @@ namespace {
 using test::automatic;
 
 double diagonal(const TriMesh& m) { return (m.V.colwise().maxCoeff() - m.V.colwise().minCoeff()).norm(); }
-double max_displacement(const TriMesh& a, const TriMesh& b) { return (a.V - b.V).rowwise().norm().maxCoeff(); }
+using test::max_displacement;
 
 TEST(ChooseParameters, ACleanSurfaceComesBackUnchanged) {
   for (const TriMesh& clean : {test::sphere(4), test::cube(16), test::torus(64, 24, 0.3)}) {

@@ -13,7 +13,7 @@
 namespace mdn {
 namespace {
 
-double angle_deg(const Eigen::RowVector3d& a, const Eigen::RowVector3d& b) {
+double row_angle_deg(const Eigen::RowVector3d& a, const Eigen::RowVector3d& b) {
   return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180.0 / M_PI;
 }
 
@@ -26,7 +26,7 @@ double crease_error(const TriMesh& clean, const Vertices& filtered) {
     bool touches = false;
     for (int k = 0; k < 3; ++k) touches |= std::abs(clean.V(clean.F(f, k), 0)) < 1e-12;
     if (!touches) continue;
-    sum += angle_deg(filtered.row(f), truth.row(f));
+    sum += row_angle_deg(filtered.row(f), truth.row(f));
     ++count;
   }
   return sum / count;
@@ -64,8 +64,8 @@ TEST(L1MedianFilter, ReducesNormalNoiseOnASphere) {
   const Vertices after = l1_median_normal_filter(noisy, clean.F, t, {});
   double e0 = 0, e1 = 0;
   for (Eigen::Index f = 0; f < truth.rows(); ++f) {
-    e0 += angle_deg(before.row(f), truth.row(f));
-    e1 += angle_deg(after.row(f), truth.row(f));
+    e0 += row_angle_deg(before.row(f), truth.row(f));
+    e1 += row_angle_deg(after.row(f), truth.row(f));
     ASSERT_NEAR(after.row(f).norm(), 1.0, 1e-12);
   }
   EXPECT_LT(e1, 0.5 * e0);

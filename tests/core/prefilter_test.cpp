@@ -8,6 +8,7 @@
 
 #include "core/noise.h"
 #include "core/parallel.h"
+#include "support/noisy.h"
 #include "support/shapes.h"
 
 namespace mdn {
@@ -252,15 +253,12 @@ std::vector<std::int32_t> faces_where(const TriMesh& m, const Keep& keep) {
   return faces;
 }
 
-Vertices with_noise(const TriMesh& m, double sigma) {
-  NoiseSpec spec;
-  spec.sigma = sigma;
-  return add_noise(m, spec);
-}
+// Noise along the normal with NoiseSpec's default seed (1).
+Vertices with_noise_v(const TriMesh& m, double sigma) { return test::with_noise(m, sigma, NoiseKind::AlongNormal, 1).V; }
 
 TEST(RegionPrefilter, SmoothsOnlyTheClusterAndKeepsOthersFixed) {
   const TriMesh clean = test::irregular_plane(6, 8);
-  const Vertices noisy = with_noise(clean, 0.5);
+  const Vertices noisy = with_noise_v(clean, 0.5);
   const Topology t = topology_of(clean);
   const std::vector<std::int32_t> left = faces_where(clean, [](const Eigen::RowVector3d& c) { return c(0) < 0.25; });
   std::int64_t unknowns = 0;
@@ -282,7 +280,7 @@ TEST(RegionPrefilter, SmoothsOnlyTheClusterAndKeepsOthersFixed) {
 // = P_U - beta L^T c, L the uniform Laplacian rows of the unknowns, fixed neighbours in c.
 TEST(RegionPrefilter, MatchesTheAssembledSystem) {
   const TriMesh clean = test::irregular_sphere(3);
-  const Vertices noisy = with_noise(clean, 0.3);
+  const Vertices noisy = with_noise_v(clean, 0.3);
   const Topology t = topology_of(clean);
   const std::vector<std::int32_t> faces = faces_where(clean, [](const Eigen::RowVector3d& c) { return c(2) > 0.1; });
   const double beta = 6;
@@ -330,7 +328,7 @@ TEST(RegionPrefilter, MatchesTheAssembledSystem) {
 // passes run in parallel from 32768 unknowns).
 TEST(RegionPrefilter, SameForAnyThreadCount) {
   const TriMesh m = test::plane(200);
-  const Vertices noisy = with_noise(m, 0.3);
+  const Vertices noisy = with_noise_v(m, 0.3);
   const Topology t = topology_of(m);
   std::vector<std::int32_t> faces(static_cast<std::size_t>(m.F.rows()));
   for (std::size_t f = 0; f < faces.size(); ++f) faces[f] = static_cast<std::int32_t>(f);

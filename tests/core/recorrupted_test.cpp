@@ -16,7 +16,7 @@ namespace {
 
 using test::automatic;
 
-double max_displacement(const TriMesh& a, const TriMesh& b) { return (a.V - b.V).rowwise().norm().maxCoeff(); }
+using test::max_displacement;
 
 // Candidates as Search scores them: the identity, the paper's row, a strong CAD-like set and a
 // heavy smoothing one.

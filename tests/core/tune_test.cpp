@@ -81,9 +81,9 @@ TEST(Tune, RefusesMismatchedMeshesAndEmptyLists) {
   EXPECT_THROW(tune_parameters(p.truth, p.noisy, bad, small_grid()), InvalidParamsError);
 }
 
-class CancelAfter : public ProgressObserver {
+class CancelAfterPolls : public ProgressObserver {
  public:
-  explicit CancelAfter(int polls) : left_(polls) {}
+  explicit CancelAfterPolls(int polls) : left_(polls) {}
   void on_progress(Stage, double) override {}
   bool cancel_requested() override { return --left_ < 0; }
 
@@ -93,7 +93,7 @@ class CancelAfter : public ProgressObserver {
 
 TEST(Tune, HonoursCancellation) {
   const Pair p = noisy_cube();
-  CancelAfter cancel(2);
+  CancelAfterPolls cancel(2);
   TuneOptions o = small_grid();
   o.progress = &cancel;
   EXPECT_THROW(tune_parameters(p.truth, p.noisy, {}, o), CancelledError);

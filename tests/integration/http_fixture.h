@@ -40,6 +40,9 @@
 namespace mdn::test {
 
 namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+inline double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // A client writing a body the server refused (413, 416 ...) may find the connection closed:
 // that must be an error return, not SIGPIPE killing the test (cpp-httplib 0.11.4 sends

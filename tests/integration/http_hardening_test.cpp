@@ -23,9 +23,6 @@ namespace mdn::test {
 namespace {
 
 using nlohmann::json;
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // A 4-vertex glb whose TEXCOORD_0 spans +-`extreme` (Draco's encoder crashed at 3e38).
 std::string quad_glb(float extreme) {

@@ -40,7 +40,7 @@ struct Split {
   std::string before, payload, after;
   std::string join() const { return before + payload + after; }
 };
-Split split(const std::string& gltf) {
+Split split_gltf(const std::string& gltf) {
   const std::size_t at = gltf.find(kHeader);
   EXPECT_NE(at, std::string::npos);
   const std::size_t start = at + kHeader.size(), end = gltf.find('"', start);
@@ -106,7 +106,7 @@ TEST(GltfDataUri, OwnedBytesDecodeAlikeAndAreFreed) {
 // under decode the same bytes.
 TEST(GltfDataUri, EscapedSolidusAndOtherBufferMediaTypes) {
   auto expected = decode(assets().gltf, Format::Gltf);
-  Split s = split(assets().gltf);
+  Split s = split_gltf(assets().gltf);
   std::string escaped;
   for (const char c : s.payload) escaped += c == '/' ? std::string("\\/") : std::string(1, c);
   ASSERT_NE(escaped, s.payload);
@@ -129,7 +129,7 @@ TEST(GltfDataUri, OtherDataUrisAreKeptVerbatim) {
 }
 
 TEST(GltfDataUri, MalformedDataUrisAreFormatErrors) {
-  const Split s = split(assets().gltf);
+  const Split s = split_gltf(assets().gltf);
   const std::string prefix = s.before.substr(0, s.before.size() - kHeader.size());
   const std::size_t n = s.payload.size();
   ASSERT_EQ(n % 4, 0u);

@@ -24,7 +24,7 @@ struct Glb {
   std::string bin;
 };
 
-Glb split(const std::string& glb) {
+Glb split_glb(const std::string& glb) {
   std::uint32_t length = 0;
   std::memcpy(&length, glb.data() + 12, 4);
   return {Json::parse(glb.substr(20, length)), glb.substr(20 + length + 8)};
@@ -142,7 +142,7 @@ TEST(Meshopt, OutputFollowsTheInputAndKeepsItsTypes) {
   // Meshopt in, meshopt out (decision 70): required, with a fallback buffer without data.
   const Encoded out = compressed->encode(as_input);
   EXPECT_EQ(out.compression, Compression::Meshopt);
-  const Glb g = split(out.bytes);
+  const Glb g = split_glb(out.bytes);
   for (const char* list : {"extensionsUsed", "extensionsRequired"}) {
     EXPECT_TRUE(listed(g.json, list, "EXT_meshopt_compression")) << list;
     EXPECT_TRUE(listed(g.json, list, "KHR_mesh_quantization")) << list;
@@ -153,7 +153,7 @@ TEST(Meshopt, OutputFollowsTheInputAndKeepsItsTypes) {
   EXPECT_EQ(g.json["buffers"][1]["extensions"]["EXT_meshopt_compression"]["fallback"], true);
   // Quantized in, quantized out (decision 71): POSITION in the input's type; the node's
   // dequantisation transform is the input's, untouched.
-  const Glb in = split(input);
+  const Glb in = split_glb(input);
   const Json& prim = g.json["meshes"][0]["primitives"][0];
   const Json& in_prim = in.json["meshes"][0]["primitives"][0];
   for (const char* semantic : {"POSITION", "TEXCOORD_0"}) {
@@ -174,14 +174,14 @@ TEST(Meshopt, OutputFollowsTheInputAndKeepsItsTypes) {
   EXPECT_EQ(back->surfaces()[0].F.rows(), compressed->surfaces()[0].F.rows());
   // Uncompressed in, uncompressed out, positions float32 as they came.
   const std::string none = plain->encode(as_input).bytes;
-  EXPECT_EQ(split(none).json.dump().find("EXT_meshopt_compression"), std::string::npos);
+  EXPECT_EQ(split_glb(none).json.dump().find("EXT_meshopt_compression"), std::string::npos);
   EXPECT_LT((decode(none, Format::Glb)->surfaces()[0].V - plain->surfaces()[0].V).cwiseAbs().maxCoeff(), 1e-7);
   // The library's default (compression unset) still writes Draco; None writes none, and a
   // quantized input keeps its POSITION type there too.
-  EXPECT_NE(split(compressed->encode({}).bytes).json.dump().find("KHR_draco_mesh_compression"), std::string::npos);
+  EXPECT_NE(split_glb(compressed->encode({}).bytes).json.dump().find("KHR_draco_mesh_compression"), std::string::npos);
   EncodeOptions no_draco;
   no_draco.compression = Compression::None;
-  const Glb g_none = split(compressed->encode(no_draco).bytes);
+  const Glb g_none = split_glb(compressed->encode(no_draco).bytes);
   EXPECT_EQ(g_none.json.dump().find("EXT_meshopt_compression"), std::string::npos);
   EXPECT_EQ(g_none.json["accessors"][g_none.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"].get<int>()]["componentType"],
             5122);
@@ -206,7 +206,7 @@ TEST(Meshopt, FloatInputIsQuantizedOnAGridCarriedByANode) {
     meshopt.compression = Compression::Meshopt;
     meshopt.position_bits = bits;
     const Encoded out = plain->encode(meshopt);
-    const Glb g = split(out.bytes);
+    const Glb g = split_glb(out.bytes);
     const Json& pos = g.json["accessors"][g.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"].get<int>()];
     EXPECT_EQ(pos["componentType"], 5123);
     EXPECT_FALSE(pos.value("normalized", false));
@@ -240,7 +240,7 @@ TEST(Meshopt, FloatInputIsQuantizedOnAGridCarriedByANode) {
   wide.compression = Compression::Meshopt;
   wide.position_bits = 20;
   const Encoded out = plain->encode(wide);
-  const Glb g = split(out.bytes);
+  const Glb g = split_glb(out.bytes);
   EXPECT_EQ(g.json["accessors"][g.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"].get<int>()]["componentType"], 5126);
   EXPECT_EQ(g.json["nodes"].size(), 1u);
   EXPECT_EQ(out.notes, std::vector<std::string>{"mesh 0: POSITION written as float (position_bits 20 > 16)"});
@@ -268,7 +268,7 @@ TEST(Compression, ResolvedInOnePlace) {
   EXPECT_EQ(draco->compression(), Compression::Draco);
   EncodeOptions as_input;
   as_input.compression = Compression::AsInput;
-  EXPECT_NE(split(draco->encode(as_input).bytes).json.dump().find("KHR_draco_mesh_compression"), std::string::npos);
+  EXPECT_NE(split_glb(draco->encode(as_input).bytes).json.dump().find("KHR_draco_mesh_compression"), std::string::npos);
 }
 
 template <class Error>
@@ -286,7 +286,7 @@ std::string error_of(const Glb& g) {
 Json& ext(Glb& g, int view) { return g.json["bufferViews"][view]["extensions"]["EXT_meshopt_compression"]; }
 
 TEST(MeshoptHostile, LyingBuffersAreClearErrors) {
-  const Glb good = split(test_io::meshopt_sphere_glb(fixture(), true));
+  const Glb good = split_glb(test_io::meshopt_sphere_glb(fixture(), true));
   Glb g = good;
   ext(g, 0)["count"] = 1000000;
   EXPECT_NE(error_of<FormatError>(g).find("disagree with EXT_meshopt_compression's 1000000 elements"), std::string::npos);

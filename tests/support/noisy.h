@@ -18,6 +18,9 @@ inline TriMesh with_noise(const TriMesh& clean, double sigma, NoiseKind kind = N
   return TriMesh{add_noise(clean, spec), clean.F};
 }
 
+// The largest distance any vertex moved between two copies of one mesh.
+inline double max_displacement(const TriMesh& a, const TriMesh& b) { return (a.V - b.V).rowwise().norm().maxCoeff(); }
+
 // The default parameters with ParamMode::Auto, as the CLI and the service send them.
 inline DenoiseParams automatic() {
   DenoiseParams p;

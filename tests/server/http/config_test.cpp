@@ -13,17 +13,12 @@
 
 #include "core/io/document.h"
 #include "server/service_parts.h"
+#include "parse_config.h"
 
 namespace mdn::http {
 namespace {
 
-ServerConfig parse(const std::vector<std::string>& args, const std::map<std::string, std::string>& env = {}) {
-  return parse_command_line(args, [&](const char* name) -> const char* {
-           auto it = env.find(name);
-           return it == env.end() ? nullptr : it->second.c_str();
-         })
-      .config;
-}
+using test::parse;
 
 std::string error_of(const std::vector<std::string>& args, const std::map<std::string, std::string>& env = {}) {
   try {

@@ -12,6 +12,7 @@
 
 #include "server/http/config.h"
 #include "server/http/transport/http_message.h"
+#include "parse_config.h"
 
 namespace mdn::http {
 namespace {
@@ -125,13 +126,7 @@ TEST(TrustedProxies, ReadsTheHeaderLinesOfARequest) {
   EXPECT_EQ(kPrivate.client_address_of("203.0.113.7", req.headers), "203.0.113.7");
 }
 
-ServerConfig parse(const std::vector<std::string>& args, const std::map<std::string, std::string>& env = {}) {
-  return parse_command_line(args, [&](const char* name) -> const char* {
-           auto it = env.find(name);
-           return it == env.end() ? nullptr : it->second.c_str();
-         })
-      .config;
-}
+using test::parse;
 
 TEST(TrustedProxies, IsASettingWithItsVariable) {
   EXPECT_TRUE(parse({}).trusted_proxies.empty());
