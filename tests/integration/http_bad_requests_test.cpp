@@ -214,7 +214,7 @@ TEST_F(HttpBadRequests, AnUnparseableRequestIsAnsweredOnceAndTheConnectionCloses
     send(fd, next.data(), next.size(), MSG_NOSIGNAL);  // may fail once the server has closed
     const auto start = std::chrono::steady_clock::now();
     const std::string response = read_until_close(fd, 5);
-    const double waited_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double waited_s = seconds_since(start);
     close(fd);
     EXPECT_EQ(response.rfind(status_line, 0), 0u) << response;
     EXPECT_NE(response.find("Connection: close\r\n"), std::string::npos) << response;
@@ -428,7 +428,7 @@ TEST(HttpBodyStall, AStalledBodyGets408AndTheConnectionClosesWithinTheTimeout) {
     const auto start = std::chrono::steady_clock::now();
     ASSERT_EQ(send(fd, head.data(), head.size(), MSG_NOSIGNAL), ssize_t(head.size()));
     const std::string response = read_until_close(fd, 10);  // the server closes: recv returns 0
-    const double after_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double after_s = seconds_since(start);
     close(fd);
     std::printf("stalled body: answered and closed after %.2f s (stall timeout 1 s)\n", after_s);
     EXPECT_EQ(response.rfind("HTTP/1.1 408 ", 0), 0u) << response;

@@ -53,7 +53,7 @@ TEST(ServerLifecycle, AnUndownloadedResultDoesNotHoldTheStop) {
   const auto signalled = std::chrono::steady_clock::now();
   server.signal(SIGTERM);
   EXPECT_EQ(server.wait_exit(std::chrono::seconds(40)), 0) << server.log();
-  const double exit_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
+  const double exit_s = seconds_since(signalled);
   std::printf("SIGTERM with one undownloaded result, grace 30 s: exited after %.2f s\n", exit_s);
   EXPECT_LT(exit_s, 10.0) << "the stop waited for the undownloaded result";
   // The log says what the drain does not wait for.

@@ -11,7 +11,6 @@ namespace mdn::test {
 namespace {
 
 using nlohmann::json;
-using Clock = std::chrono::steady_clock;
 
 // Posts a job and waits for it; returns its id.
 std::string finished_job(httplib::Client& c, const std::string& body, const std::string& params) {
@@ -45,7 +44,7 @@ TEST(WebApi, TextResultsAreGzipEncodedCheaplyAndBinaryOnesNot) {
   c->set_decompress(false);
   const auto start = Clock::now();
   auto wire = c->Get(url, {{"Accept-Encoding", "gzip, deflate, br, zstd"}});
-  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  const double seconds = seconds_since(start);
   ASSERT_TRUE(wire && wire->status == 200);
   EXPECT_EQ(wire->get_header_value("Content-Encoding"), "gzip");
   EXPECT_LT(wire->body.size() * 2, plain->body.size()) << "gzip should at least halve an OFF";
