@@ -1,5 +1,6 @@
 // The corpus's retessellations (tools/train/shape_kit.h, decision 38): a new tessellation of
-// the same closed, consistently oriented surface.
+// the same closed, consistently oriented surface. The rough generated shapes (decision 96) are
+// seeded, valid and small enough for every noise kind.
 #include <gtest/gtest.h>
 
 #include <map>
@@ -71,6 +72,34 @@ TEST(ShapeKit, RetessellateIsSeededAndKeepsACurvedSurfaceClosed) {
     EXPECT_NEAR(area(t), area(torus), 0.01 * area(torus));
     EXPECT_EQ(retessellate(torus, seed).F, t.F);
   }
+}
+
+// Every directed edge at most once: manifold and consistently oriented, borders allowed.
+void expect_oriented(const TriMesh& m) {
+  std::map<std::pair<int, int>, int> directed;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const std::pair<int, int> edge{m.F(f, k), m.F(f, (k + 1) % 3)};
+      ASSERT_EQ(++directed[edge], 1) << "edge " << edge.first << "-" << edge.second;
+    }
+}
+
+TEST(ShapeKit, RoughShapesAreSeededValidAndGetEveryNoiseKind) {
+  std::map<std::string, int> kinds;
+  for (const Generated& g : generated_shapes()) {
+    if (g.family != "rough") continue;
+    SCOPED_TRACE(g.name);
+    const std::string kind = g.name.substr(4, g.name.rfind('_') - 4);
+    ++kinds[kind];
+    const TriMesh m = g.make();
+    EXPECT_LE(m.F.rows(), 12000);  // the corpus gives every noise kind to shapes this small
+    const Vertices n = face_normals(m.V, m.F);
+    for (Eigen::Index f = 0; f < n.rows(); ++f) ASSERT_GT(n.row(f).squaredNorm(), 0.5) << "degenerate face " << f;
+    expect_oriented(m);
+    if (kind != "knurl") expect_closed_and_oriented(m);  // a knurl is an open sleeve
+    EXPECT_EQ(g.make().V, m.V);
+  }
+  EXPECT_EQ(kinds, (std::map<std::string, int>{{"knurl", 4}, {"relief", 4}, {"rope", 4}, {"sliced", 4}}));
 }
 
 }  // namespace

@@ -18,7 +18,7 @@ namespace mdn::train {
 
 struct Shape {
   std::string name;
-  std::string family;  // "cad", "organic", "cgal"
+  std::string family;  // "cad", "organic", "rough", "cgal"
   TriMesh mesh;
 };
 

@@ -7,6 +7,8 @@
 #include <numbers>
 #include <random>
 
+#include "core/smoothing.h"
+#include "core/topology.h"
 #include "corpus.h"
 #include "shape_kit.h"
 #include "support/shapes.h"
@@ -103,6 +105,99 @@ TriMesh filleted_box(Draw d) {
   return superquadric(d.integer(8, 22), p, axes);
 }
 
+
+// Shapes that are rough by construction (issue 48; decision 96): detail a few edges wide that a
+// filter would take for noise, on clean assets users have. See
+// docs/experiments/2026-12-05-rough-clean-shapes.md.
+
+// A closed space curve's point and its frame (tube()'s curve with a seeded lift and turns).
+struct Curve {
+  double lift;
+  int turns;
+  Vec3 at(double t) const { return {std::cos(t), std::sin(t), lift * std::sin(turns * t)}; }
+  Vec3 tangent(double t) const {
+    return Vec3(-std::sin(t), std::cos(t), lift * turns * std::cos(turns * t)).normalized();
+  }
+};
+
+// A rope: a tube along a closed curve with `strands` helical strands, grooves between them
+// (|cos| has a crease at each zero), 4-6 vertices across a strand.
+TriMesh rope(Draw d) {
+  const Curve c{d.real(0, 0.5), d.integer(1, 3)};
+  const int strands = d.integer(3, 5), per_strand = d.integer(4, 6);
+  const int nv = strands * per_strand;
+  const double r0 = d.real(0.12, 0.2), depth = d.real(0.15, 0.3);
+  // Twists along the curve: the strands' pitch 1-2.5 tube diameters.
+  const int twists = std::max(1, static_cast<int>(std::lround(2 * kPi / (d.real(1, 2.5) * 2 * r0))));
+  // Rows about as long as the vertices around are apart (the curve is about 2 pi long), at
+  // most 11,000 faces.
+  const int nu = std::clamp(static_cast<int>(nv / r0), 60, 11000 / (2 * nv));
+  return test::parametric(nu, nv, true, true, [&](double u, double v) {
+    const double t = 2 * kPi * u, b = 2 * kPi * v;
+    const Vec3 tangent = c.tangent(t), n1 = tangent.cross(Vec3(0, 0, 1)).normalized(), n2 = tangent.cross(n1);
+    const double r = r0 * (1 - depth + 2 * depth * std::abs(std::cos(0.5 * (strands * b + twists * t))));
+    return Vec3(c.at(t) + r * (std::cos(b) * n1 + std::sin(b) * n2));
+  });
+}
+
+// A knurled grip: an open cylinder whose radius carries a diamond knurl (two crossing
+// triangle waves) or a straight one, sharp ridges, 4-6 vertices per period.
+TriMesh knurl(Draw d) {
+  const int periods = d.integer(10, 20), per_period = d.integer(4, 6);
+  const int around = periods * per_period;
+  const double height = d.real(0.4, 1.5), depth = d.real(0.015, 0.04);
+  const bool diamond = d.chance(0.6);
+  const double pitch = 2 * kPi / periods;  // the same pitch along the axis as around it
+  const int rows = std::clamp(static_cast<int>(height / (pitch / per_period)), 8, 11000 / (2 * around));
+  const auto tri = [](double x) { return std::abs(x - 2 * std::floor(0.5 * (x + 1))); };  // 0..1, period 2
+  return test::parametric(around, rows, true, false, [&](double u, double v) {
+    const double a = 2 * kPi * u, z = height * v;
+    const double s = periods * u * 2, w = z / pitch * 2;
+    const double ridge = diamond ? 0.5 * (tri(s + w) + tri(s - w)) : tri(s);
+    return Vec3((1 + depth * ridge) * std::cos(a), (1 + depth * ridge) * std::sin(a), z);
+  });
+}
+
+// A surface with relief: an icosphere displaced along its radius by many short waves, 3-10
+// edges long and 0.15-0.5 edge lengths high.
+TriMesh relief(Draw d) {
+  TriMesh m = test::sphere(4);
+  const double edge = mean_edge_length(m.V, m.F);
+  const int count = d.integer(24, 48);
+  const double height = d.real(0.15, 0.5) * edge;
+  struct Wave { Vec3 dir; double k, phase; };
+  std::vector<Wave> waves;
+  for (int i = 0; i < count; ++i) {
+    const Vec3 dir{d.real(-1, 1), d.real(-1, 1), d.real(-1, 1)};  // braces: drawn left to right
+    const double k = 2 * kPi / (d.real(3, 10) * edge);
+    waves.push_back({dir.normalized(), k, d.real(0, 2 * kPi)});
+  }
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i) {
+    const Vec3 p = m.V.row(i).transpose();
+    double r = 0;
+    for (const Wave& w : waves) r += std::sin(w.k * p.dot(w.dir) + w.phase);
+    m.V.row(i) = (p.normalized() * (1 + height * r * std::sqrt(2.0 / count))).transpose();
+  }
+  return m;
+}
+
+// A slice stack: a bumpy blob's height quantised to slices 0.8-2 edge lengths apart (the
+// terraces of a segmentation's slices or a printer's layers), softened by 1-2 Laplacian passes.
+TriMesh sliced(Draw d) {
+  const std::uint64_t seed = d.rng();
+  const double amplitude = d.real(0.3, 1.1);
+  TriMesh m = bumpy(4, seed, amplitude, d.integer(2, 5));
+  const Vec3 axis = Vec3{d.real(-1, 1), d.real(-1, 1), d.real(-1, 1)}.normalized();  // braces: in order
+  const double step = d.real(0.8, 2.0) * mean_edge_length(m.V, m.F);
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i) {
+    const double h = m.V.row(i).dot(axis);
+    m.V.row(i) += (std::round(h / step) * step - h) * axis.transpose();
+  }
+  const Topology topo = Topology::build(m.F, static_cast<std::int32_t>(m.V.rows()));
+  m.V = laplacian_smoothing(m.V, topo, d.integer(1, 2));
+  return m;
+}
+
 }  // namespace
 
 std::vector<Generated> generated_shapes() {
@@ -141,6 +236,10 @@ std::vector<Generated> generated_shapes() {
     const int nu = d.integer(30, 90), nv = d.integer(12, 36);
     return test::torus(nu, nv, d.real(0.15, 0.6));
   });
+  add("rope", 4, "rough", rope);
+  add("knurl", 4, "rough", knurl);
+  add("relief", 4, "rough", relief);
+  add("sliced", 4, "rough", sliced);
   return out;
 }
 

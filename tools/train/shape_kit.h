@@ -51,7 +51,7 @@ TriMesh retessellate(const TriMesh& m, std::uint64_t seed, std::string* tag = nu
 
 struct Generated {
   std::string name;
-  std::string family;  // "cad" or "organic"
+  std::string family;  // "cad", "organic" or "rough" (decision 96)
   std::function<TriMesh()> make;
 };
 // Seeded random members of the corpus's families (revolved and extruded parts, filleted boxes,

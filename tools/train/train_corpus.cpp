@@ -2,6 +2,8 @@
 // Never part of the service; tools/train/README.md says how the pieces fit.
 //
 //   train_corpus shapes   [--data DIR]                      every shape: faces, family, split
+//   train_corpus export   [--data DIR] SHAPE/NOISE OUT       one case as OFF files to look at:
+//       OUT.noisy.off and OUT.clean.off (same faces, same order)
 //   train_corpus label    [--data DIR] [--jobs N] [--limit N] [--shapes A,B] OUT.tsv
 //       every case's true MSAE under every set of the label grid (label_grid.h) and the
 //       identity; appends, and skips the cases OUT already holds (resumable).
@@ -60,6 +62,7 @@
 #include "corpus.h"
 #include "label_grid.h"
 #include "labels.h"
+#include "support/shapes.h"
 
 namespace fs = std::filesystem;
 using namespace mdn;
@@ -412,11 +415,26 @@ int cmd_shapes(const Options& o) {
   return 0;
 }
 
+int cmd_export(const Options& o) {
+  const std::string name = o.positional.at(0);
+  const std::size_t slash = name.find('/');
+  if (slash == std::string::npos) throw std::invalid_argument("export needs SHAPE/NOISE, not " + name);
+  const Shape s = make_shape(name.substr(0, slash), bench::cgal_meshes(o.data));
+  const std::string noise = name.substr(slash + 1);
+  NoisyCase pair = make_noisy_case(s, noise, hash_name(s.name + "/" + noise));
+  for (const auto& [suffix, V] : {std::pair<const char*, const Vertices*>{".clean.off", &pair.clean.V}, {".noisy.off", &pair.noisy}}) {
+    const std::string path = o.positional.at(1) + suffix;
+    std::ofstream(path, std::ios::binary) << test::off_text(TriMesh{*V, pair.clean.F});
+    std::printf("%s: %lld faces\n", path.c_str(), static_cast<long long>(pair.clean.num_faces()));
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: train_corpus shapes|label|describe|faces|guided [--data DIR] [--jobs N] [--limit N] [--shapes A,B] [--cases N] [--rows N] [OUT]\n");
+    std::fprintf(stderr, "usage: train_corpus shapes|export|label|describe|faces|guided [--data DIR] [--jobs N] [--limit N] [--shapes A,B] [--cases N] [--rows N] [OUT]\n");
     return 2;
   }
   const std::string verb = argv[1];
@@ -441,6 +459,10 @@ int main(int argc, char** argv) {
   try {
     if (verb == "shapes") return cmd_shapes(o);
     if (verb == "guided") return cmd_guided(o, o.cases > 0 ? o.cases : 80, o.max_faces);
+    if (verb == "export") {
+      if (o.positional.size() != 2) throw std::invalid_argument("export needs SHAPE/NOISE and OUT");
+      return cmd_export(o);
+    }
     if (o.positional.size() != 1) throw std::invalid_argument(verb + " needs OUT");
     if (verb == "label") return cmd_label(o);
     if (verb == "describe") return cmd_describe(o);
