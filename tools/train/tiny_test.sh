@@ -76,6 +76,15 @@ grep -v '~tess' "$work/shapes.1" > "$work/generated.1"
 awk '/^gen_/ && ($4 > 12000 || $4 < 200) { bad = 1 } END { exit bad }' "$work/generated.1" \
   || fail "a generated shape is outside 200-12,000 faces"
 [ "$(grep '^gen_' "$work/generated.1" | grep -c holdout)" -ge 8 ] || fail "too few generated holdout shapes"
+# train_corpus export writes a case's two meshes: the same faces, the noise on the positions.
+"$build/tools/train/train_corpus" export box_coarse/along:0.3 "$work/export" > /dev/null
+faces=$(sed -n 2p "$work/export.clean.off" | cut -d' ' -f2)
+[ "$faces" -gt 0 ] && [ "$(sed -n 2p "$work/export.noisy.off")" = "$(sed -n 2p "$work/export.clean.off")" ] \
+  || fail "export: the two meshes' counts differ"
+cmp -s <(tail -n "$faces" "$work/export.clean.off") <(tail -n "$faces" "$work/export.noisy.off") \
+  || fail "export: the two meshes' faces differ"
+! cmp -s "$work/export.clean.off" "$work/export.noisy.off" || fail "export: no noise on the noisy mesh"
+"$build/tools/train/train_corpus" export no_such_shape/clean "$work/bad" 2> /dev/null && fail "export: an unknown shape was accepted"
 # A retessellated shape (decision 44) is in its parent's split: the same surface never in both.
 awk '{ split_of[$1] = $3 } END { for (s in split_of) if (s ~ /~tess$/) { p = s; sub(/~tess$/, "", p);
        if (!(p in split_of) || split_of[p] != split_of[s]) { print s; bad = 1 } } exit bad }' "$work/shapes.1" \
