@@ -105,7 +105,6 @@ TriMesh filleted_box(Draw d) {
   return superquadric(d.integer(8, 22), p, axes);
 }
 
-
 // Shapes that are rough by construction (issue 48; decision 96): detail a few edges wide that a
 // filter would take for noise, on clean assets users have. See
 // docs/experiments/2026-12-05-rough-clean-shapes.md.

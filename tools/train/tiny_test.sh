@@ -85,6 +85,7 @@ cmp -s <(tail -n "$faces" "$work/export.clean.off") <(tail -n "$faces" "$work/ex
   || fail "export: the two meshes' faces differ"
 ! cmp -s "$work/export.clean.off" "$work/export.noisy.off" || fail "export: no noise on the noisy mesh"
 "$build/tools/train/train_corpus" export no_such_shape/clean "$work/bad" 2> /dev/null && fail "export: an unknown shape was accepted"
+"$build/tools/train/train_corpus" export box_coarse/clean "$work/no/such/dir/x" 2> /dev/null && fail "export: an unwritable path was accepted"
 # A retessellated shape (decision 44) is in its parent's split: the same surface never in both.
 awk '{ split_of[$1] = $3 } END { for (s in split_of) if (s ~ /~tess$/) { p = s; sub(/~tess$/, "", p);
        if (!(p in split_of) || split_of[p] != split_of[s]) { print s; bad = 1 } } exit bad }' "$work/shapes.1" \

@@ -178,6 +178,8 @@ def main():
     ap.add_argument("--report")
     a = ap.parse_args()
 
+    if not a.identity_clip > 1:
+        sys.exit("train.py: --identity-clip must be over 1 (a ratio to the best set's error)")
     cases, names, dnames, L, X, meta = load(a.labels, a.descriptors)
     train = np.array([m["split"] == "train" for m in meta])
     hold = ~train

@@ -421,10 +421,12 @@ int cmd_export(const Options& o) {
   if (slash == std::string::npos) throw std::invalid_argument("export needs SHAPE/NOISE, not " + name);
   const Shape s = make_shape(name.substr(0, slash), bench::cgal_meshes(o.data));
   const std::string noise = name.substr(slash + 1);
-  NoisyCase pair = make_noisy_case(s, noise, hash_name(s.name + "/" + noise));
+  const NoisyCase pair = make_noisy_case(s, noise, hash_name(s.name + "/" + noise));
   for (const auto& [suffix, V] : {std::pair<const char*, const Vertices*>{".clean.off", &pair.clean.V}, {".noisy.off", &pair.noisy}}) {
     const std::string path = o.positional.at(1) + suffix;
-    std::ofstream(path, std::ios::binary) << test::off_text(TriMesh{*V, pair.clean.F});
+    std::ofstream out(path, std::ios::binary);
+    out << test::off_text(TriMesh{*V, pair.clean.F});
+    if (!out.flush()) throw std::runtime_error("cannot write " + path);
     std::printf("%s: %lld faces\n", path.c_str(), static_cast<long long>(pair.clean.num_faces()));
   }
   return 0;
