@@ -201,7 +201,10 @@ std::vector<std::string> base_noise_names() {
           "mix:0.2:0.2",
           // Decision 50: scanner spikes, a few vertices far off (appended: the larger shapes'
           // every fifth kind stays the same, plus the first of these).
-          "impulse:0.01:1", "impulse:0.02:0.6"};
+          "impulse:0.01:1", "impulse:0.02:0.6",
+          // Decision 98: more of them, around the kind the choice left alone (appended at
+          // indices 32-34, none a fifth: the larger shapes' list is unchanged).
+          "impulse:0.005:1", "impulse:0.01:0.7", "impulse:0.015:1.5"};
 }
 }  // namespace
 
