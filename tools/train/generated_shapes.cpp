@@ -109,20 +109,10 @@ TriMesh filleted_box(Draw d) {
 // filter would take for noise, on clean assets users have. See
 // docs/experiments/2026-12-05-rough-clean-shapes.md.
 
-// A closed space curve's point and its frame (tube()'s curve with a seeded lift and turns).
-struct Curve {
-  double lift;
-  int turns;
-  Vec3 at(double t) const { return {std::cos(t), std::sin(t), lift * std::sin(turns * t)}; }
-  Vec3 tangent(double t) const {
-    return Vec3(-std::sin(t), std::cos(t), lift * turns * std::cos(turns * t)).normalized();
-  }
-};
-
-// A rope: a tube along a closed curve with `strands` helical strands, grooves between them
+// A rope: a tube along a LoopCurve with `strands` helical strands, grooves between them
 // (|cos| has a crease at each zero), 4-6 vertices across a strand.
 TriMesh rope(Draw d) {
-  const Curve c{d.real(0, 0.5), d.integer(1, 3)};
+  const LoopCurve curve{d.real(0, 0.5), d.integer(1, 3)};
   const int strands = d.integer(3, 5), per_strand = d.integer(4, 6);
   const int nv = strands * per_strand;
   const double r0 = d.real(0.12, 0.2), depth = d.real(0.15, 0.3);
@@ -133,9 +123,7 @@ TriMesh rope(Draw d) {
   const int nu = std::clamp(static_cast<int>(nv / r0), 60, 11000 / (2 * nv));
   return test::parametric(nu, nv, true, true, [&](double u, double v) {
     const double t = 2 * kPi * u, b = 2 * kPi * v;
-    const Vec3 tangent = c.tangent(t), n1 = tangent.cross(Vec3(0, 0, 1)).normalized(), n2 = tangent.cross(n1);
-    const double r = r0 * (1 - depth + 2 * depth * std::abs(std::cos(0.5 * (strands * b + twists * t))));
-    return Vec3(c.at(t) + r * (std::cos(b) * n1 + std::sin(b) * n2));
+    return curve.around(t, b, r0 * (1 - depth + 2 * depth * std::abs(std::cos(0.5 * (strands * b + twists * t)))));
   });
 }
 

@@ -184,13 +184,18 @@ TriMesh terrain(std::uint64_t seed, int n) {
   });
 }
 
+Vec3 LoopCurve::around(double t, double b, double r) const {
+  const Vec3 c(std::cos(t), std::sin(t), lift * std::sin(turns * t));
+  const Vec3 tangent = Vec3(-std::sin(t), std::cos(t), lift * turns * std::cos(turns * t)).normalized();
+  const Vec3 n1 = tangent.cross(Vec3(0, 0, 1)).normalized(), n2 = tangent.cross(n1);
+  return Vec3(c + r * (std::cos(b) * n1 + std::sin(b) * n2));
+}
+
 TriMesh tube(double swell, double lift, int turns, int nu, int nv) {
+  const LoopCurve curve{lift, turns};
   return test::parametric(nu, nv, false, true, [&](double u, double v) {
     const double t = 2 * kPi * u, b = 2 * kPi * v, r = 0.18 + swell * std::sin(3 * t);
-    const Vec3 c(std::cos(t), std::sin(t), lift * std::sin(turns * t));
-    const Vec3 tangent = Vec3(-std::sin(t), std::cos(t), lift * turns * std::cos(turns * t)).normalized();
-    const Vec3 n1 = tangent.cross(Vec3(0, 0, 1)).normalized(), n2 = tangent.cross(n1);
-    return Vec3(c + r * (std::cos(b) * n1 + std::sin(b) * n2));
+    return curve.around(t, b, r);
   });
 }
 

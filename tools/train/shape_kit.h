@@ -32,6 +32,15 @@ TriMesh superquadric(int n, double p, const Vec3& axes);
 TriMesh bumpy(int level, std::uint64_t seed, double amplitude, int max_freq);
 // A seeded height field of n x n quads.
 TriMesh terrain(std::uint64_t seed, int n);
+// A closed curve around the z axis, radius 1, lifted by lift * sin(turns * t): tube()'s and the
+// ropes' (decision 96). around(t, b, r) is the point at distance r from the curve's point at t,
+// at angle b in the plane normal to the curve.
+struct LoopCurve {
+  double lift;
+  int turns;
+  Vec3 around(double t, double b, double r) const;
+};
+// A tube of radius 0.18 + swell * sin(3t) along LoopCurve{lift, turns}.
 TriMesh tube(double swell, double lift, int turns, int nu, int nv);
 // Refines the slab x < min + 0.3 extent twice (16x denser): an irregular tessellation.
 TriMesh irregular(const TriMesh& m);
