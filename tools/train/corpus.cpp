@@ -214,8 +214,8 @@ std::vector<std::string> scan_noise_names() {
   // distance in size, so that a scan holds 800-32,000 faces like the rest of the corpus,
   // and a second pose of the middle one. The noise in mean edge lengths is set by the
   // distance (the footprint and sigma(z) both grow with it), the detail by the size. The
-  // fused kinds ("fused_sl:SIZE:DIST", "fused_tof:SIZE:DIST") are built by name but not listed:
-  // their ground truth is not a surface on thin parts yet (decision 60).
+  // fused kinds ("fused_sl:SIZE:DIST", "fused_tof:SIZE:DIST") are built by name but not listed
+  // (decision 60; decision 99: a model trained with them on the closed shapes failed its rule).
   //
   // Decision 93: structured light also sampled at its native 640x480 ("scan_sl640"), as real
   // scans are meshed, where neighbouring vertices' errors correlate at 8/9 and a ring reads a

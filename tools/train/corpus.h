@@ -37,7 +37,7 @@ std::vector<std::string> noise_names();
 // box's longest side), seen from DIST metres by one view of range_scan.h's sensor. The case's
 // clean mesh is the scan's, not the shape's. "fused_sl:SIZE:DIST" and "fused_tof:SIZE:DIST"
 // (a turntable's six views fused, fuse_scans) are built by make_noisy_case and scan_case but
-// are not in the list (decision 60).
+// are not in the list (decisions 60 and 99).
 std::vector<std::string> scan_noise_names();
 // The fused turntable kinds tune_bench's "fused" set measures (one per sensor).
 std::vector<std::string> fused_noise_names();

@@ -725,14 +725,12 @@ RangeScan fuse_scans(const TriMesh& shape, const RangeSensor& sensor, const Scan
     return sum / crossings;
   };
   std::vector<Vec3> positions;
-  std::vector<std::array<int, 3>> cell_of;  // each vertex's cell
   for (int k = 0; k + 1 < nz; ++k)
     for (int j = 0; j + 1 < ny; ++j)
       for (int i = 0; i + 1 < nx; ++i)
         if (const auto p = cell_point(sdf, weight, i, j, k)) {
           cell_vertex[cell(i, j, k)] = static_cast<std::int32_t>(positions.size());
           positions.push_back(*p);
-          cell_of.push_back({i, j, k});
         }
   std::vector<std::array<int, 3>> tris;
   const int n[3] = {nx, ny, nz};
@@ -783,25 +781,75 @@ RangeScan fuse_scans(const TriMesh& shape, const RangeSensor& sensor, const Scan
       index[v] = count++;
     else
       index[v] = -1;
-  // Decision 58: a fused vertex has no pixel to follow; its ground truth is the same cell's
-  // vertex in the fusion of the noise-free depths, else the nearest such vertex among the 26
-  // cells around, else the nearest point of the clean surface.
+  // Decision 99: a fused vertex has no pixel to follow; its ground truth is where it meets the
+  // fusion of the noise-free depths of the same pixels (the zero set of that volume's trilinear
+  // interpolation), moving along its smoothed normal: neighbours stay neighbours, none folds
+  // over another, no two share a point. Where that volume was not seen along the way or has no
+  // zero within two voxels, the nearest point of the clean surface.
   const Bvh bvh(object);
+  // The noise-free volume at x (trilinear), if the eight corners of x's cell were seen.
+  const auto clean_field = [&](const Vec3& x) -> std::optional<double> {
+    const Vec3 g = (x - lo) / voxel;
+    const int i = static_cast<int>(std::floor(g.x())), j = static_cast<int>(std::floor(g.y())),
+              k = static_cast<int>(std::floor(g.z()));
+    if (i < 0 || j < 0 || k < 0 || i + 1 >= nx || j + 1 >= ny || k + 1 >= nz) return std::nullopt;
+    const double u = g.x() - i, w = g.y() - j, s = g.z() - k;
+    double f = 0;
+    for (int c = 0; c < 8; ++c) {
+      const int a = c & 1, b = (c >> 1) & 1, e = c >> 2;
+      const std::size_t v = at(i + a, j + b, k + e);
+      if (clean_weight[v] <= 0) return std::nullopt;
+      f += clean_sdf[v] * (a ? u : 1 - u) * (b ? w : 1 - w) * (e ? s : 1 - s);
+    }
+    return f;
+  };
+  // Each vertex moves along its normal on the fused surface, smoothed over its neighbours so
+  // that neighbouring vertices move along nearly parallel lines and none crosses another: the
+  // area-weighted normals of its faces, then four passes of the mean over the faces' corners.
+  std::vector<Vec3> along(positions.size(), Vec3::Zero());
+  for (const auto& t : kept) {
+    const Vec3 n = (positions[static_cast<std::size_t>(t[1])] - positions[static_cast<std::size_t>(t[0])])
+                       .cross(positions[static_cast<std::size_t>(t[2])] - positions[static_cast<std::size_t>(t[0])]);
+    for (const int v : t) along[static_cast<std::size_t>(v)] += n;
+  }
+  for (int pass = 0; pass < 4; ++pass) {
+    std::vector<Vec3> next(positions.size(), Vec3::Zero());
+    for (const auto& t : kept) {
+      const Vec3 sum = along[static_cast<std::size_t>(t[0])].normalized() + along[static_cast<std::size_t>(t[1])].normalized() +
+                       along[static_cast<std::size_t>(t[2])].normalized();
+      for (const int v : t) next[static_cast<std::size_t>(v)] += sum;
+    }
+    along.swap(next);
+  }
+  // The zero of the noise-free volume on the line start + t n nearest to t = 0, |t| up to two
+  // voxels: the first sign change in steps of a tenth of a voxel, alternately ahead and behind,
+  // then bisection.
+  const auto onto_clean_fusion = [&](const Vec3& start, const Vec3& n) -> std::optional<Vec3> {
+    const std::optional<double> f0 = clean_field(start);
+    if (!f0 || n.squaredNorm() == 0) return std::nullopt;
+    const double h = 0.1 * voxel;
+    for (int k = 1; k <= 20; ++k)
+      for (const double dir : {1.0, -1.0}) {
+        double ta = dir * (k - 1) * h, tb = dir * k * h;
+        const std::optional<double> fa = clean_field(start + ta * n), fb = clean_field(start + tb * n);
+        if (!fa || !fb || (*fa < 0) == (*fb < 0)) continue;
+        const bool a_inside = *fa < 0;
+        for (int it = 0; it < 40; ++it) {
+          const double tm = 0.5 * (ta + tb);
+          const std::optional<double> fm = clean_field(start + tm * n);
+          if (!fm) return std::nullopt;
+          (((*fm < 0) == a_inside) ? ta : tb) = tm;
+        }
+        return start + 0.5 * (ta + tb) * n;
+      }
+    return std::nullopt;
+  };
   RangeScan out;
   out.noisy.resize(count, 3);
   out.clean.V.resize(count, 3);
   for (std::size_t v = 0; v < positions.size(); ++v) {
     if (index[v] < 0) continue;
-    const auto [ci, cj, ck] = cell_of[v];
-    std::optional<Vec3> truth = cell_point(clean_sdf, clean_weight, ci, cj, ck);
-    for (int dk = -1; dk <= 1 && !cell_point(clean_sdf, clean_weight, ci, cj, ck); ++dk)
-      for (int dj = -1; dj <= 1; ++dj)
-        for (int di = -1; di <= 1; ++di) {
-          const int i = ci + di, j = cj + dj, k = ck + dk;
-          if (i < 0 || j < 0 || k < 0 || i + 1 >= nx || j + 1 >= ny || k + 1 >= nz) continue;
-          const auto p = cell_point(clean_sdf, clean_weight, i, j, k);
-          if (p && (!truth || (*p - positions[v]).squaredNorm() < (*truth - positions[v]).squaredNorm())) truth = p;
-        }
+    const std::optional<Vec3> truth = onto_clean_fusion(positions[v], along[v].normalized());
     out.noisy.row(index[v]) = positions[v].transpose();
     out.clean.V.row(index[v]) = (truth ? *truth : bvh.closest_point(positions[v])).transpose();
   }

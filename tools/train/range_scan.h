@@ -116,8 +116,9 @@ RangeScan scan_shape(const TriMesh& shape, const RangeSensor& sensor, const Scan
 // A turntable station's output (issue 48's fused variant): `views` captures of the shape turning
 // about the camera's vertical axis in equal steps, seen from `elevation_deg` above, fused into
 // a truncated signed distance volume (Curless and Levoy 1996, as KinectFusion does) and meshed
-// by surface nets (decision 58). Noisy vertices are the fused surface's, each clean vertex
-// the nearest point of the clean surface (there is no pixel to share); `pixel` is empty.
+// by surface nets (decision 58). Noisy vertices are the fused surface's; there is no pixel to
+// share, so each clean vertex is where the noisy one, moving along its smoothed normal, meets
+// the same fusion of the noise-free depths (decision 99); `pixel` is empty.
 // Positions in metres around the object's centre. The bottom, never seen, stays open.
 struct FusedOptions {
   int views = 6;              // captures around the turntable, >= 1
