@@ -5,6 +5,8 @@
 #include <unistd.h>
 
 #include <cstdint>
+#include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <numbers>
 #include <optional>
@@ -242,9 +244,34 @@ constexpr Verb kVerbs[] = {
     {[](const CliOptions&) { return true; }, run_denoise},
 };
 
+// Decision 100: with kHugePagesMinInputBytes of input files or more (the meshes and the ground
+// truth; standard input does not count), the process starts again at once with glibc's huge
+// pages for its heap, if the kernel gives them on request and GLIBC_TUNABLES does not already
+// say. Nothing has been read or written yet, so the new process does the whole run; if the
+// restart fails this one does it.
+void restart_with_huge_pages(const CliOptions& options, char** argv) {
+  std::uintmax_t bytes = 0;
+  std::vector<std::string> files = options.positional;
+  for (const auto* file : {&options.metrics, &options.tune})
+    if (*file) files.push_back(**file);
+  for (const std::string& file : files) {
+    std::error_code error;
+    if (file != kStdio && std::filesystem::is_regular_file(file, error)) {
+      const std::uintmax_t size = std::filesystem::file_size(file, error);
+      if (!error) bytes += size;
+    }
+  }
+  if (bytes < service::kHugePagesMinInputBytes) return;
+  if (!service::kernel_gives_huge_pages_on_request()) return;
+  const std::optional<std::string> tunables = service::tunables_with_huge_pages(std::getenv("GLIBC_TUNABLES"));
+  if (!tunables || ::setenv("GLIBC_TUNABLES", tunables->c_str(), 1) != 0) return;
+  ::execv("/proc/self/exe", argv);
+}
+
 int run(int argc, char** argv) {
   service::keep_freed_memory();  // decision 52: a process that ends after its files
   const CliOptions options = parse_command_line(argc, argv);
+  restart_with_huge_pages(options, argv);
   if (!options.help && !options.version) check_standard_input(options);
   for (const Verb& verb : kVerbs)
     if (verb.applies(options)) return verb.run(options);

@@ -2,6 +2,7 @@
 // and stdout JSON, as a user would see them.
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -27,6 +28,7 @@
 #include "core/noise.h"
 #include "core/params.h"
 #include "service/job_runner.h"
+#include "service/process_memory.h"
 #include "support/shapes.h"
 
 namespace mdn {
@@ -1060,6 +1062,47 @@ TEST_F(Cli, SparseGltfDeclaringMillionsOfVerticesIsRefusedBeforeAllocating) {
         << r.err;
     EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(20)) << "does not hang";
   }
+}
+
+// Decision 100: from 4 MiB of input files on, the tool starts again at once with huge pages for
+// its heap. The restarted run is the same run: the same bytes out, the same exit code and
+// message for a bad argument, and where the kernel gives huge pages on request, a fraction of
+// the page faults. GLIBC_TUNABLES that already names the setting keeps the process as it is.
+TEST_F(Cli, LargeInputsRestartWithHugePagesAndRunTheSame) {
+  TriMesh ball = test::sphere(6), mesh;  // two noisy balls side by side: 8 MB of OFF
+  ball.V = add_noise(ball, {NoiseKind::AlongNormal, 0.2, 3, 0});
+  mesh.V.resize(2 * ball.V.rows(), 3);
+  mesh.F.resize(2 * ball.F.rows(), 3);
+  mesh.V << ball.V, ball.V.rowwise() + Vec3(3, 0, 0).transpose();
+  mesh.F << ball.F, ball.F.array() + static_cast<std::int32_t>(ball.V.rows());
+  write_text(path("large.off"), test::off_text(mesh));
+  ASSERT_GE(fs::file_size(path("large.off")), service::kHugePagesMinInputBytes);
+  const auto faults_of = [&](const std::string& args, const std::string& shell, Result& r) {
+    rusage before{}, after{};
+    ::getrusage(RUSAGE_CHILDREN, &before);
+    r = run(args, "/dev/null", shell);
+    ::getrusage(RUSAGE_CHILDREN, &after);
+    return after.ru_minflt - before.ru_minflt;
+  };
+  const std::string args = "--mode none " + quote(path("large.off")) + " ";
+  Result kept, restarted;
+  const long kept_faults = faults_of(args + quote(path("kept.glb")), "GLIBC_TUNABLES=glibc.malloc.hugetlb=0 ", kept);
+  const long restarted_faults = faults_of(args + quote(path("restarted.glb")), "unset GLIBC_TUNABLES; ", restarted);
+  ASSERT_EQ(kept.code, 0) << kept.err;
+  ASSERT_EQ(restarted.code, 0) << restarted.err;
+  EXPECT_EQ(read_text(path("kept.glb")), read_text(path("restarted.glb")));
+  if (service::kernel_gives_huge_pages_on_request()) {
+    EXPECT_LT(2 * restarted_faults, kept_faults) << "page faults: " << restarted_faults << " against " << kept_faults;
+  }
+
+  const Result bad = run("--params '{\"alpha\": -1}' " + quote(path("large.off")) + " " + quote(path("x.off")), "/dev/null",
+                         "unset GLIBC_TUNABLES; ");
+  const Result bad_kept = run("--params '{\"alpha\": -1}' " + quote(path("large.off")) + " " + quote(path("x.off")),
+                              "/dev/null", "GLIBC_TUNABLES=glibc.malloc.hugetlb=0 ");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_EQ(bad.code, bad_kept.code);
+  EXPECT_EQ(bad.err, bad_kept.err);
+  EXPECT_FALSE(fs::exists(path("x.off")));
 }
 
 }  // namespace
