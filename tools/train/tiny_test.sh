@@ -91,4 +91,11 @@ awk '{ split_of[$1] = $3 } END { for (s in split_of) if (s ~ /~tess$/) { p = s; 
        if (!(p in split_of) || split_of[p] != split_of[s]) { print s; bad = 1 } } exit bad }' "$work/shapes.1" \
   || fail "a retessellated shape is not in its parent's split"
 [ "$(grep -c '~tess' "$work/shapes.1")" -ge 20 ] || fail "too few retessellated shapes"
+# `fields` (issue 48's per-face bound): its "best1" is the best of candidates that hold the pick's
+# own normals, so it never exceeds the pick's error; every case gets its row and the table its
+# "all" line.
+"$build/tools/train/train_corpus" fields --shapes washer_coarse,rounded_box_coarse --cases 3 > "$work/fields.txt"
+awk '$1 ~ /\// && NF == 7 { rows++; if ($4 > 1.0000005) bad = 1 } $1 == "all" { all = 1 }
+     END { exit !(rows >= 1 && all && !bad) }' "$work/fields.txt" \
+  || fail "fields: a case whose best1 exceeds its pick's error, or no rows ($work/fields.txt)"
 echo "tiny training pipeline: ok"

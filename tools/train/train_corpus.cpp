@@ -24,6 +24,11 @@
 //       (clean normals turned by 6 degrees) and by the prior, for the pick, the pick with
 //       sigma_gamma 20, 30 and 45 degrees and the paper's Table 1 row (and the diagnostic guidances
 //       cmd_guided names); median ratios per group.
+//   train_corpus fields   [--data DIR] [--jobs N] [--cases N] [--max-faces N]
+//       issue 48's per-face parameter fields, bounded before they are built: the same holdout
+//       cases, auto's pick with ten candidate normal fields (sigma_gamma, iterations), the normals
+//       chosen with the clean surface in view for the whole case, per clean face class or per face
+//       (cmd_fields); median ratios to the pick per group.
 //
 // DIR: CGAL's demo data (scripts/fetch-cgal-data.sh; default $MDN_CGAL_DATA or
 // third_party_data/cgal). --limit N keeps the first N cases of each split's shapes in turn
@@ -55,6 +60,7 @@
 #include "core/metrics.h"
 #include "core/normal_filter.h"
 #include "core/parallel.h"
+#include "core/pipeline.h"
 #include "core/auto/denoise.h"
 #include "core/prefilter.h"
 #include "core/topology.h"
@@ -298,14 +304,46 @@ double median_of(std::vector<double> v) {
   return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
 }
 
-int cmd_guided(const Options& o, int wanted, std::int64_t max_faces) {
-  std::map<std::string, Shape> shapes;
-  const std::vector<CaseRef> cases = cases_by_hash(o, shapes);
+// The cases of the paired checks (guided, fields): the first `wanted` noisy cases of
+// holdout-split shapes in the hash's order, of at most max_faces faces.
+std::vector<CaseRef> paired_cases(const Options& o, int wanted, std::int64_t max_faces, std::map<std::string, Shape>& shapes) {
   std::vector<CaseRef> chosen;
-  for (const CaseRef& c : cases)
+  for (const CaseRef& c : cases_by_hash(o, shapes))
     if (static_cast<int>(chosen.size()) < wanted && split_of(c.shape) == "holdout" && c.noise != "clean" &&
         shapes.at(c.shape).mesh.num_faces() <= max_faces)
       chosen.push_back(c);
+  return chosen;
+}
+
+// A paired check's ratios per case, gathered into groups ("all", "kind:...") and printed as the
+// median per group with the worst (largest) or the best (smallest) in brackets.
+struct GroupTable {
+  std::map<std::string, std::vector<std::vector<double>>> groups;
+  void add(const std::vector<std::string>& in, const std::vector<double>& ratios) {
+    for (const std::string& g : in) {
+      auto& cols = groups[g];
+      cols.resize(ratios.size());
+      for (std::size_t k = 0; k < ratios.size(); ++k) cols[k].push_back(ratios[k]);
+    }
+  }
+  void print(const std::vector<std::string>& names, const char* bracket, bool largest) const {
+    std::printf("\nMedian ratio per group (the same runs, paired per case; %s in brackets):\n%-26s %5s", bracket, "group",
+                "cases");
+    for (const std::string& n : names) std::printf(" %15s", n.c_str());
+    std::printf("\n");
+    for (const auto& [name, cols] : groups) {
+      std::printf("%-26s %5zu", name.c_str(), cols[0].size());
+      for (const auto& col : cols)
+        std::printf("   %5.3f (%5.2f)", median_of(col),
+                    largest ? *std::max_element(col.begin(), col.end()) : *std::min_element(col.begin(), col.end()));
+      std::printf("\n");
+    }
+  }
+};
+
+int cmd_guided(const Options& o, int wanted, std::int64_t max_faces) {
+  std::map<std::string, Shape> shapes;
+  const std::vector<CaseRef> chosen = paired_cases(o, wanted, max_faces, shapes);
   // s30gF, s30gS: a diagnosis of where the prior falls short of the oracle: the oracle's guidance
   // at the clean surface's crease and corner faces and the prior's elsewhere (F), and the other
   // way round (S).
@@ -366,7 +404,7 @@ int cmd_guided(const Options& o, int wanted, std::int64_t max_faces) {
                run(with_gamma(30), &elsewhere), run(pick, &patch), run(with_gamma(30), &patch), run(DenoiseParams{}, &patch)},
               r.report.choice->chosen, pick.sigma_gamma, prior.summary.median_deg};
   });
-  std::map<std::string, std::vector<std::vector<double>>> groups;
+  GroupTable table;
   std::printf("%-40s %7s %-24s %6s", "case", "faces", "pick", "read");
   for (const std::string& n : names) std::printf(" %8s", n.c_str());
   std::printf("\n");
@@ -378,24 +416,110 @@ int cmd_guided(const Options& o, int wanted, std::int64_t max_faces) {
                                      m[GP] / m[P], m[S30GP] / m[P], m[PGP] / m[PP]};
     const std::string kind = chosen[i].noise.substr(0, chosen[i].noise.find(':'));
     const std::string by_pick = out[i].pick == "identity" ? "identity" : out[i].sigma_gamma >= 90 ? "sigma_gamma 90" : "sigma_gamma <= 45";
-    for (const std::string& g : {std::string("all"), "kind:" + kind, "pick:" + by_pick}) {
-      auto& cols = groups[g];
-      cols.resize(ratios.size());
-      for (std::size_t k = 0; k < ratios.size(); ++k) cols[k].push_back(ratios[k]);
-    }
+    table.add({"all", "kind:" + kind, "pick:" + by_pick}, ratios);
     std::printf("%-40s %7lld %-24s %6.2f", chosen[i].name().c_str(), static_cast<long long>(shapes.at(chosen[i].shape).mesh.num_faces()),
                 out[i].pick.c_str(), out[i].reading);
     for (const double x : ratios) std::printf(" %8.3f", x);
     std::printf("\n");
   }
-  std::printf("\nMedian ratio per group (the same runs, paired per case; worst in brackets):\n%-26s %5s", "group", "cases");
-  for (const std::string& n : names) std::printf(" %15s", n.c_str());
+  table.print(names, "worst", true);
+  return 0;
+}
+
+// Issue 48's fallback, measured before anything is built: what a per-face field of sigma_gamma
+// and normal iterations could give at most. Holdout cases as `guided` draws them, auto's pick
+// held fixed: its pre-filter (Eq. 1-4), then ten candidate normal fields (Eq. 7: its own
+// parameters; sigma_gamma 20, 30, 45 and 90 degrees; its sigma_gamma at 2, 5, 20, 40 and 100
+// iterations), then the vertex update (Eq. 8) from normals chosen with the clean surface in
+// view: "best1" the one candidate best for the whole case (a perfect per-mesh choice);
+// "class" per clean face class (flat, curved, crease, corner: decision 88's), the candidate
+// whose normals err least over the class's faces (four choices per case: what a per-face field
+// driven by a perfect classifier gives); "face" per face the candidate nearest the clean normal
+// (a bound that also profits from choosing among ten noisy estimates). Ratios to the pick's
+// MSAE; cases auto leaves alone are skipped.
+int cmd_fields(const Options& o, int wanted, std::int64_t max_faces) {
+  std::map<std::string, Shape> shapes;
+  const std::vector<CaseRef> chosen = paired_cases(o, wanted, max_faces, shapes);
+  const std::vector<std::string> names{"best1/p", "class/p", "face/p", "class/best1"};
+  struct Out {
+    std::vector<double> ratios;
+    std::string pick;
+  };
+  std::vector<Out> out(chosen.size());
+  run_parallel(chosen.size(), o.jobs, [&](std::size_t i) {
+    const CaseRef& c = chosen[i];
+    const Shape& s = shapes.at(c.shape);
+    const NoisyCase pair = make_noisy_case(s, c.noise, hash_name(s.name + "/" + c.noise));
+    DenoiseParams automatic;
+    automatic.mode = ParamMode::Auto;
+    const DenoiseResult r = denoise(TriMesh{pair.noisy, pair.clean.F}, automatic);
+    out[i].pick = r.report.choice->chosen;
+    if (out[i].pick == "identity") return;
+    const DenoiseParams& pick = r.report.params;
+    const Prepared prepared = prepare(pair.clean, pair.noisy);
+    Executor one(1);
+    DenoiseReport report;
+    const Vertices P = prefilter_stage(prepared.P, prepared.F, prepared.topo, pick, one, nullptr, report);
+    std::vector<Vertices> N;
+    for (const double gamma : {pick.sigma_gamma, 20.0, 30.0, 45.0, 90.0}) {
+      NormalFilterSettings nfs = normal_filter_settings(pick);
+      nfs.sigma_gamma_deg = gamma;
+      N.push_back(l1_median_normal_filter(P, prepared.F, prepared.topo, nfs, &one));
+    }
+    {  // the pick's sigma_gamma at 2, 5, 20, 40 and 100 iterations
+      const std::vector<int> counts{2, 5, 20, 40, 100};
+      NormalFilterSettings nfs = normal_filter_settings(pick);
+      nfs.iterations = counts.back();
+      nfs.on_iteration = [&](int done, const Vertices& n) {
+        if (std::find(counts.begin(), counts.end(), done) != counts.end()) N.push_back(n);
+      };
+      l1_median_normal_filter(P, prepared.F, prepared.topo, nfs, &one);
+    }
+    const auto result = [&](const Vertices& normals) {
+      const Vertices V = vertex_update(P, prepared.F, prepared.topo, normals, pick.n_vertex, &one);
+      return msae_of_normals(face_normals(V, prepared.F), prepared.truth_normals);
+    };
+    const auto angle2 = [&](std::size_t k, Eigen::Index f) {
+      const Vec3 a = N[k].row(f).transpose(), b = prepared.truth_normals.row(f).transpose();
+      const double angle = std::atan2(a.cross(b).norm(), a.dot(b));
+      return angle * angle;
+    };
+    const double p = result(N[0]);
+    double best1 = p;
+    for (std::size_t k = 1; k < N.size(); ++k) best1 = std::min(best1, result(N[k]));
+    const std::vector<FaceClass> cls = face_classes(pair.clean.V, pair.clean.F, prepared.topo, one);
+    std::array<std::vector<double>, 4> class_error;
+    for (auto& e : class_error) e.assign(N.size(), 0.0);
+    Vertices per_face = N[0];
+    for (Eigen::Index f = 0; f < prepared.F.rows(); ++f) {
+      std::size_t nearest = 0;
+      for (std::size_t k = 0; k < N.size(); ++k) {
+        class_error[static_cast<std::size_t>(cls[static_cast<std::size_t>(f)])][k] += angle2(k, f);
+        if (angle2(k, f) < angle2(nearest, f)) nearest = k;
+      }
+      per_face.row(f) = N[nearest].row(f);
+    }
+    Vertices per_class = N[0];
+    for (Eigen::Index f = 0; f < prepared.F.rows(); ++f) {
+      const std::vector<double>& e = class_error[static_cast<std::size_t>(cls[static_cast<std::size_t>(f)])];
+      per_class.row(f) = N[static_cast<std::size_t>(std::min_element(e.begin(), e.end()) - e.begin())].row(f);
+    }
+    const double by_class = result(per_class);
+    out[i].ratios = {best1 / p, by_class / p, result(per_face) / p, by_class / best1};
+  });
+  GroupTable table;
+  std::printf("%-40s %7s %-26s", "case", "faces", "pick");
+  for (const std::string& n : names) std::printf(" %11s", n.c_str());
   std::printf("\n");
-  for (const auto& [name, cols] : groups) {
-    std::printf("%-26s %5zu", name.c_str(), cols[0].size());
-    for (const auto& col : cols) std::printf("   %5.3f (%5.2f)", median_of(col), *std::max_element(col.begin(), col.end()));
+  for (std::size_t i = 0; i < chosen.size(); ++i) {
+    if (out[i].ratios.empty()) continue;
+    table.add({"all", "kind:" + chosen[i].noise.substr(0, chosen[i].noise.find(':'))}, out[i].ratios);
+    std::printf("%-40s %7lld %-26s", chosen[i].name().c_str(), static_cast<long long>(shapes.at(chosen[i].shape).mesh.num_faces()),
+                out[i].pick.c_str());
+    for (const double x : out[i].ratios) std::printf(" %11.3f", x);
     std::printf("\n");
   }
+  table.print(names, "best", false);
   return 0;
 }
 
@@ -461,6 +585,7 @@ int main(int argc, char** argv) {
   try {
     if (verb == "shapes") return cmd_shapes(o);
     if (verb == "guided") return cmd_guided(o, o.cases > 0 ? o.cases : 80, o.max_faces);
+    if (verb == "fields") return cmd_fields(o, o.cases > 0 ? o.cases : 80, o.max_faces);
     if (verb == "export") {
       if (o.positional.size() != 2) throw std::invalid_argument("export needs SHAPE/NOISE and OUT");
       return cmd_export(o);
