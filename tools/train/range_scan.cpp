@@ -828,10 +828,13 @@ RangeScan fuse_scans(const TriMesh& shape, const RangeSensor& sensor, const Scan
     const std::optional<double> f0 = clean_field(start);
     if (!f0 || n.squaredNorm() == 0) return std::nullopt;
     const double h = 0.1 * voxel;
+    std::optional<double> last[2] = {f0, f0};  // the value at the previous step, ahead and behind
     for (int k = 1; k <= 20; ++k)
-      for (const double dir : {1.0, -1.0}) {
+      for (int side = 0; side < 2; ++side) {
+        const double dir = side == 0 ? 1.0 : -1.0;
         double ta = dir * (k - 1) * h, tb = dir * k * h;
-        const std::optional<double> fa = clean_field(start + ta * n), fb = clean_field(start + tb * n);
+        const std::optional<double> fa = last[side], fb = clean_field(start + tb * n);
+        last[side] = fb;
         if (!fa || !fb || (*fa < 0) == (*fb < 0)) continue;
         const bool a_inside = *fa < 0;
         for (int it = 0; it < 40; ++it) {

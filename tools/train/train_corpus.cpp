@@ -493,9 +493,11 @@ int cmd_fields(const Options& o, int wanted, std::int64_t max_faces) {
     Vertices per_face = N[0];
     for (Eigen::Index f = 0; f < prepared.F.rows(); ++f) {
       std::size_t nearest = 0;
+      double nearest_error = std::numeric_limits<double>::infinity();
       for (std::size_t k = 0; k < N.size(); ++k) {
-        class_error[static_cast<std::size_t>(cls[static_cast<std::size_t>(f)])][k] += angle2(k, f);
-        if (angle2(k, f) < angle2(nearest, f)) nearest = k;
+        const double e = angle2(k, f);
+        class_error[static_cast<std::size_t>(cls[static_cast<std::size_t>(f)])][k] += e;
+        if (e < nearest_error) nearest = k, nearest_error = e;
       }
       per_face.row(f) = N[nearest].row(f);
     }
